@@ -1,0 +1,148 @@
+// `luxel inspect SCENE`: what Luxel sees in a scene and how fast it traces it.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "accel/bvh_builder.h"
+#include "accel/cl_tracer.h"
+#include "accel/embree_tracer.h"
+#include "accel/ray_gen.h"
+#include "accel/throughput.h"
+#include "accel/triangle_soup.h"
+#include "commands.h"
+#include "device/context.h"
+#include "scene/gltf_import.h"
+#include "scene/scene_stats.h"
+
+namespace luxel::cli {
+namespace {
+
+struct InspectArgs {
+  std::string scene;
+  std::string device;
+  size_t rays = 1u << 20;
+  uint64_t seed = 1;
+  bool trace = true;
+};
+
+bool parse(const std::vector<std::string>& args, InspectArgs& out) {
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& a = args[i];
+    auto value = [&](const char* name) -> const std::string* {
+      if (i + 1 >= args.size()) {
+        std::fprintf(stderr, "luxel inspect: %s needs a value\n", name);
+        return nullptr;
+      }
+      return &args[++i];
+    };
+    if (a == "--device") {
+      const auto* v = value("--device");
+      if (!v) return false;
+      out.device = *v;
+    } else if (a == "--rays") {
+      const auto* v = value("--rays");
+      if (!v) return false;
+      char* end = nullptr;
+      const long long n = std::strtoll(v->c_str(), &end, 10);
+      if (*end != '\0' || n < 1 || n > (1ll << 26)) {
+        std::fprintf(stderr, "luxel inspect: --rays must be an integer in [1, 67108864], got '%s'\n", v->c_str());
+        return false;
+      }
+      out.rays = static_cast<size_t>(n);
+    } else if (a == "--seed") {
+      const auto* v = value("--seed");
+      if (!v) return false;
+      out.seed = std::strtoull(v->c_str(), nullptr, 10);
+    } else if (a == "--no-trace") {
+      out.trace = false;
+    } else if (!a.empty() && a[0] == '-') {
+      std::fprintf(stderr, "luxel inspect: unknown option '%s'\n", a.c_str());
+      return false;
+    } else if (out.scene.empty()) {
+      out.scene = a;
+    } else {
+      std::fprintf(stderr, "luxel inspect: unexpected argument '%s'\n", a.c_str());
+      return false;
+    }
+  }
+  if (out.scene.empty()) {
+    std::fprintf(stderr, "usage: luxel inspect SCENE.gltf|SCENE.glb [--device SPEC] [--rays N] [--seed S] [--no-trace]\n");
+    return false;
+  }
+  return true;
+}
+
+int fail(const Status& st) {
+  std::fprintf(stderr, "luxel: %s\n", st.to_string().c_str());
+  return 1;
+}
+
+}  // namespace
+
+int run_devices(const std::vector<std::string>&) {
+  auto devices = device::list_devices();
+  if (!devices) return fail(devices.status());
+  auto chosen = device::choose_device("");
+  for (const auto& d : devices.value())
+    std::printf("%s %d:%d  %s\n",
+                chosen && chosen->id == d.id ? "*" : " ", d.platform_index, d.device_index,
+                d.describe().c_str());
+  return 0;
+}
+
+int run_inspect(const std::vector<std::string>& argv) {
+  InspectArgs args;
+  if (!parse(argv, args)) return 2;
+
+  const auto t0 = std::chrono::steady_clock::now();
+  auto scene = scene::import_gltf_file(args.scene);
+  if (!scene) return fail(scene.status());
+  const double import_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const scene::SceneStats stats = scene::compute_stats(scene.value());
+  std::printf("scene      %s (imported in %.0f ms)\n", args.scene.c_str(), import_ms);
+  std::printf("%s", scene::format_stats(stats).c_str());
+  for (const auto& w : scene->import_stats.warnings) std::printf("warning    %s\n", w.c_str());
+
+  auto ctx = device::Context::create(args.device);
+  if (!ctx) return fail(ctx.status());
+  std::printf("device     %s\n", ctx.value()->info().describe().c_str());
+
+  auto soup = accel::build_triangle_soup(scene.value());
+  if (!soup) return fail(soup.status());
+  auto bvh = accel::build_bvh(soup.value());
+  if (!bvh) return fail(bvh.status());
+  const auto& bs = bvh->stats;
+  std::printf("bvh        %zu nodes, %zu leaves, depth %u, SAH cost %.1f, built in %.1f ms (Embree rtcBuildBVH), %.1f MiB on device\n",
+              bs.nodes, bs.leaves, bs.max_depth, bs.sah_cost, bs.build_ms,
+              static_cast<double>(bs.device_bytes) / (1024.0 * 1024.0));
+
+  const auto tc = std::chrono::steady_clock::now();
+  auto cl_tracer = accel::ClTracer::create(*ctx.value(), bvh.value());
+  if (!cl_tracer) return fail(cl_tracer.status());
+  std::printf("kernels    intersect.cl, features: %s (ready in %.0f ms)\n",
+              cl_tracer.value()->features().describe().c_str(),
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tc).count());
+  auto embree = accel::EmbreeTracer::create(bvh.value());
+  if (!embree) return fail(embree.status());
+  if (!args.trace) return 0;
+
+  std::printf("\nray throughput, %zu rays per set (best of 3; OpenCL: kernel time, Embree: wall time on all cores)\n",
+              args.rays);
+  std::printf("%-12s %-8s %14s %14s %12s\n", "rays", "query", "OpenCL Mray/s", "Embree Mray/s", "CL/Embree");
+  const accel::RayKind kinds[] = {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow};
+  for (const auto kind : kinds) {
+    const auto rays = accel::make_rays(soup.value(), kind, args.rays, args.seed);
+    const auto query = kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
+    auto tp = accel::measure_throughput(*ctx.value(), *cl_tracer.value(), *embree.value(), rays, query,
+                                        kind == accel::RayKind::kCoherent);
+    if (!tp) return fail(tp.status());
+    std::printf("%-12s %-8s %14.2f %14.2f %11.2fx\n", accel::ray_kind_name(kind),
+                query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(), tp->embree_mrays(),
+                tp->ratio());
+  }
+  return 0;
+}
+
+}  // namespace luxel::cli

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs every Debian package Luxel's build, tests and tools need.
+# Idempotent: packages already present are skipped; `apt-get update` runs only
+# when something is missing (and at most once).
+set -euo pipefail
+
+PACKAGES=(
+  # toolchain
+  build-essential cmake pkg-config git clang libclang-rt-dev
+  # OpenCL: headers (C and C++), ICD loader, PoCL CPU driver
+  opencl-headers opencl-clhpp-headers ocl-icd-opencl-dev pocl-opencl-icd clinfo
+  # geometry and images
+  libembree-dev libopenimageio-dev openimageio-tools
+  libtinygltf-dev nlohmann-json3-dev libstb-dev
+  # service (later issues) and tests
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
+  googletest libgtest-dev libgmock-dev
+  python3 python3-numpy
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

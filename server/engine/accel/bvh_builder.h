@@ -1,0 +1,50 @@
+// BVH construction with Embree's builder API (rtcBuildBVH, binned SAH) into
+// Luxel's device layout: "fat" BVH2 nodes holding both children's bounds
+// (kernels/shared/geometry.h documents the layout) over world-space triangles
+// reordered so every leaf is a contiguous range.
+#pragma once
+
+#include <vector>
+
+#include "accel/triangle_soup.h"
+#include "common/status.h"
+#include "shared/geometry.h"
+
+namespace luxel::accel {
+
+struct BvhBuildOptions {
+  unsigned max_leaf_size = 4;   // triangles per leaf (the builder may exceed it at max depth)
+  unsigned max_depth = 48;      // the traversal stack (LUX_STACK_SIZE) must be deeper
+  float traversal_cost = 1.0f;  // SAH cost of one node visit relative to...
+  float intersection_cost = 1.0f;  // ...one triangle test
+};
+
+struct BvhStats {
+  size_t nodes = 0;
+  size_t leaves = 0;
+  size_t triangles = 0;       // referenced by leaves (== soup size)
+  unsigned max_depth = 0;
+  double sah_cost = 0.0;      // expected cost per ray, relative to root area
+  double build_ms = 0.0;      // rtcBuildBVH plus flattening
+  size_t device_bytes = 0;    // nodes + triangles (+ alpha data)
+};
+
+struct DeviceBvh {
+  std::vector<cl::LuxBvhNode> nodes;        // node 0 is the root
+  std::vector<cl::LuxTriangle> triangles;   // leaf order
+  std::vector<cl::LuxTriangleUV> uvs;       // leaf order; empty unless alpha masks
+  std::vector<cl::LuxAlphaMask> masks;
+  std::vector<uint8_t> alpha_texels;
+  BvhStats stats;
+
+  bool has_alpha_masks() const { return !masks.empty(); }
+};
+
+// Builds over every triangle of the soup. An empty soup gives a root whose
+// children are both absent (every ray misses).
+Result<DeviceBvh> build_bvh(const TriangleSoup& soup, const BvhBuildOptions& options = {});
+
+// The stack depth traversal needs for this BVH (max depth + 1).
+unsigned required_stack_size(const DeviceBvh& bvh);
+
+}  // namespace luxel::accel

@@ -1,0 +1,55 @@
+// OpenCL ray queries: the BVH uploaded to the device and the intersection
+// program compiled for this scene's features.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "accel/bvh_builder.h"
+#include "common/status.h"
+#include "device/context.h"
+#include "device/feature_set.h"
+#include "device/program_cache.h"
+
+namespace luxel::accel {
+
+class ClTracer {
+ public:
+  // Uploads the BVH (and alpha data only when the scene has masked
+  // triangles) and builds kernels/intersect.cl with the matching features.
+  static Result<std::unique_ptr<ClTracer>> create(device::Context& ctx, const DeviceBvh& bvh);
+
+  // Features the intersection program was compiled with.
+  const device::FeatureSet& features() const { return features_; }
+  size_t device_bytes() const { return device_bytes_; }
+
+  // Enqueue on device buffers; `capacity` rays are launched, the kernel reads
+  // the live count from `ray_count` (one int). No host synchronisation.
+  Status enqueue_closest(const device::Buffer& rays, const device::Buffer& ray_count,
+                         const device::Buffer& hits, size_t capacity);
+  Status enqueue_any(const device::Buffer& rays, const device::Buffer& ray_count,
+                     const device::Buffer& occluded, size_t capacity);
+
+  // Host-vector conveniences for tests and benchmarks (upload, trace, read back).
+  Result<std::vector<cl::LuxHit>> closest(const std::vector<cl::LuxRay>& rays);
+  Result<std::vector<int>> any(const std::vector<cl::LuxRay>& rays);
+
+  size_t work_group_size() const { return local_size_; }
+  void set_work_group_size(size_t n) { local_size_ = n; }
+
+ private:
+  ClTracer(device::Context& ctx) : ctx_(ctx) {}
+  template <typename Out>
+  Status bind_and_launch(device::Kernel& kernel, const device::Buffer& rays,
+                         const device::Buffer& ray_count, const device::Buffer& out,
+                         size_t capacity);
+
+  device::Context& ctx_;
+  device::FeatureSet features_;
+  device::Buffer nodes_, triangles_, uvs_, masks_, alpha_texels_;
+  device::Kernel closest_, any_;
+  size_t device_bytes_ = 0;
+  size_t local_size_ = 64;
+};
+
+}  // namespace luxel::accel

@@ -1,0 +1,32 @@
+#include "common/hash.h"
+
+#include <cstdio>
+
+namespace luxel {
+
+Hasher& Hasher::add(const void* data, size_t size) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  // Length-prefix each field so ("ab","c") and ("a","bc") differ.
+  uint64_t len = size;
+  for (int i = 0; i < 8; ++i) {
+    const unsigned char c = static_cast<unsigned char>(len >> (8 * i));
+    a_ = (a_ ^ c) * 0x100000001b3ull;
+    b_ = (b_ ^ (c + 0x5bu)) * 0x100000001b3ull;
+  }
+  for (size_t i = 0; i < size; ++i) {
+    a_ = (a_ ^ p[i]) * 0x100000001b3ull;
+    b_ = (b_ ^ static_cast<unsigned char>(p[i] + 0x5bu)) * 0x100000001b3ull;
+  }
+  return *this;
+}
+
+Hasher& Hasher::add(std::string_view bytes) { return add(bytes.data(), bytes.size()); }
+
+std::string Hasher::hex() const {
+  char buf[33];
+  std::snprintf(buf, sizeof buf, "%016llx%016llx", static_cast<unsigned long long>(a_),
+                static_cast<unsigned long long>(b_));
+  return buf;
+}
+
+}  // namespace luxel

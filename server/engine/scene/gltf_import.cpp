@@ -1,0 +1,237 @@
+// Entry points of the glTF importer (see gltf_import.h) and the node
+// hierarchy: scene selection, transforms, instancing, cycle checks.
+#include "scene/gltf_import.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <sstream>
+
+#include "scene/gltf_load.h"
+#include "scene/lights.h"
+#include "scene/materials.h"
+#include "scene/mesh_build.h"
+
+namespace luxel::scene {
+namespace {
+
+using detail::build_mesh;
+
+std::string node_label(const tinygltf::Model& model, int i) {
+  const std::string& name = model.nodes[static_cast<size_t>(i)].name;
+  return name.empty() ? strprintf("node[%d]", i) : strprintf("node '%s' (node[%d])", name.c_str(), i);
+}
+
+bool all_finite(const std::vector<double>& v) {
+  for (double x : v) {
+    if (!std::isfinite(x)) return false;
+  }
+  return true;
+}
+
+// The node's local transform: `matrix` when given, else T * R * S.
+Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
+  const auto& n = model.nodes[static_cast<size_t>(i)];
+  auto bad = [&](const char* what) {
+    return invalid_argument(strprintf("%s: %s", node_label(model, i).c_str(), what));
+  };
+  if (!all_finite(n.matrix) || !all_finite(n.translation) || !all_finite(n.rotation) || !all_finite(n.scale)) {
+    return bad("transform has a NaN or infinite value");
+  }
+  if (n.matrix.size() == 16) {
+    Mat4 m;
+    for (size_t k = 0; k < 16; ++k) m.m[k] = n.matrix[k];  // both column-major
+    return m;
+  }
+  if (!n.matrix.empty()) return bad("matrix must have 16 numbers");
+  if (!(n.translation.empty() || n.translation.size() == 3)) return bad("translation must have 3 numbers");
+  if (!(n.rotation.empty() || n.rotation.size() == 4)) return bad("rotation must have 4 numbers");
+  if (!(n.scale.empty() || n.scale.size() == 3)) return bad("scale must have 3 numbers");
+  double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
+  for (size_t k = 0; k < n.translation.size(); ++k) t[k] = n.translation[k];
+  for (size_t k = 0; k < n.scale.size(); ++k) s[k] = n.scale[k];
+  if (!n.rotation.empty()) {
+    const double len = std::sqrt(n.rotation[0] * n.rotation[0] + n.rotation[1] * n.rotation[1] +
+                                 n.rotation[2] * n.rotation[2] + n.rotation[3] * n.rotation[3]);
+    if (!(len > 0) || !std::isfinite(len)) return bad("rotation quaternion has zero length");
+    // Exporters write quaternions rounded to a few digits; renormalize.
+    for (size_t k = 0; k < 4; ++k) q[k] = n.rotation[k] / len;
+  }
+  return mat4_from_trs(t, q, s);
+}
+
+// Builds parent links and rejects nodes with several parents and cycles
+// (glTF requires the nodes to form disjoint trees).
+Status check_hierarchy(const tinygltf::Model& model, std::vector<int>* parent) {
+  const size_t n = model.nodes.size();
+  parent->assign(n, -1);
+  for (size_t p = 0; p < n; ++p) {
+    for (int c : model.nodes[p].children) {
+      if (c < 0 || static_cast<size_t>(c) >= n) {
+        return invalid_argument(strprintf("%s: child %d does not exist (%zu nodes)",
+                                          node_label(model, static_cast<int>(p)).c_str(), c, n));
+      }
+      int& slot = (*parent)[static_cast<size_t>(c)];
+      if (slot >= 0) {
+        return invalid_argument(strprintf("%s has several parents (node[%d] and node[%zu]); a node may have only "
+                                          "one parent", node_label(model, c).c_str(), slot, p));
+      }
+      slot = static_cast<int>(p);
+    }
+  }
+  // Walk up from every node; each node is settled once, so this is O(n)
+  // and needs no recursion however deep the hierarchy is.
+  std::vector<uint8_t> state(n, 0);  // 0 new, 1 on the current path, 2 settled
+  std::vector<int> path;
+  for (size_t start = 0; start < n; ++start) {
+    path.clear();
+    int i = static_cast<int>(start);
+    while (i >= 0 && state[static_cast<size_t>(i)] == 0) {
+      state[static_cast<size_t>(i)] = 1;
+      path.push_back(i);
+      i = (*parent)[static_cast<size_t>(i)];
+    }
+    if (i >= 0 && state[static_cast<size_t>(i)] == 1) {
+      return invalid_argument(strprintf("%s is part of a cycle in the node hierarchy",
+                                        node_label(model, i).c_str()));
+    }
+    for (int k : path) state[static_cast<size_t>(k)] = 2;
+  }
+  return Status::ok();
+}
+
+Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::vector<int>& parent) {
+  std::vector<int> roots;
+  if (model.scenes.empty()) {
+    for (size_t i = 0; i < model.nodes.size(); ++i) {
+      if (parent[i] < 0) roots.push_back(static_cast<int>(i));
+    }
+    return roots;
+  }
+  int s = model.defaultScene;
+  if (s >= 0 && static_cast<size_t>(s) >= model.scenes.size()) {
+    return invalid_argument(strprintf("scene %d (the default scene) does not exist (%zu scenes)", s,
+                                      model.scenes.size()));
+  }
+  if (s < 0) s = 0;
+  std::vector<uint8_t> seen(model.nodes.size(), 0);
+  for (int r : model.scenes[static_cast<size_t>(s)].nodes) {
+    if (r < 0 || static_cast<size_t>(r) >= model.nodes.size()) {
+      return invalid_argument(strprintf("scene %d: node %d does not exist (%zu nodes)", s, r, model.nodes.size()));
+    }
+    if (parent[static_cast<size_t>(r)] >= 0) {
+      return invalid_argument(strprintf("scene %d: %s is listed as a root but is a child of node[%d]", s,
+                                        node_label(model, r).c_str(), parent[static_cast<size_t>(r)]));
+    }
+    if (seen[static_cast<size_t>(r)]++) {
+      return invalid_argument(strprintf("scene %d: %s is listed twice", s, node_label(model, r).c_str()));
+    }
+    roots.push_back(r);
+  }
+  return roots;
+}
+
+Status instantiate(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
+  std::vector<int> parent;
+  LUXEL_RETURN_IF_ERROR(check_hierarchy(model, &parent));
+  auto roots = scene_roots(model, parent);
+  if (!roots) return roots.status();
+
+  uint64_t budget = options.max_accessor_elements;
+  std::vector<int> mesh_slot(model.meshes.size(), -1);
+  struct Item {
+    int node;
+    Mat4 parent_world;
+  };
+  std::vector<Item> stack;
+  for (auto it = roots->rbegin(); it != roots->rend(); ++it) stack.push_back({*it, Mat4{}});
+  while (!stack.empty()) {
+    const Item item = stack.back();
+    stack.pop_back();
+    const auto& node = model.nodes[static_cast<size_t>(item.node)];
+    auto local = local_transform(model, item.node);
+    if (!local) return local.status();
+    const Mat4 world = item.parent_world * *local;
+    for (double v : world.m) {
+      if (!std::isfinite(v)) {
+        return invalid_argument(node_label(model, item.node) + ": the world transform overflows");
+      }
+    }
+    if (node.mesh >= 0 || node.mesh < -1) {
+      if (static_cast<size_t>(node.mesh) >= model.meshes.size()) {
+        return invalid_argument(strprintf("%s: mesh %d does not exist (%zu meshes)",
+                                          node_label(model, item.node).c_str(), node.mesh, model.meshes.size()));
+      }
+      int& slot = mesh_slot[static_cast<size_t>(node.mesh)];
+      if (slot < 0) {
+        auto mesh = build_mesh(model, node.mesh, options, &budget, scene);
+        if (!mesh) return mesh.status();
+        scene->meshes.push_back(std::move(*mesh));
+        slot = static_cast<int>(scene->meshes.size() - 1);
+      }
+      Instance inst;
+      inst.name = node.name.empty() ? strprintf("node[%d]", item.node) : node.name;
+      inst.node_index = item.node;
+      inst.mesh = slot;
+      inst.object_to_world = world;
+      scene->instances.push_back(std::move(inst));
+    }
+    LUXEL_RETURN_IF_ERROR(detail::convert_node_light(model, item.node, node_label(model, item.node), world, scene));
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.push_back({*c, world});
+  }
+  return Status::ok();
+}
+
+Result<Scene> import_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
+                           const ImportOptions& options) {
+  tinygltf::Model model;
+  LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &model));
+  Scene scene;
+  scene.source_name = name;
+  LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
+  LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));
+  if (scene.materials.empty()) {
+    Material m;
+    m.name = "default";
+    scene.materials.push_back(m);
+  }
+  return scene;
+}
+
+}  // namespace
+
+Result<Scene> import_gltf_memory(std::string_view bytes, const std::string& base_dir, const std::string& name,
+                                 const ImportOptions& options) {
+  // Library code below may still throw on hostile input (allocation failure,
+  // container limits); a bad upload must become an error, not a crash.
+  try {
+    auto scene = import_model(bytes, base_dir, name, options);
+    if (!scene) {
+      const Status& st = scene.status();
+      // Prefix the file name unless the message already starts with it.
+      const std::string prefix = "'" + name + "'";
+      if (st.message().rfind(prefix, 0) == 0) return st;
+      return Status(st.code(), prefix + ": " + st.message());
+    }
+    return scene;
+  } catch (const std::bad_alloc&) {
+    return resource_exhausted(strprintf("'%s': out of memory while importing", name.c_str()));
+  } catch (const std::exception& e) {
+    return invalid_argument(strprintf("'%s': malformed glTF: %s", name.c_str(), e.what()));
+  }
+}
+
+Result<Scene> import_gltf_file(const std::string& path, const ImportOptions& options) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return not_found(strprintf("'%s': cannot open the file", path.c_str()));
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  if (f.bad()) return data_loss(strprintf("'%s': read error", path.c_str()));
+  const std::string bytes = ss.str();
+  std::string base = std::filesystem::path(path).parent_path().string();
+  if (base.empty()) base = ".";
+  return import_gltf_memory(bytes, base, path, options);
+}
+
+}  // namespace luxel::scene

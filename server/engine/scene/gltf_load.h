@@ -1,0 +1,32 @@
+// Front end of the importer: bytes (.gltf JSON or .glb) -> tinygltf::Model.
+//
+// tinygltf 2.7 trusts its input in places (GLB chunk bounds, image buffer
+// views, deeply nested extras recurse). Everything it would trust is checked
+// here first, with errors that name the buffer / image / uri at fault and the
+// status codes the service maps to gRPC: kDataLoss for truncated data,
+// kNotFound for missing external files, kInvalidArgument otherwise.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "common/status.h"
+#include "scene/tinygltf_config.h"
+
+namespace luxel::scene::detail {
+
+// Deepest JSON nesting accepted (glTF itself needs about 8; extras may add a
+// few). Bounds the recursion of tinygltf's JSON-to-Value conversion.
+inline constexpr int kMaxJsonDepth = 64;
+
+// Parses the document. External URIs resolve against base_dir; an empty
+// base_dir forbids external files. URIs must be relative and stay inside
+// base_dir (no "..", no absolute paths): uploaded scenes must not read other
+// files of the server.
+Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
+                  tinygltf::Model* model);
+
+// Decodes %XX escapes of a URI (tinygltf resolves files the same way).
+std::string percent_decode(const std::string& uri);
+
+}  // namespace luxel::scene::detail

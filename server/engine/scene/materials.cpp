@@ -1,0 +1,151 @@
+// See materials.h. Factors are validated (finite, in range) because later
+// stages feed them to the path tracer unchecked.
+#include "scene/materials.h"
+
+#include <cmath>
+#include <map>
+#include <utility>
+
+#include "scene/textures.h"
+
+namespace luxel::scene::detail {
+namespace {
+
+class TextureTable {
+ public:
+  TextureTable(const tinygltf::Model& model, const ImportOptions& options, Scene* scene)
+      : model_(model), options_(options), scene_(scene), pixel_budget_(options.max_total_texture_pixels) {}
+
+  // Resolves a textureInfo of material `what` ("material 'x' (material[1])
+  // baseColorTexture") to a TextureRef, decoding the image on first use.
+  Result<TextureRef> resolve(int texture_index, int texcoord, ColorSpace space, const std::string& what) {
+    TextureRef ref;
+    if (texture_index < 0) return ref;
+    if (static_cast<size_t>(texture_index) >= model_.textures.size()) {
+      return invalid_argument(strprintf("%s: texture %d does not exist (%zu textures)", what.c_str(), texture_index,
+                                        model_.textures.size()));
+    }
+    if (texcoord != 0 && texcoord != 1) {
+      return invalid_argument(strprintf("%s: texCoord %d is not supported (0 or 1)", what.c_str(), texcoord));
+    }
+    const int image = model_.textures[static_cast<size_t>(texture_index)].source;
+    if (image < 0 || static_cast<size_t>(image) >= model_.images.size()) {
+      return invalid_argument(strprintf("%s: texture %d has no valid image source (source %d; textures given only "
+                                        "through extensions such as KHR_texture_basisu are not supported)",
+                                        what.c_str(), texture_index, image));
+    }
+    ref.texcoord = texcoord;
+    const auto key = std::make_pair(image, space);
+    auto it = decoded_.find(key);
+    if (it == decoded_.end()) {
+      auto tex = decode_texture(model_, image, space, options_, &pixel_budget_);
+      if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
+      scene_->textures.push_back(std::move(*tex));
+      it = decoded_.emplace(key, static_cast<int>(scene_->textures.size() - 1)).first;
+    }
+    ref.texture = it->second;
+    return ref;
+  }
+
+ private:
+  const tinygltf::Model& model_;
+  const ImportOptions& options_;
+  Scene* scene_;
+  uint64_t pixel_budget_;
+  std::map<std::pair<int, ColorSpace>, int> decoded_;
+};
+
+bool finite_all(const std::vector<double>& v) {
+  for (double x : v) {
+    if (!std::isfinite(x)) return false;
+  }
+  return true;
+}
+
+Status check_factor(const std::string& label, const char* field, double v, double lo, double hi) {
+  if (!std::isfinite(v) || v < lo || v > hi) {
+    return invalid_argument(strprintf("%s: %s %g is outside [%g, %g]", label.c_str(), field, v, lo, hi));
+  }
+  return Status::ok();
+}
+
+Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* table) {
+  const auto& gm = model.materials[static_cast<size_t>(index)];
+  const std::string label = gm.name.empty() ? strprintf("material[%d]", index)
+                                            : strprintf("material '%s' (material[%d])", gm.name.c_str(), index);
+  Material m;
+  m.name = gm.name.empty() ? strprintf("material[%d]", index) : gm.name;
+  const auto& pbr = gm.pbrMetallicRoughness;
+
+  if (pbr.baseColorFactor.size() != 4 || !finite_all(pbr.baseColorFactor)) {
+    return invalid_argument(label + ": baseColorFactor must be 4 finite numbers");
+  }
+  for (double v : pbr.baseColorFactor) LUXEL_RETURN_IF_ERROR(check_factor(label, "baseColorFactor", v, 0, 1));
+  m.base_color_factor = {static_cast<float>(pbr.baseColorFactor[0]), static_cast<float>(pbr.baseColorFactor[1]),
+                         static_cast<float>(pbr.baseColorFactor[2]), static_cast<float>(pbr.baseColorFactor[3])};
+  LUXEL_RETURN_IF_ERROR(check_factor(label, "metallicFactor", pbr.metallicFactor, 0, 1));
+  LUXEL_RETURN_IF_ERROR(check_factor(label, "roughnessFactor", pbr.roughnessFactor, 0, 1));
+  m.metallic_factor = static_cast<float>(pbr.metallicFactor);
+  m.roughness_factor = static_cast<float>(pbr.roughnessFactor);
+
+  if (gm.emissiveFactor.size() != 3 || !finite_all(gm.emissiveFactor)) {
+    return invalid_argument(label + ": emissiveFactor must be 3 finite numbers");
+  }
+  // The spec bounds emissiveFactor to [0,1]; older exporters wrote larger
+  // values to mean a stronger light, which we keep.
+  for (double v : gm.emissiveFactor) {
+    LUXEL_RETURN_IF_ERROR(check_factor(label, "emissiveFactor", v, 0, HUGE_VAL));
+  }
+  m.emissive_factor = {static_cast<float>(gm.emissiveFactor[0]), static_cast<float>(gm.emissiveFactor[1]),
+                       static_cast<float>(gm.emissiveFactor[2])};
+  auto ext = gm.extensions.find("KHR_materials_emissive_strength");
+  if (ext != gm.extensions.end() && ext->second.IsObject() && ext->second.Has("emissiveStrength")) {
+    const auto& v = ext->second.Get("emissiveStrength");
+    if (!v.IsNumber()) return invalid_argument(label + ": emissiveStrength is not a number");
+    const double s = v.GetNumberAsDouble();
+    LUXEL_RETURN_IF_ERROR(check_factor(label, "emissiveStrength", s, 0, 3.0e38));
+    m.emissive_strength = static_cast<float>(s);
+  }
+
+  m.double_sided = gm.doubleSided;
+  if (gm.alphaMode == "OPAQUE" || gm.alphaMode.empty()) {
+    m.alpha_mode = AlphaMode::kOpaque;
+  } else if (gm.alphaMode == "MASK") {
+    m.alpha_mode = AlphaMode::kMask;
+  } else if (gm.alphaMode == "BLEND") {
+    m.alpha_mode = AlphaMode::kBlend;
+  } else {
+    return invalid_argument(strprintf("%s: alphaMode '%s' is not OPAQUE, MASK or BLEND", label.c_str(),
+                                      gm.alphaMode.c_str()));
+  }
+  LUXEL_RETURN_IF_ERROR(check_factor(label, "alphaCutoff", gm.alphaCutoff, 0, 3.0e38));
+  m.alpha_cutoff = static_cast<float>(gm.alphaCutoff);
+
+  auto base = table->resolve(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, ColorSpace::kSRGB,
+                             label + " baseColorTexture");
+  if (!base) return base.status();
+  m.base_color_texture = *base;
+  auto mr = table->resolve(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                           ColorSpace::kLinear, label + " metallicRoughnessTexture");
+  if (!mr) return mr.status();
+  m.metallic_roughness_texture = *mr;
+  auto em = table->resolve(gm.emissiveTexture.index, gm.emissiveTexture.texCoord, ColorSpace::kSRGB,
+                           label + " emissiveTexture");
+  if (!em) return em.status();
+  m.emissive_texture = *em;
+  return m;
+}
+
+}  // namespace
+
+Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
+  TextureTable table(model, options, scene);
+  for (size_t i = 0; i < model.materials.size(); ++i) {
+    auto m = convert(model, static_cast<int>(i), &table);
+    if (!m) return m.status();
+    scene->materials.push_back(std::move(*m));
+  }
+  return Status::ok();
+}
+
+}  // namespace luxel::scene::detail

@@ -1,0 +1,16 @@
+// glTF materials -> scene::Material (same indices) and the textures they use.
+#pragma once
+
+#include "common/status.h"
+#include "scene/gltf_import.h"
+#include "scene/scene.h"
+#include "scene/tinygltf_config.h"
+
+namespace luxel::scene::detail {
+
+// Appends one Material per glTF material to scene->materials (so glTF
+// material i is Scene material i) and decodes each (image, colour space) pair
+// they reference once into scene->textures.
+Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene);
+
+}  // namespace luxel::scene::detail

@@ -1,0 +1,210 @@
+// See mesh_build.h.
+#include "scene/mesh_build.h"
+
+#include <cmath>
+#include <limits>
+
+#include "scene/accessor.h"
+
+namespace luxel::scene::detail {
+namespace {
+
+// A triangle whose doubled area |(p1-p0) x (p2-p0)| is below this fraction of
+// its longest edge squared is treated as zero-area: its largest angle is
+// within ~1e-12 rad of 180 degrees, far below float resolution, so its normal
+// is noise and no texel can be sampled on it.
+constexpr double kRelativeAreaEpsilon = 1e-12;
+
+const char* mode_name(int mode) {
+  switch (mode) {
+    case TINYGLTF_MODE_POINTS: return "POINTS";
+    case TINYGLTF_MODE_LINE: return "LINES";
+    case TINYGLTF_MODE_LINE_LOOP: return "LINE_LOOP";
+    case TINYGLTF_MODE_LINE_STRIP: return "LINE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_STRIP: return "TRIANGLE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_FAN: return "TRIANGLE_FAN";
+    default: return "unknown";
+  }
+}
+
+struct Attribute {
+  const char* semantic;
+  int type;
+  unsigned allowed;
+  std::vector<float>* out;
+  bool present = false;
+};
+
+// q - p in double (exact for float inputs of similar magnitude).
+void diff(const Vec3& q, const Vec3& p, double out[3]) {
+  for (int k = 0; k < 3; ++k) out[k] = static_cast<double>(q[k]) - static_cast<double>(p[k]);
+}
+
+bool zero_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  double e1[3], e2[3], e3[3];
+  diff(b, a, e1);
+  diff(c, a, e2);
+  diff(c, b, e3);
+  const double cx = e1[1] * e2[2] - e1[2] * e2[1];
+  const double cy = e1[2] * e2[0] - e1[0] * e2[2];
+  const double cz = e1[0] * e2[1] - e1[1] * e2[0];
+  const double doubled_area = std::sqrt(cx * cx + cy * cy + cz * cz);
+  auto len2 = [](const double* e) { return e[0] * e[0] + e[1] * e[1] + e[2] * e[2]; };
+  const double longest2 = std::max({len2(e1), len2(e2), len2(e3)});
+  return !(doubled_area > kRelativeAreaEpsilon * longest2);
+}
+
+Vec3 vec3_at(const std::vector<float>& v, size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
+
+int default_material(const tinygltf::Model& model, Scene* scene) {
+  const size_t index = model.materials.size();
+  if (scene->materials.size() == index) {
+    Material m;  // glTF default: white, metallic 1, roughness 1, opaque
+    m.name = "default";
+    scene->materials.push_back(m);
+  }
+  return static_cast<int>(index);
+}
+
+Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, const ImportOptions& options,
+                        uint64_t* budget, Scene* scene, Mesh* mesh, bool* all_tangents) {
+  const auto& prim = model.meshes[static_cast<size_t>(mesh_index)].primitives[static_cast<size_t>(prim_index)];
+  const std::string ctx = strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
+
+  std::vector<float> pos, nrm, tan, uv0, uv1;
+  Attribute attrs[] = {
+      {"POSITION", TINYGLTF_TYPE_VEC3, kCompF32, &pos},
+      {"NORMAL", TINYGLTF_TYPE_VEC3, kCompF32, &nrm},
+      {"TANGENT", TINYGLTF_TYPE_VEC4, kCompF32, &tan},
+      {"TEXCOORD_0", TINYGLTF_TYPE_VEC2, kCompF32 | kCompU8 | kCompU16, &uv0},
+      {"TEXCOORD_1", TINYGLTF_TYPE_VEC2, kCompF32 | kCompU8 | kCompU16, &uv1},
+  };
+  size_t vertex_count = 0;
+  for (auto& a : attrs) {
+    auto it = prim.attributes.find(a.semantic);
+    if (it == prim.attributes.end()) continue;
+    LUXEL_RETURN_IF_ERROR(read_floats(model, it->second, a.semantic, a.type, a.allowed, ctx, budget, a.out));
+    a.present = true;
+    const size_t comps = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 2;
+    const size_t count = a.out->size() / comps;
+    if (a.out == &pos) {
+      vertex_count = count;
+    } else if (count != vertex_count) {
+      return invalid_argument(strprintf("%s: accessor %d (%s): count %zu differs from the POSITION count %zu",
+                                        ctx.c_str(), it->second, a.semantic, count, vertex_count));
+    }
+  }
+  if (!attrs[0].present) return invalid_argument(ctx + ": has no POSITION attribute");
+  if (!attrs[4].present && options.require_lightmap_uvs) {
+    return invalid_argument(ctx + ": TEXCOORD_1 (lightmap UVs) is missing; every primitive needs lightmap UVs "
+                                  "(UV generation is not implemented yet)");
+  }
+  const size_t base = mesh->positions.size();
+  if (base + vertex_count > std::numeric_limits<uint32_t>::max()) {
+    return resource_exhausted(ctx + ": the mesh has more than 2^32 vertices");
+  }
+
+  std::vector<uint32_t> indices;
+  if (prim.indices >= 0) {
+    LUXEL_RETURN_IF_ERROR(read_indices(model, prim.indices, ctx, budget, &indices));
+    for (size_t i = 0; i < indices.size(); ++i) {
+      if (indices[i] >= vertex_count) {
+        return invalid_argument(strprintf("%s: accessor %d (indices): index %u at position %zu is out of range "
+                                          "(POSITION has %zu vertices)", ctx.c_str(), prim.indices, indices[i], i,
+                                          vertex_count));
+      }
+    }
+  } else {
+    indices.resize(vertex_count);
+    for (size_t i = 0; i < vertex_count; ++i) indices[i] = static_cast<uint32_t>(i);
+  }
+  if (indices.size() % 3 != 0) {
+    return invalid_argument(strprintf("%s: %zu %s is not a multiple of 3 (mode TRIANGLES)", ctx.c_str(),
+                                      indices.size(), prim.indices >= 0 ? "indices" : "vertices"));
+  }
+
+  int material = prim.material;
+  if (material < 0) {
+    material = default_material(model, scene);
+  } else if (static_cast<size_t>(material) >= model.materials.size()) {
+    return invalid_argument(strprintf("%s: material %d does not exist (%zu materials)", ctx.c_str(), material,
+                                      model.materials.size()));
+  }
+
+  // Keep the triangles with three distinct indices and a non-zero area.
+  std::vector<uint32_t> kept;
+  kept.reserve(indices.size());
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
+    if (a == b || b == c || a == c || zero_area(vec3_at(pos, a), vec3_at(pos, b), vec3_at(pos, c))) {
+      ++scene->import_stats.degenerate_triangles_dropped;
+      continue;
+    }
+    kept.insert(kept.end(), {a, b, c});
+  }
+
+  std::vector<Vec3> normals(vertex_count, Vec3{0, 0, 0});
+  if (attrs[1].present) {
+    for (size_t i = 0; i < vertex_count; ++i) normals[i] = normalize(vec3_at(nrm, i));
+  } else {
+    // Area-weighted smooth normals over shared vertices (the cross product's
+    // length is twice the area). Non-indexed primitives share no vertices, so
+    // they get flat normals.
+    mesh->generated_normals = true;
+    for (size_t t = 0; t < kept.size(); t += 3) {
+      const Vec3 p0 = vec3_at(pos, kept[t]), p1 = vec3_at(pos, kept[t + 1]), p2 = vec3_at(pos, kept[t + 2]);
+      const Vec3 n = cross(p1 - p0, p2 - p0);
+      for (int k = 0; k < 3; ++k) normals[kept[t + static_cast<size_t>(k)]] = normals[kept[t + static_cast<size_t>(k)]] + n;
+    }
+    for (auto& n : normals) n = normalize(n);
+  }
+
+  for (size_t i = 0; i < vertex_count; ++i) {
+    mesh->positions.push_back(vec3_at(pos, i));
+    mesh->normals.push_back(normals[i]);
+    mesh->uv0.push_back(attrs[3].present ? Vec2{uv0[2 * i], uv0[2 * i + 1]} : Vec2{});
+    mesh->uv1.push_back(attrs[4].present ? Vec2{uv1[2 * i], uv1[2 * i + 1]} : Vec2{});
+  }
+  if (*all_tangents && attrs[2].present) {
+    for (size_t i = 0; i < vertex_count; ++i) mesh->tangents.push_back({tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3]});
+  } else {
+    *all_tangents = false;
+    mesh->tangents.clear();
+  }
+  for (uint32_t i : kept) mesh->indices.push_back(static_cast<uint32_t>(base) + i);
+  mesh->triangle_material.insert(mesh->triangle_material.end(), kept.size() / 3, material);
+  return Status::ok();
+}
+
+}  // namespace
+
+std::string mesh_label(const tinygltf::Model& model, int mesh_index) {
+  const std::string& name = model.meshes[static_cast<size_t>(mesh_index)].name;
+  if (name.empty()) return strprintf("mesh[%d]", mesh_index);
+  return strprintf("mesh '%s' (mesh[%d])", name.c_str(), mesh_index);
+}
+
+Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const ImportOptions& options,
+                        uint64_t* budget, Scene* scene) {
+  const auto& gm = model.meshes[static_cast<size_t>(mesh_index)];
+  Mesh mesh;
+  mesh.name = gm.name.empty() ? strprintf("mesh[%d]", mesh_index) : gm.name;
+  mesh.gltf_index = mesh_index;
+  bool all_tangents = true;
+  for (size_t p = 0; p < gm.primitives.size(); ++p) {
+    const int mode = gm.primitives[p].mode;
+    if (mode != TINYGLTF_MODE_TRIANGLES && mode != -1) {
+      ++scene->import_stats.skipped_primitives;
+      scene->import_stats.warnings.push_back(strprintf("%s primitive %zu: mode %d (%s) is not TRIANGLES; skipped",
+                                                       mesh_label(model, mesh_index).c_str(), p, mode,
+                                                       mode_name(mode)));
+      continue;
+    }
+    LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), options, budget, scene, &mesh,
+                                           &all_tangents));
+  }
+  if (!all_tangents) mesh.tangents.clear();
+  return mesh;
+}
+
+}  // namespace luxel::scene::detail

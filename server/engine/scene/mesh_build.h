@@ -1,0 +1,24 @@
+// glTF mesh -> scene::Mesh: reads the triangle primitives of one glTF mesh,
+// validates them, drops degenerate triangles and generates missing normals.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "common/status.h"
+#include "scene/gltf_import.h"
+#include "scene/scene.h"
+#include "scene/tinygltf_config.h"
+
+namespace luxel::scene::detail {
+
+// "mesh 'floor' (mesh[2])", or "mesh[2]" for an unnamed mesh.
+std::string mesh_label(const tinygltf::Model& model, int mesh_index);
+
+// Builds the mesh. Primitives without a material get the glTF default
+// material, appended to scene->materials on first use. `budget` limits the
+// accessor elements read (see ImportOptions::max_accessor_elements).
+Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const ImportOptions& options,
+                        uint64_t* budget, Scene* scene);
+
+}  // namespace luxel::scene::detail

@@ -1,0 +1,42 @@
+// Scene statistics printed by `luxel inspect` (and later returned by the
+// service on upload).
+#pragma once
+
+#include <string>
+
+#include "scene/scene.h"
+
+namespace luxel::scene {
+
+struct SceneStats {
+  size_t meshes = 0;
+  size_t instances = 0;
+  size_t mesh_triangles = 0;     // unique triangles (each mesh once)
+  size_t world_triangles = 0;    // after instancing
+  size_t materials = 0;
+  size_t textures = 0;
+  size_t texture_bytes = 0;      // host memory of decoded textures
+  size_t alpha_masked_triangles = 0;  // world triangles with alphaMode MASK
+  size_t point_lights = 0, spot_lights = 0, directional_lights = 0;
+  size_t emissive_triangles = 0;      // world triangles with an emissive material
+  // Total emitted power of the emissive triangles, in glTF emissive units x m^2
+  // (sum over triangles of area * pi * mean(emissive factor * strength); the
+  // emissive texture's mean is used when there is one).
+  double emissive_power = 0.0;
+  Bounds3 world_bounds;
+  // Lightmap UV (TEXCOORD_1) coverage, rasterized at coverage_resolution^2:
+  // fraction of texels whose centre is inside at least one UV triangle, and
+  // the number covered by more than one triangle of different instances/charts.
+  int coverage_resolution = 512;
+  double lightmap_coverage = 0.0;
+  size_t lightmap_overlap_texels = 0;
+  size_t degenerate_triangles_dropped = 0;
+  size_t skipped_primitives = 0;
+};
+
+SceneStats compute_stats(const Scene& scene, int coverage_resolution = 512);
+
+// Multi-line human-readable report.
+std::string format_stats(const SceneStats& stats);
+
+}  // namespace luxel::scene

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds Luxel and runs the whole test suite with ctest.
+#   ./test.sh              everything (unit, kernel conformance, 60 s fuzzing)
+#   ./test.sh --sanitize   the same under ASan + UBSan in build-asan/
+# Extra arguments after `--` go to ctest (e.g. ./test.sh -- -R accel).
+set -euo pipefail
+cd "$(dirname "$0")"
+build_dir=build
+cmake_args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --sanitize) build_dir=build-asan; cmake_args+=(-DLUXEL_SANITIZE=ON); shift ;;
+    --) shift; break ;;
+    *) echo "test.sh: unknown option $1" >&2; exit 2 ;;
+  esac
+done
+./deploy/install-deps.sh
+./deploy/build.sh "$build_dir" "${cmake_args[@]}"
+cd "$build_dir"
+ctest --output-on-failure --timeout 900 "$@"

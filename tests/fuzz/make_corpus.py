@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Writes the seed corpus of import_fuzz (tests/fuzz/corpus/): a few tiny
+.gltf/.glb files covering the importer's features. Re-run after changing it:
+    python3 tests/fuzz/make_corpus.py
+"""
+import base64, json, os, struct, zlib
+
+OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corpus")
+
+
+def png_rgba(w, h, pixels):
+    def chunk(t, d):
+        return struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d) & 0xFFFFFFFF)
+    raw = b"".join(b"\0" + bytes(pixels[y * w * 4:(y + 1) * w * 4]) for y in range(h))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+class Doc:
+    def __init__(self):
+        self.bin = bytearray()
+        self.j = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": []}],
+                  "nodes": [], "meshes": [], "accessors": [], "bufferViews": []}
+
+    def view(self, data, stride=0):
+        while len(self.bin) % 4:
+            self.bin.append(0)
+        v = {"buffer": 0, "byteOffset": len(self.bin), "byteLength": len(data)}
+        if stride:
+            v["byteStride"] = stride
+        self.bin += data
+        self.j["bufferViews"].append(v)
+        return len(self.j["bufferViews"]) - 1
+
+    def acc(self, data, ctype, count, typ, normalized=False):
+        a = {"bufferView": self.view(data), "componentType": ctype, "count": count, "type": typ}
+        if normalized:
+            a["normalized"] = True
+        self.j["accessors"].append(a)
+        return len(self.j["accessors"]) - 1
+
+    def quad(self, index_type=5125, uv1=True, uv0=False, normals=False):
+        pos = [0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0]
+        prim = {"attributes": {"POSITION": self.acc(struct.pack("<12f", *pos), 5126, 4, "VEC3")}}
+        if uv1:
+            prim["attributes"]["TEXCOORD_1"] = self.acc(struct.pack("<8f", 0, 0, .1, 0, .1, .1, 0, .1), 5126, 4, "VEC2")
+        if uv0:
+            prim["attributes"]["TEXCOORD_0"] = self.acc(struct.pack("<8H", 0, 0, 65535, 0, 65535, 65535, 0, 65535),
+                                                        5123, 4, "VEC2", True)
+        if normals:
+            prim["attributes"]["NORMAL"] = self.acc(struct.pack("<12f", *([0, 0, 1] * 4)), 5126, 4, "VEC3")
+        idx = [0, 1, 2, 0, 2, 3]
+        if index_type:
+            fmt = {5121: "<6B", 5123: "<6H", 5125: "<6I"}[index_type]
+            prim["indices"] = self.acc(struct.pack(fmt, *idx), index_type, 6, "SCALAR")
+        return prim
+
+    def mesh(self, prims, name="m"):
+        self.j["meshes"].append({"name": name, "primitives": prims})
+        return len(self.j["meshes"]) - 1
+
+    def node(self, n, root=True):
+        self.j["nodes"].append(n)
+        i = len(self.j["nodes"]) - 1
+        if root:
+            self.j["scenes"][0]["nodes"].append(i)
+        return i
+
+    def gltf(self):
+        j = dict(self.j)
+        j["buffers"] = [{"byteLength": len(self.bin), "uri": "data:application/octet-stream;base64,"
+                         + base64.b64encode(bytes(self.bin)).decode()}]
+        return json.dumps(j, separators=(",", ":")).encode()
+
+    def glb(self):
+        j = dict(self.j)
+        j["buffers"] = [{"byteLength": len(self.bin)}]
+        js = json.dumps(j, separators=(",", ":")).encode()
+        js += b" " * (-len(js) % 4)
+        b = bytes(self.bin) + b"\0" * (-len(self.bin) % 4)
+        total = 12 + 8 + len(js) + 8 + len(b)
+        return (b"glTF" + struct.pack("<II", 2, total) + struct.pack("<I", len(js)) + b"JSON" + js
+                + struct.pack("<I", len(b)) + b"BIN\0" + b)
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    files = {}
+
+    d = Doc()
+    d.node({"mesh": d.mesh([d.quad(5121)])})
+    files["indexed_u8.gltf"] = d.gltf()
+    files["indexed_u8.glb"] = d.glb()
+
+    d = Doc()
+    m = d.mesh([d.quad(0, normals=True), dict(d.quad(5123), mode=5)])
+    c = d.node({"mesh": m, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1]}, root=False)
+    d.node({"children": [c], "translation": [1, 2, 3], "rotation": [0, 0.7071068, 0, 0.7071068], "scale": [2, 2, 2]})
+    d.node({"mesh": m})
+    files["hierarchy_instancing.gltf"] = d.gltf()
+
+    d = Doc()
+    img = png_rgba(2, 2, [255, 128, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0, 10, 20, 30, 40])
+    d.j["images"] = [{"bufferView": d.view(img), "mimeType": "image/png"}]
+    d.j["textures"] = [{"source": 0}]
+    d.j["materials"] = [{"name": "mat", "pbrMetallicRoughness": {
+        "baseColorFactor": [1, 0.5, 0.5, 1], "baseColorTexture": {"index": 0},
+        "metallicRoughnessTexture": {"index": 0, "texCoord": 1}, "metallicFactor": 0, "roughnessFactor": 0.5},
+        "emissiveFactor": [1, 1, 1], "emissiveTexture": {"index": 0},
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4}},
+        "alphaMode": "MASK", "alphaCutoff": 0.3, "doubleSided": True}]
+    p = d.quad(5125, uv0=True)
+    p["material"] = 0
+    d.node({"mesh": d.mesh([p])})
+    files["material_texture.glb"] = d.glb()
+
+    d = Doc()
+    d.j["extensionsUsed"] = ["KHR_lights_punctual"]
+    d.j["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "intensity": 10, "color": [1, 1, 1], "range": 5},
+        {"type": "spot", "spot": {"innerConeAngle": 0.1, "outerConeAngle": 0.7}},
+        {"type": "directional", "intensity": 2}]}}
+    for i in range(3):
+        d.node({"translation": [i, 1, 0], "extensions": {"KHR_lights_punctual": {"light": i}}})
+    d.node({"mesh": d.mesh([d.quad(5123)])})
+    files["lights.gltf"] = d.gltf()
+
+    d = Doc()
+    p = d.quad(5125)
+    base = p["attributes"]["POSITION"]
+    d.j["accessors"][base]["sparse"] = {"count": 1, "indices": {"bufferView": d.view(struct.pack("<I", 2)),
+                                                                "componentType": 5125},
+                                        "values": {"bufferView": d.view(struct.pack("<3f", 2, 2, 0))}}
+    d.node({"mesh": d.mesh([p])})
+    files["sparse.gltf"] = d.gltf()
+
+    files["empty.gltf"] = b'{"asset":{"version":"2.0"}}'
+
+    for name, data in files.items():
+        with open(os.path.join(OUT, name), "wb") as f:
+            f.write(data)
+        print(name, len(data))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,17 @@
+# Runs the fuzz target once over every file of REGRESSIONS_DIR and CORPUS_DIR (libFuzzer runs
+# individual files without fuzzing). Fails if any input crashes.
+set(files "")
+foreach(dir ${REGRESSIONS_DIR} ${CORPUS_DIR})
+  file(GLOB f LIST_DIRECTORIES false "${dir}/*")
+  list(APPEND files ${f})
+endforeach()
+list(FILTER files EXCLUDE REGEX "README")
+list(LENGTH files n)
+if(n EQUAL 0)
+  message(FATAL_ERROR "no inputs in ${REGRESSIONS_DIR} or ${CORPUS_DIR}")
+endif()
+execute_process(COMMAND ${FUZZER} -runs=1 ${files} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "import_fuzz failed on a regression input (rc ${rc}):\n${out}")
+endif()
+message(STATUS "import_fuzz: ${n} inputs replayed")
