@@ -2,7 +2,8 @@
 // OpenCL device, PoCL on a CPU-only machine) and of Embree, on the same rays
 // and scenes, in one run. Prints a markdown table for docs/performance.md.
 //
-//   bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] SCENE...
+//   bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W]
+//              [--leaf-size L] [--intersection-cost C] SCENE...
 //   (no SCENE: every bundled scene and every shared benchmark scene)
 #include <cstdio>
 #include <cstdlib>
@@ -51,6 +52,7 @@ int main(int argc, char** argv) {
   size_t rays = 1u << 20;
   int repeats = 3;
   size_t work_group = 0;
+  accel::BvhBuildOptions bvh_options;
   std::string device_spec;
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
@@ -59,8 +61,10 @@ int main(int argc, char** argv) {
     else if (a == "--repeats" && i + 1 < argc) repeats = std::atoi(argv[++i]);
     else if (a == "--device" && i + 1 < argc) device_spec = argv[++i];
     else if (a == "--work-group" && i + 1 < argc) work_group = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--leaf-size" && i + 1 < argc) bvh_options.max_leaf_size = static_cast<unsigned>(std::atoi(argv[++i]));
+    else if (a == "--intersection-cost" && i + 1 < argc) bvh_options.intersection_cost = std::strtof(argv[++i], nullptr);
     else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] [SCENE...]\n");
+      std::fprintf(stderr, "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] [--leaf-size L] [--intersection-cost C] [SCENE...]\n");
       return 2;
     } else scenes.push_back(a);
   }
@@ -80,7 +84,7 @@ int main(int argc, char** argv) {
     if (!scene) return fail(scene.status());
     auto soup = accel::build_triangle_soup(scene.value());
     if (!soup) return fail(soup.status());
-    auto bvh = accel::build_bvh(soup.value());
+    auto bvh = accel::build_bvh(soup.value(), bvh_options);
     if (!bvh) return fail(bvh.status());
     auto cl = accel::ClTracer::create(*ctx.value(), bvh.value());
     if (!cl) return fail(cl.status());

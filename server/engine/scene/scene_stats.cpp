@@ -129,17 +129,33 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
 
   const int res = std::max(1, coverage_resolution);
   s.coverage_resolution = res;
+  // Per texel: how many triangles of the mesh that last covered it, and
+  // whether another mesh covered it too. Meshes laid out in their own unit
+  // square (instanced meshes, per-mesh layouts) overlap each other by design
+  // until the atlas packer places them; overlap inside one mesh is a UV error.
   std::vector<uint8_t> hits(static_cast<size_t>(res) * static_cast<size_t>(res), 0);
-  for (const auto& m : scene.meshes) {
+  std::vector<int32_t> owner(hits.size(), -1);
+  std::vector<uint8_t> flags(hits.size(), 0);  // 1: covered, 2: self-overlap, 4: cross-mesh
+  for (size_t mi = 0; mi < scene.meshes.size(); ++mi) {
+    const Mesh& m = scene.meshes[mi];
     if (m.uv1.size() != m.positions.size()) continue;
+    std::fill(hits.begin(), hits.end(), 0);
     for (size_t t = 0; t < m.triangle_count(); ++t) {
       rasterize(m.uv1[m.indices[3 * t]], m.uv1[m.indices[3 * t + 1]], m.uv1[m.indices[3 * t + 2]], res, &hits);
     }
+    for (size_t i = 0; i < hits.size(); ++i) {
+      if (hits[i] == 0) continue;
+      if (hits[i] > 1) flags[i] |= 2;
+      if (owner[i] >= 0 && owner[i] != static_cast<int32_t>(mi)) flags[i] |= 4;
+      owner[i] = static_cast<int32_t>(mi);
+      flags[i] |= 1;
+    }
   }
   size_t covered = 0;
-  for (uint8_t h : hits) {
-    covered += h > 0;
-    s.lightmap_overlap_texels += h > 1;
+  for (uint8_t f : flags) {
+    covered += (f & 1) != 0;
+    s.lightmap_overlap_texels += (f & 2) != 0;
+    s.lightmap_shared_texels += (f & 4) != 0;
   }
   s.lightmap_coverage = static_cast<double>(covered) / static_cast<double>(hits.size());
   return s;
@@ -164,8 +180,8 @@ std::string format_stats(const SceneStats& s) {
                    static_cast<double>(b.lo.z), static_cast<double>(b.hi.x), static_cast<double>(b.hi.y),
                    static_cast<double>(b.hi.z));
   }
-  o << strprintf("lightmap UVs:      %.2f%% of %d^2 texels covered, %zu texels overlap\n",
-                 100.0 * s.lightmap_coverage, s.coverage_resolution, s.lightmap_overlap_texels)
+  o << strprintf("lightmap UVs:      %.2f%% of %d^2 texels covered, %zu overlap within a mesh, %zu shared by several meshes\n",
+                 100.0 * s.lightmap_coverage, s.coverage_resolution, s.lightmap_overlap_texels, s.lightmap_shared_texels)
     << "import:            " << s.degenerate_triangles_dropped << " degenerate triangles dropped, "
     << s.skipped_primitives << " non-triangle primitives skipped\n";
   return o.str();

@@ -24,12 +24,17 @@ struct SceneStats {
   // emissive texture's mean is used when there is one).
   double emissive_power = 0.0;
   Bounds3 world_bounds;
-  // Lightmap UV (TEXCOORD_1) coverage, rasterized at coverage_resolution^2:
-  // fraction of texels whose centre is inside at least one UV triangle, and
-  // the number covered by more than one triangle of different instances/charts.
+  // Lightmap UV (TEXCOORD_1) coverage, rasterized at coverage_resolution^2
+  // with every mesh in the same unit square: fraction of texels whose centre
+  // is inside at least one UV triangle; texels covered twice by one mesh (a
+  // UV error: two surfaces would share lightmap texels); texels covered by
+  // several meshes (normal for instanced meshes and per-mesh layouts, which
+  // get their own atlas rectangles when packed; an error in a single-atlas
+  // scene such as the shared benchmark scenes).
   int coverage_resolution = 512;
   double lightmap_coverage = 0.0;
   size_t lightmap_overlap_texels = 0;
+  size_t lightmap_shared_texels = 0;
   size_t degenerate_triangles_dropped = 0;
   size_t skipped_primitives = 0;
 };

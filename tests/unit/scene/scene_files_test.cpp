@@ -67,6 +67,7 @@ TEST(SharedScenes, CornellBox) {
   // README: 0.68 of the atlas area covered, no overlap.
   EXPECT_NEAR(s.lightmap_coverage, 0.68, 0.02);
   EXPECT_EQ(s.lightmap_overlap_texels, 0u);
+  EXPECT_EQ(s.lightmap_shared_texels, 0u) << "one atlas for all 16 meshes";
   std::printf("%s", format_stats(s).c_str());
 }
 
