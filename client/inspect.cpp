@@ -142,6 +142,7 @@ int run_inspect(const std::vector<std::string>& argv) {
                 query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(), tp->embree_mrays(),
                 tp->ratio());
   }
+  std::printf("\nkernel launches (OpenCL profiling events, all passes)\n%s", ctx.value()->timer().table().c_str());
   return 0;
 }
 
