@@ -41,7 +41,6 @@ Result<std::unique_ptr<ClTracer>> ClTracer::create(device::Context& ctx, const D
   return t;
 }
 
-template <typename Out>
 Status ClTracer::bind_and_launch(device::Kernel& kernel, const device::Buffer& rays,
                                  const device::Buffer& ray_count, const device::Buffer& out,
                                  size_t capacity) {
@@ -56,12 +55,12 @@ Status ClTracer::bind_and_launch(device::Kernel& kernel, const device::Buffer& r
 
 Status ClTracer::enqueue_closest(const device::Buffer& rays, const device::Buffer& ray_count,
                                  const device::Buffer& hits, size_t capacity) {
-  return bind_and_launch<cl::LuxHit>(closest_, rays, ray_count, hits, capacity);
+  return bind_and_launch(closest_, rays, ray_count, hits, capacity);
 }
 
 Status ClTracer::enqueue_any(const device::Buffer& rays, const device::Buffer& ray_count,
                              const device::Buffer& occluded, size_t capacity) {
-  return bind_and_launch<int>(any_, rays, ray_count, occluded, capacity);
+  return bind_and_launch(any_, rays, ray_count, occluded, capacity);
 }
 
 namespace {

@@ -39,7 +39,6 @@ class ClTracer {
 
  private:
   ClTracer(device::Context& ctx) : ctx_(ctx) {}
-  template <typename Out>
   Status bind_and_launch(device::Kernel& kernel, const device::Buffer& rays,
                          const device::Buffer& ray_count, const device::Buffer& out,
                          size_t capacity);

@@ -1,6 +1,7 @@
 #include "accel/embree_tracer.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <thread>
 #include <vector>
