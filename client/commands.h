@@ -8,5 +8,6 @@ namespace luxel::cli {
 
 int run_inspect(const std::vector<std::string>& args);
 int run_devices(const std::vector<std::string>& args);
+int run_bake(const std::vector<std::string>& args);
 
 }  // namespace luxel::cli

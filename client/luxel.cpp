@@ -16,6 +16,9 @@ void usage(FILE* out) {
                "  inspect SCENE [--device SPEC] [--rays N] [--seed S] [--no-trace]\n"
                "        scene statistics, OpenCL device, BVH build, ray throughput of the\n"
                "        OpenCL kernels and of Embree on the scene\n"
+               "  bake SCENE --local --out DIR [--samples N] [--time S] [--target-error E]\n"
+               "        [--bounces B] [--resolution N | --texel-density D] [--seed S] ...\n"
+               "        bake an irradiance lightmap in-process (luxel bake --help for all options)\n"
                "  devices\n"
                "        list OpenCL devices (SPEC for --device: gpu, cpu, P:D, or a name substring;\n"
                "        the LUXEL_DEVICE environment variable sets the default)\n",
@@ -42,6 +45,7 @@ int main(int argc, char** argv) {
   }
   if (cmd == "inspect") return luxel::cli::run_inspect(args);
   if (cmd == "devices") return luxel::cli::run_devices(args);
+  if (cmd == "bake") return luxel::cli::run_bake(args);
   std::fprintf(stderr, "luxel: unknown command '%s'\n\n", cmd.c_str());
   usage(stderr);
   return 2;

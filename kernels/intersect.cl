@@ -147,3 +147,53 @@ __kernel void intersect_any(__global const LuxBvhNode* nodes, __global const Lux
                              , rays[gid], 1, &t, &u, &v);
   occluded[gid] = prim >= 0 ? 1 : 0;
 }
+
+/* Indexed variants for the wavefront bake (thesis §5.1, §5.4): work-item i
+ * traces ray indices[i] & index_mask, so a compacted list of live paths (or a
+ * list sorted by ray direction, with the octant in the bits above the mask)
+ * drives traversal, and the result is written back at the SOURCE ray index so
+ * rays and results stay in path order. */
+__kernel void intersect_closest_indexed(__global const LuxBvhNode* nodes,
+                                        __global const LuxTriangle* tris LUX_ALPHA_PARAMS,
+                                        __global const LuxRay* rays, __global const uint* indices,
+                                        __global const int* ray_count, uint index_mask,
+                                        __global LuxHit* hits) {
+  const int gid = (int)get_global_id(0);
+  if (gid >= *ray_count) return;
+  const uint r = indices[gid] & index_mask;
+  float t, u = 0.0f, v = 0.0f;
+  const int prim = lux_trace(nodes, tris
+#if LUX_ALPHA_MASK
+                             , tri_uvs, masks, alpha_texels
+#endif
+                             , rays[r], 0, &t, &u, &v);
+  LuxHit h;
+  h.t = t;
+  h.u = u;
+  h.v = v;
+  h.prim = prim;
+  hits[r] = h;
+}
+
+__kernel void intersect_any_indexed(__global const LuxBvhNode* nodes,
+                                    __global const LuxTriangle* tris LUX_ALPHA_PARAMS,
+                                    __global const LuxRay* rays, __global const uint* indices,
+                                    __global const int* ray_count, uint index_mask,
+                                    __global int* occluded) {
+  const int gid = (int)get_global_id(0);
+  if (gid >= *ray_count) return;
+  const uint r = indices[gid] & index_mask;
+  const LuxRay ray = rays[r];
+  /* An empty interval (tmax < tmin) marks "no shadow ray": skip traversal. */
+  if (!(ray.dir_tmax.w > ray.org_tmin.w)) {
+    occluded[r] = 0;
+    return;
+  }
+  float t, u, v;
+  const int prim = lux_trace(nodes, tris
+#if LUX_ALPHA_MASK
+                             , tri_uvs, masks, alpha_texels
+#endif
+                             , ray, 1, &t, &u, &v);
+  occluded[r] = prim >= 0 ? 1 : 0;
+}

@@ -38,19 +38,44 @@ Result<std::unique_ptr<ClTracer>> ClTracer::create(device::Context& ctx, const D
   auto any = program.value()->kernel("intersect_any");
   if (!any) return any.status();
   t->any_ = std::move(any.value());
+  auto closest_indexed = program.value()->kernel("intersect_closest_indexed");
+  if (!closest_indexed) return closest_indexed.status();
+  t->closest_indexed_ = std::move(closest_indexed.value());
+  auto any_indexed = program.value()->kernel("intersect_any_indexed");
+  if (!any_indexed) return any_indexed.status();
+  t->any_indexed_ = std::move(any_indexed.value());
   return t;
+}
+
+// The scene buffers lead every intersection kernel's argument list; the alpha
+// buffers are arguments only in programs compiled with LUX_ALPHA_MASK.
+template <typename... Args>
+Status ClTracer::launch_with_scene(device::Kernel& kernel, size_t capacity, const Args&... args) {
+  if (features_.has("ALPHA_MASK")) {
+    LUXEL_RETURN_IF_ERROR(
+        kernel.set_args(nodes_, triangles_, uvs_, masks_, alpha_texels_, args...));
+  } else {
+    LUXEL_RETURN_IF_ERROR(kernel.set_args(nodes_, triangles_, args...));
+  }
+  return ctx_.launch(kernel, capacity, local_size_);
 }
 
 Status ClTracer::bind_and_launch(device::Kernel& kernel, const device::Buffer& rays,
                                  const device::Buffer& ray_count, const device::Buffer& out,
                                  size_t capacity) {
-  if (features_.has("ALPHA_MASK")) {
-    LUXEL_RETURN_IF_ERROR(kernel.set_args(nodes_, triangles_, uvs_, masks_, alpha_texels_, rays,
-                                          ray_count, out));
-  } else {
-    LUXEL_RETURN_IF_ERROR(kernel.set_args(nodes_, triangles_, rays, ray_count, out));
-  }
-  return ctx_.launch(kernel, capacity, local_size_);
+  return launch_with_scene(kernel, capacity, rays, ray_count, out);
+}
+
+Status ClTracer::enqueue_closest_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                                         const device::Buffer& ray_count, uint32_t index_mask,
+                                         const device::Buffer& hits, size_t capacity) {
+  return launch_with_scene(closest_indexed_, capacity, rays, indices, ray_count, index_mask, hits);
+}
+
+Status ClTracer::enqueue_any_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                                     const device::Buffer& ray_count, uint32_t index_mask,
+                                     const device::Buffer& occluded, size_t capacity) {
+  return launch_with_scene(any_indexed_, capacity, rays, indices, ray_count, index_mask, occluded);
 }
 
 Status ClTracer::enqueue_closest(const device::Buffer& rays, const device::Buffer& ray_count,

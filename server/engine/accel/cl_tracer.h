@@ -30,6 +30,16 @@ class ClTracer {
   Status enqueue_any(const device::Buffer& rays, const device::Buffer& ray_count,
                      const device::Buffer& occluded, size_t capacity);
 
+  // Indexed variants (wavefront bake, thesis §5.1/§5.4): work-item i traces
+  // rays[indices[i] & index_mask] and writes the result at that source index.
+  // ray_count holds the number of valid entries in `indices`.
+  Status enqueue_closest_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                                 const device::Buffer& ray_count, uint32_t index_mask,
+                                 const device::Buffer& hits, size_t capacity);
+  Status enqueue_any_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                             const device::Buffer& ray_count, uint32_t index_mask,
+                             const device::Buffer& occluded, size_t capacity);
+
   // Host-vector conveniences for tests and benchmarks (upload, trace, read back).
   Result<std::vector<cl::LuxHit>> closest(const std::vector<cl::LuxRay>& rays);
   Result<std::vector<int>> any(const std::vector<cl::LuxRay>& rays);
@@ -39,6 +49,8 @@ class ClTracer {
 
  private:
   ClTracer(device::Context& ctx) : ctx_(ctx) {}
+  template <typename... Args>
+  Status launch_with_scene(device::Kernel& kernel, size_t capacity, const Args&... args);
   Status bind_and_launch(device::Kernel& kernel, const device::Buffer& rays,
                          const device::Buffer& ray_count, const device::Buffer& out,
                          size_t capacity);
@@ -46,7 +58,7 @@ class ClTracer {
   device::Context& ctx_;
   device::FeatureSet features_;
   device::Buffer nodes_, triangles_, uvs_, masks_, alpha_texels_;
-  device::Kernel closest_, any_;
+  device::Kernel closest_, any_, closest_indexed_, any_indexed_;
   size_t device_bytes_ = 0;
   size_t local_size_ = 64;
 };

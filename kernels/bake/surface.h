@@ -1,0 +1,52 @@
+/* Surface points of the bake: a triangle's interpolated position, normals and
+ * material UV, and the material evaluated there. Device only. */
+#ifndef LUXEL_BAKE_SURFACE_H
+#define LUXEL_BAKE_SURFACE_H
+
+#include "shared/bake.h"
+
+typedef struct LuxSurface {
+  float3 p;      /* world position */
+  float3 ng;     /* unit geometric normal, on the shading normal's side */
+  float3 ng_winding; /* unit geometric normal from the winding (emitter front side) */
+  float3 ns;     /* unit shading normal, on the same side as ng */
+  float2 uv;     /* material UV (TEXCOORD_0) */
+  int material;
+  int light;     /* emissive light index or -1 */
+} LuxSurface;
+
+/* Barycentrics (b1, b2) weight vertices 1 and 2, as in LuxHit.u/v. */
+inline LuxSurface lux_surface_at(const __global LuxSurfaceTri* tris, int tri, float b1, float b2) {
+  const LuxSurfaceTri t = tris[tri];
+  const float b0 = 1.0f - b1 - b2;
+  LuxSurface s;
+  s.p = b0 * t.p0.xyz + b1 * t.p1.xyz + b2 * t.p2.xyz;
+  const float3 cross_e = cross(t.p1.xyz - t.p0.xyz, t.p2.xyz - t.p0.xyz);
+  const float len = length(cross_e);
+  s.ng = len > 0.0f ? cross_e / len : (float3)(0.0f, 1.0f, 0.0f);
+  s.ng_winding = s.ng;
+  float3 ns = b0 * t.n0.xyz + b1 * t.n1.xyz + b2 * t.n2.xyz;
+  const float ns_len = length(ns);
+  ns = ns_len > 1e-20f ? ns / ns_len : s.ng;
+  /* Winding and vertex normals disagree on a few real-world triangles
+   * (scenes/README: 99.86-99.99 % agree): trust the vertex normals for the
+   * side, so the geometric normal follows the shading normal. */
+  if (dot(ns, s.ng) < 0.0f) s.ng = -s.ng;
+  s.ns = ns;
+  s.uv = b0 * (float2)(t.uv0.x, t.uv0.y) + b1 * (float2)(t.uv1.x, t.uv1.y) +
+         b2 * (float2)(t.uv2.x, t.uv2.y);
+  s.material = as_int(t.p0.w);
+  s.light = as_int(t.p1.w);
+  return s;
+}
+
+/* Offsets p off the surface to the side `dir` leaves from (shared robust
+ * offset, kernels/shared/ray_offset.h). */
+inline float3 lux_offset_origin(float3 p, float3 ng, float3 dir) {
+  const float3 n = dot(dir, ng) >= 0.0f ? ng : -ng;
+  float x = p.x, y = p.y, z = p.z;
+  LUX_OFFSET_RAY_ORIGIN(x, y, z, n.x, n.y, n.z);
+  return (float3)(x, y, z);
+}
+
+#endif /* LUXEL_BAKE_SURFACE_H */

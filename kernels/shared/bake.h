@@ -1,0 +1,101 @@
+/* Structs of the wavefront bake pipeline, shared by host and device.
+ *
+ * One bake iteration (thesis §3.2.2 + §5.1):
+ *   texel domain -> radix sort by texel -> offset buffer (Listing 3.1)
+ *   -> raygen (Listing 4.2; vertex 0 = the texel's surface point)
+ *   -> [closest hit -> shade (emission, NEE, extension, RR) -> any hit for
+ *       the shadow rays -> resolve shadows -> compaction] x bounces
+ *   -> gather accumulation per texel (Listing 3.2, Welford).
+ * All paths of one iteration live in slot order = sorted texel order, so the
+ * accumulation kernel finds a texel's paths through the offset buffer. */
+#ifndef LUXEL_SHARED_BAKE_H
+#define LUXEL_SHARED_BAKE_H
+
+#include "shared/compat.h"
+
+#ifndef LUX_DEVICE
+namespace luxel::cl {
+#endif
+
+/* Surface data of one world triangle (TriangleSoup order), 128 bytes.
+ *   p0.w (int) material index;  p1.w (int) emissive light index or -1;
+ *   p2.w (int) instance index. n*: world-space shading normals (w unused).
+ *   uv*: material UVs (TEXCOORD_0). */
+typedef struct LuxSurfaceTri {
+  float4 p0;
+  float4 p1;
+  float4 p2;
+  float4 n0;
+  float4 n1;
+  float4 n2;
+  float2 uv0;
+  float2 uv1;
+  float2 uv2;
+  float2 pad;
+} LuxSurfaceTri;
+
+/* Device material, 64 bytes. Texture indices are -1 when absent.
+ *   flags bit 0: double-sided; bit 1: emits light. */
+typedef struct LuxMaterial {
+  float4 base_color;   /* linear rgb, a = alpha factor */
+  float4 emission;     /* rgb = emissiveFactor * strength (radiance), w unused */
+  float metallic;
+  float roughness;
+  int base_color_tex;
+  int metallic_roughness_tex;
+  int emissive_tex;
+  int flags;
+  float alpha_cutoff;
+  int pad;
+} LuxMaterial;
+
+#define LUX_MATERIAL_DOUBLE_SIDED 1
+#define LUX_MATERIAL_EMISSIVE 2
+
+/* State of one path, 80 bytes.
+ *   throughput.w: solid-angle pdf of the last BSDF sample (0 = no MIS, e.g.
+ *                 the first segment from a texel when no light can be hit)
+ *   prev_pos.w:   unused */
+typedef struct LuxPath {
+  float4 throughput;
+  float4 radiance;
+  float4 prev_pos;
+  uint texel;
+  uint sample_index; /* index into the texel's progressive sequence (§6.2) */
+  uint seed;         /* per-texel decorrelation seed */
+  uint depth;        /* scattering vertices so far (0 = the texel point) */
+  float2 sample_pos; /* texel-space position of the primary sample */
+  uint alive;
+  uint pad;
+} LuxPath;
+
+/* Per-bake constants passed by value to the bake kernels. 48 bytes. */
+typedef struct LuxBakeParams {
+  uint width;
+  uint height;
+  uint texel_count;   /* width * height */
+  uint covered_count; /* texels with >= 1 valid sample */
+  uint bake_seed;
+  uint max_bounces;   /* indirect bounces after the texel point */
+  uint rr_depth;      /* Russian roulette from this depth on */
+  uint light_count;
+  int sky_light;      /* index of the sky entry in the light table, or -1 */
+  float clamp_luminance; /* 0 = off */
+  uint paths;          /* paths in this iteration */
+  uint pad;
+} LuxBakeParams;
+
+/* Per-work-group partial statistics of the accumulation buffer. */
+typedef struct LuxAccumStats {
+  float rel_error_sum; /* sum over covered texels of the relative std. error */
+  uint error_texels;   /* texels that contributed to rel_error_sum */
+  uint min_spp;
+  uint pad;
+  float4 pad2;         /* keeps the struct 32 bytes */
+} LuxAccumStats;
+
+#ifndef LUX_DEVICE
+}  // namespace luxel::cl
+#endif
+
+#endif /* LUXEL_SHARED_BAKE_H */

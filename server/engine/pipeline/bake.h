@@ -1,0 +1,82 @@
+// The in-process bake engine: a progressive wavefront lightmap path tracer
+// (thesis Ch. 3-6) over OpenCL. No gRPC here; the CLI (`luxel bake --local`)
+// and the service drive it the same way.
+//
+//   Result<BakeResult> r = bake(scene, settings, ctx, on_progress);
+//
+// Deterministic: the same scene, settings (seed included) and device give
+// bit-identical lightmaps, whatever the timing (stopping on time or error
+// decides only HOW MANY iterations run, never what an iteration computes).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "atlas/atlas.h"
+#include "common/status.h"
+#include "device/context.h"
+#include "pipeline/bake_settings.h"
+#include "scene/scene.h"
+
+namespace luxel::pipeline {
+
+struct BakeProgress {
+  double elapsed_s = 0;
+  uint64_t paths = 0;          // paths traced so far
+  double mean_spp = 0;         // mean samples per covered texel
+  uint32_t min_spp = 0;        // minimum over covered texels
+  double error = 1;            // mean relative standard error over covered texels
+  double eta_s = -1;           // estimated seconds left (-1: unknown)
+  double fraction = 0;         // progress towards the nearest stopping rule, [0, 1]
+  uint32_t iteration = 0;
+};
+
+enum class Termination { kSamples, kTime, kError, kCancelled };
+const char* termination_name(Termination t);
+
+// One point of the error-against-time series (reported with every bake).
+struct ErrorSample {
+  double elapsed_s;
+  uint64_t paths;
+  double mean_spp;
+  uint32_t min_spp;
+  double error;
+};
+
+struct BakeResult {
+  int width = 0, height = 0;
+  std::vector<float> irradiance;   // RGBA, row 0 = top; A = fraction of the texel covered by geometry
+  std::vector<float> samples;      // samples per texel (own-texel paths)
+  std::vector<float> rel_error;    // relative standard error per texel (0 where uncovered)
+  atlas::Atlas atlas;
+  size_t covered_texels = 0;
+
+  Termination termination = Termination::kSamples;
+  double seconds = 0;
+  uint64_t paths = 0;
+  double mean_spp = 0;
+  uint32_t min_spp = 0;
+  double error = 1;
+  uint64_t nonfinite_dropped = 0;
+  std::vector<ErrorSample> series;
+
+  std::string features;            // compiled bake features ("light_emissive, nee, ...")
+  std::string device;
+  size_t sample_info_bytes = 0;
+  size_t peak_device_bytes = 0;
+  double setup_s = 0;              // import excluded: atlas, BVH, uploads, program builds
+  std::string kernel_table;        // per-kernel timing table (Table 5.4 style)
+  std::vector<std::pair<std::string, double>> kernel_ms;  // name -> total ms
+};
+
+// Called every settings.progress_interval_s (and once at the end). Return
+// false to cancel the bake; the result then holds what was accumulated.
+using ProgressFn = std::function<bool(const BakeProgress&)>;
+
+Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
+                        device::Context& ctx, const ProgressFn& on_progress = {});
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,122 @@
+#include "pipeline/bake_outputs.h"
+
+#include <filesystem>
+#include <system_error>
+
+#include "output/atomic_file.h"
+#include "output/dilate.h"
+#include "output/exr.h"
+#include "output/preview.h"
+
+namespace luxel::pipeline {
+namespace {
+
+output::Image to_image(int w, int h, int channels, const std::vector<float>& px) {
+  output::Image img;
+  img.width = w;
+  img.height = h;
+  img.channels = channels;
+  img.pixels = px;
+  return img;
+}
+
+std::string series_csv(const BakeResult& r) {
+  std::string s = "elapsed_s,paths,mean_spp,min_spp,rel_error\n";
+  for (const auto& e : r.series)
+    s += strprintf("%.6f,%llu,%.4f,%u,%.6g\n", e.elapsed_s,
+                   static_cast<unsigned long long>(e.paths), e.mean_spp, e.min_spp, e.error);
+  return s;
+}
+
+}  // namespace
+
+output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,
+                               const BakeResult& result, const std::string& scene_sha256) {
+  output::Manifest m;
+  m.luxel_version = LUXEL_VERSION;
+  m.git_revision = LUXEL_GIT_REVISION;
+  m.scene_name = scene.source_name;
+  m.scene_sha256 = scene_sha256;
+  m.width = result.width;
+  m.height = result.height;
+  m.encoding = "irradiance";
+  m.units =
+      "irradiance E in W/m^2 on the front side of the surface (radiometric; glTF emissive "
+      "radiance and light intensities taken 1:1); outgoing diffuse radiance = albedo * E / pi";
+  m.uv_set = "TEXCOORD_1";
+  m.atlas_mode = atlas::atlas_mode_name(result.atlas.mode);
+  for (const auto& p : result.atlas.placements) {
+    output::Manifest::Instance inst;
+    const auto& si = scene.instances[p.instance];
+    inst.name = si.name;
+    inst.node = si.node_index;
+    inst.mesh = si.mesh;
+    for (int k = 0; k < 2; ++k) {
+      inst.scale[k] = p.scale[k];
+      inst.offset[k] = p.offset[k];
+    }
+    for (int k = 0; k < 4; ++k) inst.rect[k] = p.rect[k];
+    m.instances.push_back(inst);
+  }
+  m.settings = settings.describe();
+  m.features = result.features;
+  m.device = result.device;
+  m.stats.seconds = result.seconds;
+  m.stats.paths = result.paths;
+  m.stats.mean_spp = result.mean_spp;
+  m.stats.min_spp = result.min_spp;
+  m.stats.error_estimate = result.error;
+  m.stats.nonfinite_dropped = result.nonfinite_dropped;
+  m.stats.termination = termination_name(result.termination);
+  m.stats.covered_texels = result.covered_texels;
+  m.dilation_texels = settings.dilation_texels;
+  return m;
+}
+
+Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
+                                       const BakeSettings& settings, const BakeResult& result,
+                                       const std::string& scene_sha256) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return invalid_argument(strprintf("cannot create output folder '%s': %s", dir.c_str(),
+                                            ec.message().c_str()));
+  namespace fs = std::filesystem;
+  OutputPaths paths;
+  auto at = [&](const char* name) { return (fs::path(dir) / name).string(); };
+  paths.irradiance_exr = at("irradiance.exr");
+  paths.preview_png = at("preview.png");
+  paths.samples_exr = at("samples.exr");
+  paths.error_exr = at("rel_error.exr");
+  paths.series_csv = at("error_series.csv");
+  paths.manifest_json = at("manifest.json");
+
+  output::Image lightmap = to_image(result.width, result.height, 4, result.irradiance);
+  LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
+  const std::map<std::string, std::string> meta = {
+      {"luxel/encoding", "irradiance"},
+      {"luxel/units", "W/m^2"},
+      {"luxel/alpha", "fraction of the texel covered by geometry"},
+      {"luxel/scene", scene.source_name}};
+  LUXEL_RETURN_IF_ERROR(output::write_exr(paths.irradiance_exr, lightmap, {"R", "G", "B", "A"}, meta));
+  LUXEL_RETURN_IF_ERROR(output::write_png_preview(paths.preview_png, lightmap));
+  LUXEL_RETURN_IF_ERROR(output::write_exr(
+      paths.samples_exr, to_image(result.width, result.height, 1, result.samples), {"Y"},
+      {{"luxel/content", "samples per texel"}}));
+  LUXEL_RETURN_IF_ERROR(output::write_exr(
+      paths.error_exr, to_image(result.width, result.height, 1, result.rel_error), {"Y"},
+      {{"luxel/content", "relative standard error of the texel mean"}}));
+  const std::string csv = series_csv(result);
+  LUXEL_RETURN_IF_ERROR(output::write_file_atomic(paths.series_csv, csv.data(), csv.size()));
+
+  output::Manifest m = make_manifest(scene, settings, result, scene_sha256);
+  m.files = {
+      {"irradiance", "irradiance.exr", "exr", "RGBA float32, linear irradiance; A = coverage"},
+      {"preview", "preview.png", "png", "tone-mapped sRGB preview of the dilated lightmap"},
+      {"samples", "samples.exr", "exr", "float32 Y: samples per texel"},
+      {"rel_error", "rel_error.exr", "exr", "float32 Y: relative standard error per texel"},
+      {"error_series", "error_series.csv", "csv", "error estimate against time"}};
+  LUXEL_RETURN_IF_ERROR(output::write_manifest(paths.manifest_json, m));
+  return paths;
+}
+
+}  // namespace luxel::pipeline

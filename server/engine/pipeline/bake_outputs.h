@@ -1,0 +1,30 @@
+// Writes a finished bake into a folder: the irradiance lightmap (linear float
+// EXR, alpha = coverage), a tone-mapped PNG preview, the samples-per-texel and
+// relative-error maps, the error-against-time series (CSV) and a JSON
+// manifest describing all of them. Uncovered texels are dilated first so
+// bilinear filtering in an engine does not bleed black into charts.
+#pragma once
+
+#include <string>
+
+#include "common/status.h"
+#include "output/manifest.h"
+#include "pipeline/bake.h"
+#include "scene/scene.h"
+
+namespace luxel::pipeline {
+
+struct OutputPaths {
+  std::string irradiance_exr, preview_png, samples_exr, error_exr, series_csv, manifest_json;
+};
+
+// Creates `dir` if needed. `scene_sha256` may be empty.
+Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
+                                       const BakeSettings& settings, const BakeResult& result,
+                                       const std::string& scene_sha256 = "");
+
+// The manifest that write_bake_outputs writes (without the file list).
+output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,
+                               const BakeResult& result, const std::string& scene_sha256);
+
+}  // namespace luxel::pipeline

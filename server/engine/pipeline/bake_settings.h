@@ -1,0 +1,52 @@
+// What a bake is asked to do: lightmap size, stopping rules, light transport
+// and ablation switches. Validated by validate_settings(), which names the
+// offending field, so the CLI and the service report the same errors.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "atlas/atlas.h"
+#include "common/status.h"
+#include "pipeline/shading/light_settings.h"
+
+namespace luxel::pipeline {
+
+enum class Filter { kBox, kGaussian };
+
+struct BakeSettings {
+  atlas::AtlasSettings atlas;   // resolution or texel density
+
+  // Stopping rules: whichever is reached first. 0 disables a rule; at least
+  // one must be set.
+  uint32_t samples_per_texel = 256;  // every covered texel has at least this many
+  double time_budget_s = 0;          // wall-clock seconds of path tracing
+  double target_error = 0;           // mean relative standard error over covered texels
+
+  int max_bounces = 4;          // indirect bounces after the texel point (0 = direct light only)
+  int rr_depth = 3;             // Russian roulette from this vertex depth on
+  uint32_t paths_per_iteration = 1u << 18;  // batch size: bounds device memory
+  uint32_t seed = 1;
+  Filter filter = Filter::kBox;
+  float clamp_luminance = 0;    // firefly clamp on a path's luminance; 0 = off (unbiased)
+  LightSettings lights;         // sky, sun, directional angular radius
+
+  // Ablation switches (thesis §5.1, §5.4, §6.2).
+  bool compaction = true;
+  bool sort_directions = false;
+  bool random_sequence = false;
+
+  double progress_interval_s = 1.0;  // progress callback period
+  int dilation_texels = 2;           // output: fill uncovered texels this far
+
+  // The settings as "key=value" strings, for manifests and reports.
+  std::map<std::string, std::string> describe() const;
+};
+
+// INVALID_ARGUMENT naming the field ("settings.max_bounces: must be in [0, 64], got 99").
+Status validate_settings(const BakeSettings& settings);
+
+const char* filter_name(Filter f);
+
+}  // namespace luxel::pipeline

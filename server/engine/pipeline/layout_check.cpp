@@ -1,0 +1,15 @@
+// Host/device layout agreement for the bake structs (kernels/shared/bake.h).
+#include <cstddef>
+
+#include "shared/bake.h"
+
+namespace luxel::cl {
+static_assert(sizeof(LuxSurfaceTri) == 128 && alignof(LuxSurfaceTri) == 16);
+static_assert(offsetof(LuxSurfaceTri, uv0) == 96);
+static_assert(sizeof(LuxMaterial) == 64);
+static_assert(offsetof(LuxMaterial, metallic) == 32);
+static_assert(sizeof(LuxPath) == 80);
+static_assert(offsetof(LuxPath, texel) == 48 && offsetof(LuxPath, sample_pos) == 64);
+static_assert(sizeof(LuxBakeParams) == 48);
+static_assert(sizeof(LuxAccumStats) == 32);
+}  // namespace luxel::cl
