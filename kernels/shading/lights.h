@@ -1,0 +1,352 @@
+/* Light sampling for next-event estimation (thesis §6.1) and the pdfs that
+ * multiple importance sampling needs (§6.3.2, eq. 6.3).
+ *
+ * A light is chosen with probability proportional to its power (§6.3.2:
+ * "probability proportional to its intensity, omitting any spatial
+ * considerations") through the table's select_cdf, then a point or direction
+ * on it is sampled. Layout, units, feature macros and the equirect mapping
+ * are documented in shared/light.h.
+ *
+ * Using a sample: if lux_sample_light returns 1, trace a shadow ray from p
+ * along wi up to dist (INFINITY for directional lights and the sky); if
+ * unoccluded the contribution is
+ *     radiance * f(wi) * |cos(n, wi)| / pdf
+ * where pdf includes the selection probability. For is_delta samples (point,
+ * spot, directional without angular radius) pdf is the selection
+ * probability alone and radiance already includes 1/dist^2 and the spot
+ * falloff. `mis` says whether a BSDF-sampled ray could also reach the same
+ * emitter (emissive triangles, the sky): only then is the sample weighted
+ * with MIS against the BSDF pdf. Sun discs (directional lights with an
+ * angular radius) have a solid-angle pdf but mis = 0: rays that escape are
+ * shaded with the sky only, so NEE is the sun's one estimator. */
+#ifndef LUXEL_SHADING_LIGHTS_H
+#define LUXEL_SHADING_LIGHTS_H
+
+#include "shared/light.h"
+#include "shading/distribution.h"
+
+typedef struct LuxLightSample {
+  float3 wi;       /* unit direction from p towards the light */
+  float dist;      /* distance to the sampled point; INFINITY for directional and sky */
+  float3 radiance; /* see the header comment */
+  float pdf;       /* solid angle, times the selection probability (delta: selection only) */
+  int is_delta;
+  int mis;      /* 1: the BSDF strategy can hit this emitter too; weight with MIS */
+  int light;    /* index in the light table */
+  int triangle; /* emissive triangles: world triangle id (TriangleSoup order), else -1 */
+  float2 bary;  /* emissive triangles: barycentrics of v1 and v2 (like LuxHit u, v) */
+} LuxLightSample;
+
+/* ---- Private warps (lux_lights_ prefix; kernels/sampling/warp.h has the
+ * public ones once it exists). ---- */
+
+/* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
+inline void lux_lights_onb(float3 n, float3* t, float3* b) {
+  const float sign = n.z >= 0.0f ? 1.0f : -1.0f;
+  const float a = -1.0f / (sign + n.z);
+  const float c = n.x * n.y * a;
+  *t = (float3)(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+  *b = (float3)(c, sign + n.y * n.y * a, -n.y);
+}
+
+/* Uniform direction in the cone of half-angle a around `axis`, given
+ * one_minus_cos = 1 - cos(a). Working with 1 - cos keeps tiny cones (the sun,
+ * a ~ 0.27 deg, 1 - cos ~ 1e-5) accurate where cos itself rounds to 1. */
+inline float3 lux_lights_uniform_cone(float2 u, float one_minus_cos, float3 axis) {
+  const float h = u.x * one_minus_cos; /* 1 - cos(theta), uniform */
+  const float cos_t = 1.0f - h;
+  const float sin_t = sqrt(max(h * (2.0f - h), 0.0f));
+  const float phi = 2.0f * M_PI_F * u.y;
+  float3 t, b;
+  lux_lights_onb(axis, &t, &b);
+  return normalize(t * (cos(phi) * sin_t) + b * (sin(phi) * sin_t) + axis * cos_t);
+}
+
+inline float3 lux_lights_uniform_sphere(float2 u) {
+  const float z = 1.0f - 2.0f * u.x;
+  const float r = sqrt(max(1.0f - z * z, 0.0f));
+  const float phi = 2.0f * M_PI_F * u.y;
+  return (float3)(r * cos(phi), r * sin(phi), z);
+}
+
+/* Uniform point on a triangle: barycentrics of (v1, v2). */
+inline float2 lux_lights_uniform_triangle(float2 u) {
+  const float su = sqrt(u.x);
+  return (float2)(1.0f - su, u.y * su);
+}
+
+/* ---- Sky mapping (shared/light.h, EQUIRECT MAPPING). ---- */
+
+inline float3 lux_sky_to_local(const LuxSky sky, float3 d) {
+  const float s = sky.rotation.x, c = sky.rotation.y;
+  return (float3)(c * d.x - s * d.z, d.y, s * d.x + c * d.z);
+}
+
+inline float3 lux_sky_to_world(const LuxSky sky, float3 l) {
+  const float s = sky.rotation.x, c = sky.rotation.y;
+  return (float3)(c * l.x + s * l.z, l.y, -s * l.x + c * l.z);
+}
+
+/* Image coordinates (s along a row, t down the rows) of a unit local
+ * direction. */
+inline float2 lux_sky_local_to_st(float3 l) {
+  return (float2)(0.5f + atan2(l.x, -l.z) * (0.5f / M_PI_F), acos(clamp(l.y, -1.0f, 1.0f)) / M_PI_F);
+}
+
+#if LUX_SKY_IMAGE
+inline float3 lux_sky_texel(const LuxSky sky, const __global float* texels, float2 st) {
+  const int col = clamp((int)(st.x * (float)sky.width), 0, sky.width - 1);
+  const int row = clamp((int)(st.y * (float)sky.height), 0, sky.height - 1);
+  return vload3((size_t)row * (size_t)sky.width + (size_t)col, texels);
+}
+#endif
+
+/* Radiance arriving from direction `dir` (towards the sky), for rays that
+ * escape the scene. */
+inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, float3 dir) {
+#if LUX_SKY_IMAGE
+  if (sky.kind == LUX_SKY_KIND_IMAGE) {
+    return lux_sky_texel(sky, sky_texels, lux_sky_local_to_st(lux_sky_to_local(sky, normalize(dir))));
+  }
+#endif
+#if LUX_SKY
+  if (sky.kind == LUX_SKY_KIND_CONSTANT) return sky.radiance.xyz;
+#endif
+  (void)sky;
+  (void)sky_texels;
+  (void)dir;
+  return (float3)(0.0f);
+}
+
+/* Solid-angle pdf with which lux_sample_light produces direction `dir` from
+ * the sky, including the sky's selection probability (for MIS when a BSDF
+ * ray escapes). sky_light: the sky's light index (LuxSky.light). */
+inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_light,
+                         const __global float* sky_marginal, const __global float* sky_conditional,
+                         float3 dir) {
+  if (sky_light < 0) return 0.0f;
+  const float select = lux_cdf_pmf(select_cdf, (uint)sky_light);
+#if LUX_SKY_IMAGE
+  if (sky.kind == LUX_SKY_KIND_IMAGE) {
+    const float3 l = lux_sky_to_local(sky, normalize(dir));
+    const float sin_t = sqrt(max(1.0f - l.y * l.y, 0.0f));
+    if (!(sin_t > 0.0f)) return 0.0f;
+    /* d(omega) = sin(theta) d(theta) d(phi) = 2 pi^2 sin(theta) ds dt */
+    const float pdf_st = lux_pdf_2d(sky_marginal, sky_conditional, (uint)sky.width, (uint)sky.height,
+                                    lux_sky_local_to_st(l));
+    return select * pdf_st / (2.0f * M_PI_F * M_PI_F * sin_t);
+  }
+#endif
+#if LUX_SKY
+  if (sky.kind == LUX_SKY_KIND_CONSTANT) return select / (4.0f * M_PI_F);
+#endif
+  (void)sky_marginal;
+  (void)sky_conditional;
+  (void)dir;
+  return 0.0f;
+}
+
+/* ---- Per-type samplers: fill wi, dist, radiance, pdf (without selection),
+ * flags; return 0 when the sample carries nothing. ---- */
+
+#if LUX_LIGHT_POINT || LUX_LIGHT_SPOT
+/* Direction and inverse-square falloff towards a point source. */
+inline int lux_lights_towards_point(const LuxLight* light, float3 p, LuxLightSample* s, float* inv_d2) {
+  const float3 to = light->a.xyz - p;
+  const float d2 = dot(to, to);
+  if (!(d2 > 0.0f)) return 0;
+  s->dist = sqrt(d2);
+  s->wi = to / s->dist;
+  s->pdf = 1.0f;
+  s->is_delta = 1;
+  *inv_d2 = 1.0f / d2;
+  return 1;
+}
+#endif
+
+#if LUX_LIGHT_POINT
+inline int lux_lights_sample_point(const LuxLight* light, float3 p, LuxLightSample* s) {
+  float inv_d2;
+  if (!lux_lights_towards_point(light, p, s, &inv_d2)) return 0;
+  s->radiance = light->d.xyz * inv_d2;
+  return 1;
+}
+#endif
+
+#if LUX_LIGHT_SPOT
+/* glTF KHR_lights_punctual falloff: the square of a linear ramp in cos from
+ * the outer to the inner cone. */
+inline int lux_lights_sample_spot(const LuxLight* light, float3 p, LuxLightSample* s) {
+  float inv_d2;
+  if (!lux_lights_towards_point(light, p, s, &inv_d2)) return 0;
+  const float cos_inner = light->e.x, cos_outer = light->e.y;
+  const float cd = dot(light->b.xyz, -s->wi);
+  float att = clamp((cd - cos_outer) / max(cos_inner - cos_outer, 1e-4f), 0.0f, 1.0f);
+  att *= att;
+  if (!(att > 0.0f)) return 0;
+  s->radiance = light->d.xyz * (att * inv_d2);
+  return 1;
+}
+#endif
+
+#if LUX_LIGHT_DIRECTIONAL
+inline int lux_lights_sample_directional(const LuxLight* light, float2 u, LuxLightSample* s) {
+  const float3 to_light = -light->b.xyz;
+  const float one_minus_cos = light->e.z;
+  s->dist = INFINITY;
+  s->radiance = light->d.xyz;
+  if (one_minus_cos > 0.0f) {
+    s->wi = lux_lights_uniform_cone(u, one_minus_cos, to_light);
+    s->pdf = 1.0f / (2.0f * M_PI_F * one_minus_cos);
+  } else {
+    s->wi = to_light;
+    s->pdf = 1.0f;
+    s->is_delta = 1;
+  }
+  return 1;
+}
+#endif
+
+#if LUX_LIGHT_EMISSIVE
+/* Uniform by area, converted to solid angle: pdf = d^2 / (A |cos theta_l|). */
+inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u, LuxLightSample* s) {
+  const float2 bary = lux_lights_uniform_triangle(u);
+  const float3 x = light->a.xyz + bary.x * light->b.xyz + bary.y * light->c.xyz;
+  const float3 to = x - p;
+  const float d2 = dot(to, to);
+  if (!(d2 > 0.0f)) return 0;
+  s->dist = sqrt(d2);
+  s->wi = to / s->dist;
+  float cos_l = -dot(light->e.xyz, s->wi);
+  if (lux_as_int(light->b.w) & LUX_LIGHT_FLAG_DOUBLE_SIDED) cos_l = fabs(cos_l);
+  if (!(cos_l > 0.0f)) return 0; /* p sees the back of a one-sided emitter */
+  s->pdf = d2 / (light->d.w * cos_l);
+  s->radiance = light->d.xyz;
+  s->mis = 1;
+  s->triangle = lux_as_int(light->c.w);
+  s->bary = bary;
+  return 1;
+}
+#endif
+
+#if LUX_SKY || LUX_SKY_IMAGE
+inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_texels,
+                                 const __global float* sky_marginal, const __global float* sky_conditional,
+                                 float2 u, LuxLightSample* s) {
+  s->dist = INFINITY;
+  s->mis = 1;
+#if LUX_SKY_IMAGE
+  if (sky.kind == LUX_SKY_KIND_IMAGE) {
+    float pdf_st;
+    const float2 st =
+        lux_sample_grid_2d(sky_marginal, sky_conditional, (uint)sky.width, (uint)sky.height, u, &pdf_st);
+    const float theta = M_PI_F * st.y, phi = 2.0f * M_PI_F * (st.x - 0.5f);
+    const float sin_t = sin(theta);
+    if (!(pdf_st > 0.0f) || !(sin_t > 0.0f)) return 0;
+    s->wi = lux_sky_to_world(sky, (float3)(sin_t * sin(phi), cos(theta), -sin_t * cos(phi)));
+    s->pdf = pdf_st / (2.0f * M_PI_F * M_PI_F * sin_t);
+    s->radiance = lux_sky_texel(sky, sky_texels, st);
+    return 1;
+  }
+#endif
+#if LUX_SKY
+  if (sky.kind == LUX_SKY_KIND_CONSTANT) {
+    s->wi = lux_lights_uniform_sphere(u);
+    s->pdf = 1.0f / (4.0f * M_PI_F);
+    s->radiance = sky.radiance.xyz;
+    return 1;
+  }
+#endif
+  (void)sky_texels;
+  (void)sky_marginal;
+  (void)sky_conditional;
+  return 0;
+}
+#endif
+
+/* Next-event estimation: pick a light by power with u_select, sample it with
+ * u from shading point p. Returns 0 when the sample carries nothing (no
+ * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
+ * light type). */
+inline int lux_sample_light(const __global LuxLight* lights, const __global float* select_cdf, uint light_count,
+                            LuxSky sky, const __global float* sky_texels, const __global float* sky_marginal,
+                            const __global float* sky_conditional, float3 p, float u_select, float2 u,
+                            LuxLightSample* out) {
+  out->wi = (float3)(0.0f, 1.0f, 0.0f);
+  out->dist = 0.0f;
+  out->radiance = (float3)(0.0f);
+  out->pdf = 0.0f;
+  out->is_delta = 0;
+  out->mis = 0;
+  out->light = -1;
+  out->triangle = -1;
+  out->bary = (float2)(0.0f);
+  if (light_count == 0u) return 0;
+  float select;
+  const uint index = lux_sample_cdf(select_cdf, light_count, u_select, &select);
+  if (!(select > 0.0f)) return 0;
+  const LuxLight light = lights[index];
+  out->light = (int)index;
+  int ok = 0;
+  switch (lux_as_int(light.a.w)) {
+#if LUX_LIGHT_POINT
+    case LUX_LIGHT_TYPE_POINT: ok = lux_lights_sample_point(&light, p, out); break;
+#endif
+#if LUX_LIGHT_SPOT
+    case LUX_LIGHT_TYPE_SPOT: ok = lux_lights_sample_spot(&light, p, out); break;
+#endif
+#if LUX_LIGHT_DIRECTIONAL
+    case LUX_LIGHT_TYPE_DIRECTIONAL: ok = lux_lights_sample_directional(&light, u, out); break;
+#endif
+#if LUX_LIGHT_EMISSIVE
+    case LUX_LIGHT_TYPE_TRIANGLE: ok = lux_lights_sample_triangle(&light, p, u, out); break;
+#endif
+#if LUX_SKY || LUX_SKY_IMAGE
+    case LUX_LIGHT_TYPE_SKY:
+      ok = lux_lights_sample_sky(sky, sky_texels, sky_marginal, sky_conditional, u, out);
+      break;
+#endif
+    default: break;
+  }
+  (void)p;
+  (void)u;
+  (void)sky;
+  (void)sky_texels;
+  (void)sky_marginal;
+  (void)sky_conditional;
+  if (!ok || !(out->pdf > 0.0f)) return 0;
+  out->pdf *= select;
+  return 1;
+}
+
+/* Solid-angle pdf with which lux_sample_light would produce the point
+ * hit_point on emissive-triangle light `light` from p, selection included
+ * (for MIS when a BSDF ray hits an emitter; triangle_light maps the hit
+ * triangle to `light`). light_normal: the hit triangle's geometric normal
+ * (any length, either sign). 0 for the back of a one-sided emitter. */
+inline float lux_light_pdf_triangle(const __global LuxLight* lights, const __global float* select_cdf, int light,
+                                    float3 p, float3 hit_point, float3 light_normal) {
+#if LUX_LIGHT_EMISSIVE
+  if (light < 0) return 0.0f;
+  const LuxLight l = lights[light];
+  if (lux_as_int(l.a.w) != LUX_LIGHT_TYPE_TRIANGLE) return 0.0f;
+  const float3 to = hit_point - p;
+  const float d2 = dot(to, to);
+  if (!(d2 > 0.0f)) return 0.0f;
+  const float3 wi = to * rsqrt(d2);
+  if (!(lux_as_int(l.b.w) & LUX_LIGHT_FLAG_DOUBLE_SIDED) && !(dot(l.e.xyz, wi) < 0.0f)) return 0.0f;
+  const float cos_l = fabs(dot(normalize(light_normal), wi));
+  if (!(cos_l > 0.0f)) return 0.0f;
+  return lux_cdf_pmf(select_cdf, (uint)light) * d2 / (l.d.w * cos_l);
+#else
+  (void)lights;
+  (void)select_cdf;
+  (void)light;
+  (void)p;
+  (void)hit_point;
+  (void)light_normal;
+  return 0.0f;
+#endif
+}
+
+#endif /* LUXEL_SHADING_LIGHTS_H */

@@ -1,0 +1,251 @@
+// The bake engine against scenes with closed-form irradiance (issue 3,
+// DESIGN.md "Accuracy"): point light over a plane, uniform sky over an open
+// plane, a closed emissive furnace box. Every covered texel is z-tested
+// against the expected value with the standard error the engine reports
+// itself (Šidák-corrected over texels), plus a pooled test of the mean
+// relative deviation over all texels. Each check must also FAIL when a
+// deliberate error is injected into the expected value, so it cannot pass
+// trivially.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <array>
+#include <cstring>
+#include <functional>
+
+#include "atlas/sample_info.h"
+#include "device/context.h"
+#include "pipeline/bake.h"
+#include "shared/sample_info.h"
+#include "test_scenes.h"
+
+namespace luxel {
+namespace {
+
+struct Verdict {
+  bool texels_ok = true;  // every texel within the Šidák bound
+  bool pooled_ok = true;  // the mean relative deviation within its CI
+  double max_z = 0, pooled_z = 0, mean_ratio = 0;
+  size_t texels = 0;
+  bool ok() const { return texels_ok && pooled_ok; }
+};
+
+// z-tests every fully covered texel's mean (channel 0..2) against
+// expected(texel, channel). The engine's standard error is rel_error * mean
+// luminance; a floor of 1e-5 relative covers fp32 accumulation rounding when
+// the sampling variance is ~0 (e.g. stratified direct light).
+Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t, int)>& expected,
+              double family_alpha = 1e-3) {
+  Verdict v;
+  std::vector<double> rel;
+  std::vector<std::array<double, 3>> zs;
+  for (size_t t = 0; t < size_t(r.width) * r.height; ++t) {
+    if (r.irradiance[t * 4 + 3] < 1.0f || r.samples[t] < 2) continue;
+    const double lum = 0.2126 * r.irradiance[t * 4] + 0.7152 * r.irradiance[t * 4 + 1] +
+                       0.0722 * r.irradiance[t * 4 + 2];
+    std::array<double, 3> z{};
+    for (int c = 0; c < 3; ++c) {
+      const double e = expected(static_cast<uint32_t>(t), c);
+      const double x = r.irradiance[t * 4 + static_cast<size_t>(c)];
+      // Channel se from the luminance rel. error (grey transport: equal).
+      const double se_rel = r.rel_error[t];
+      const double se = std::sqrt(std::pow(se_rel * (lum > 0 ? x : 0), 2) + std::pow(1e-5 * e, 2));
+      z[static_cast<size_t>(c)] = se > 0 ? (x - e) / se : (x == e ? 0 : INFINITY);
+      if (c == 1) rel.push_back(e > 0 ? x / e - 1 : 0);
+    }
+    zs.push_back(z);
+  }
+  v.texels = zs.size();
+  // Šidák: per-test alpha = 1 - (1 - family)^(1/m); two-sided normal bound.
+  const double m = 3.0 * std::max<size_t>(zs.size(), 1);
+  const double per_test = 1.0 - std::pow(1.0 - family_alpha, 1.0 / m);
+  // Inverse normal tail by bisection on erfc.
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > per_test ? lo : hi) = mid;
+  }
+  const double bound = hi;
+  for (const auto& z : zs)
+    for (double zc : z) {
+      v.max_z = std::max(v.max_z, std::fabs(zc));
+      if (!(std::fabs(zc) <= bound)) v.texels_ok = false;
+    }
+  // Pooled: the mean relative deviation over texels with its sample CI.
+  double mean = 0, var = 0;
+  for (double x : rel) mean += x;
+  mean /= std::max<size_t>(rel.size(), 1);
+  for (double x : rel) var += (x - mean) * (x - mean);
+  var /= std::max<size_t>(rel.size() - 1, 1);
+  const double se = std::sqrt(var / std::max<size_t>(rel.size(), 1)) + 1e-5;
+  v.pooled_z = mean / se;
+  v.mean_ratio = 1 + mean;
+  v.pooled_ok = std::fabs(v.pooled_z) <= 4.0;  // ~6e-5 two-sided
+  std::printf("  %zu texels, max |z| %.2f (bound %.2f), mean ratio %.5f, pooled z %.2f\n",
+              v.texels, v.max_z, bound, v.mean_ratio, v.pooled_z);
+  return v;
+}
+
+class ClosedFormTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto ctx = device::Context::create();
+    ASSERT_TRUE(ctx) << ctx.status().to_string();
+    ctx_ = std::move(ctx.value()).release();
+  }
+  static void TearDownTestSuite() { delete ctx_; }
+
+  pipeline::BakeResult bake(const scene::Scene& s, const pipeline::BakeSettings& settings) {
+    auto r = pipeline::bake(s, settings, *ctx_);
+    EXPECT_TRUE(r) << r.status().to_string();
+    if (!r) return {};
+    return std::move(r.value());
+  }
+
+  static pipeline::BakeSettings settings(int resolution, uint32_t spp, int bounces) {
+    pipeline::BakeSettings s;
+    s.atlas.resolution = resolution;
+    s.samples_per_texel = spp;
+    s.max_bounces = bounces;
+    s.paths_per_iteration = 1u << 16;
+    s.seed = 7;
+    return s;
+  }
+
+  static device::Context* ctx_;
+};
+device::Context* ClosedFormTest::ctx_ = nullptr;
+
+// The mean of f over a texel's valid Hammersley positions (the quantity the
+// engine estimates: each valid position is chosen with equal probability).
+double texel_mean(const atlas::SampleInfo& info, uint32_t texel,
+                  const std::function<double(double, double)>& f_uv) {
+  const uint32_t off = info.offsets[texel];
+  const uint64_t valid = uint64_t{info.words[off]} | (uint64_t{info.words[off + 1]} << 32);
+  const uint32_t tx = texel % static_cast<uint32_t>(info.width), ty = texel / static_cast<uint32_t>(info.width);
+  double sum = 0;
+  int n = 0;
+  for (uint32_t i = 0; i < 64; ++i) {
+    if (!(valid >> i & 1)) continue;
+    const cl::float2 h = cl::lux_hammersley64(i);
+    sum += f_uv((tx + h.x) / info.width, (ty + h.y) / info.height);
+    ++n;
+  }
+  return sum / n;
+}
+
+TEST_F(ClosedFormTest, PointLightOverPlane) {
+  // E = I cos(theta) / r^2 = I h / r^3, direct light only.
+  scene::Scene s = testing::open_plane();
+  scene::Light light;
+  light.type = scene::LightType::kPoint;
+  light.intensity = 3.0f;
+  light.position = {0.1f, 0.75f, -0.2f};
+  s.lights.push_back(light);
+  auto st = settings(32, 64, 0);
+  auto r = bake(s, st);
+  ASSERT_GT(r.covered_texels, 1000u);
+  auto atlas = atlas::build_atlas(s, st.atlas);
+  ASSERT_TRUE(atlas);
+  auto info = atlas::build_sample_info(s, atlas.value());
+  ASSERT_TRUE(info);
+  auto expected = [&](double scale) {
+    return [&, scale](uint32_t t, int) {
+      return scale * texel_mean(info.value(), t, [&](double u, double v) {
+               const double x = -1 + 2 * v - light.position.x, z = -1 + 2 * u - light.position.z;
+               const double h = light.position.y;
+               const double r2 = x * x + z * z + h * h;
+               return light.intensity * h / (r2 * std::sqrt(r2));
+             });
+    };
+  };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
+TEST_F(ClosedFormTest, UniformSkyOverOpenPlane) {
+  // E = pi L for an unoccluded plane under a constant sky; bounces add
+  // nothing (nothing to hit), but run them to exercise the loop.
+  scene::Scene s = testing::open_plane();
+  auto st = settings(16, 256, 2);
+  st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+  st.lights.sky.color = {0.25f, 0.5f, 1.0f};
+  st.lights.sky.intensity = 2.0f;
+  auto r = bake(s, st);
+  const double l[3] = {0.5, 1.0, 2.0};
+  auto expected = [&](double scale) {
+    return [&, scale](uint32_t, int c) { return scale * M_PI * l[c]; };
+  };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
+TEST_F(ClosedFormTest, FurnaceBox) {
+  // Closed box, albedo a, every wall emitting Le: with B bounces the
+  // irradiance is pi Le (1 - a^(B+1)) / (1 - a) everywhere (-> pi Le/(1-a)).
+  const float a = 0.5f, le = 0.25f;
+  const int bounces = 6;
+  scene::Scene s = testing::furnace_box(a, le);
+  auto st = settings(24, 128, bounces);
+  auto r = bake(s, st);
+  ASSERT_GT(r.covered_texels, 300u);
+  const double e = M_PI * le * (1 - std::pow(a, bounces + 1)) / (1 - a);
+  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  EXPECT_EQ(r.nonfinite_dropped, 0u);
+}
+
+TEST_F(ClosedFormTest, SameSeedIsBitIdenticalOtherSeedDiffers) {
+  scene::Scene s = testing::furnace_box(0.5f, 0.25f);
+  auto st = settings(16, 16, 3);
+  auto a = bake(s, st);
+  auto b = bake(s, st);
+  ASSERT_EQ(a.irradiance.size(), b.irradiance.size());
+  EXPECT_EQ(0, std::memcmp(a.irradiance.data(), b.irradiance.data(), a.irradiance.size() * 4));
+  st.seed = 8;
+  auto c = bake(s, st);
+  EXPECT_NE(0, std::memcmp(a.irradiance.data(), c.irradiance.data(), a.irradiance.size() * 4));
+}
+
+TEST_F(ClosedFormTest, NonFiniteSamplesAreCountedAndDropped) {
+  // A light so bright that I / r^2 overflows fp32: every sample is +inf.
+  scene::Scene s = testing::open_plane();
+  scene::Light light;
+  light.type = scene::LightType::kPoint;
+  light.intensity = 3e38f;
+  light.position = {0, 1e-3f, 0};
+  s.lights.push_back(light);
+  auto r = bake(s, settings(8, 4, 0));
+  EXPECT_GT(r.nonfinite_dropped, 0u);
+  for (float x : r.irradiance) EXPECT_TRUE(std::isfinite(x));
+}
+
+TEST_F(ClosedFormTest, StopsOnTargetErrorAndTime) {
+  scene::Scene s = testing::furnace_box(0.5f, 0.25f);
+  auto st = settings(16, 0, 2);
+  st.target_error = 0.05;
+  auto r = bake(s, st);
+  EXPECT_EQ(r.termination, pipeline::Termination::kError);
+  EXPECT_LE(r.error, 0.05);
+  EXPECT_FALSE(r.series.empty());
+  st.target_error = 0;
+  st.time_budget_s = 0.5;
+  auto t = bake(s, st);
+  EXPECT_EQ(t.termination, pipeline::Termination::kTime);
+  EXPECT_LT(t.seconds, 10.0);
+}
+
+TEST_F(ClosedFormTest, InvalidSettingsNameTheField) {
+  scene::Scene s = testing::open_plane();
+  auto st = settings(16, 16, 1);
+  st.max_bounces = 99;
+  auto r = pipeline::bake(s, st, *ctx_);
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.status().message().find("max_bounces"), std::string::npos) << r.status().message();
+}
+
+}  // namespace
+}  // namespace luxel
