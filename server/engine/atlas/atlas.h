@@ -1,0 +1,76 @@
+// The lightmap atlas: where each instance's TEXCOORD_1 layout lands in the
+// one lightmap image of a bake (thesis §4.1-4.2: "the clip-space position for
+// each mesh vertex within the lightmap is given by the vertex's lightmap UV
+// transformed by the offset and scale produced in the preprocessing stage").
+//
+// Two modes:
+//   kShared  the scene already has one scene-wide atlas in TEXCOORD_1 (every
+//            mesh used by at most one instance, layouts of different
+//            instances disjoint; the shared benchmark scenes): UVs are used
+//            as they are (scale 1, offset 0).
+//   kPacked  otherwise (instanced meshes, per-mesh layouts that each fill the
+//            unit square): every instance gets its own rectangle, its mesh's
+//            TEXCOORD_1 bounding box scaled to one texel density for the whole
+//            scene (see shelf_packer.h).
+//
+// UV convention: glTF UV (0,0) is the top-left corner; atlas UV (u, v) is the
+// point (u * width, v * height) in texel units, row 0 at the top. Texel (x, y)
+// covers [x, x+1) x [y, y+1).
+//
+// In shared mode every TEXCOORD_1 must lie in [0,1] (a tolerance of 1e-5):
+// clamping would fold geometry onto the border texels, so a UV outside is an
+// INVALID_ARGUMENT naming the mesh. (A scene whose layouts overlap is packed
+// instead, and packing accepts any UV range.)
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/math.h"
+#include "common/status.h"
+#include "scene/scene.h"
+
+namespace luxel::atlas {
+
+struct AtlasSettings {
+  int resolution = 0;         // square side in texels; 0: derive from texel_density
+  float texel_density = 0;    // texels per world unit, used when resolution == 0
+  int padding_texels = 2;     // packed mode: between rectangles and from the border
+  int max_resolution = 8192;  // larger atlases are RESOURCE_EXHAUSTED
+};
+
+enum class AtlasMode { kShared, kPacked };
+
+const char* atlas_mode_name(AtlasMode mode);
+
+struct InstancePlacement {
+  uint32_t instance = 0;
+  float scale[2] = {1, 1};  // atlas_uv = uv1 * scale + offset
+  float offset[2] = {0, 0};
+  int rect[4] = {0, 0, 0, 0};  // x, y, w, h in texels (the whole atlas in shared mode)
+};
+
+struct Atlas {
+  int width = 0, height = 0;
+  AtlasMode mode = AtlasMode::kShared;
+  std::vector<InstancePlacement> placements;  // one per Scene::instances, same order
+  double texels_per_unit = 0;                 // achieved mean density (texels per world unit)
+
+  Vec2 to_atlas(uint32_t instance, Vec2 uv1) const {
+    const InstancePlacement& p = placements[instance];
+    return {uv1.x * p.scale[0] + p.offset[0], uv1.y * p.scale[1] + p.offset[1]};
+  }
+};
+
+// Lays out the scene's lightmap. With resolution > 0 the atlas is that square
+// (texel_density is ignored); packed mode then uses the largest density that
+// fits. With resolution == 0 the side follows from texel_density: in shared
+// mode ceil(sqrt(world area * density^2 / UV area)), in packed mode the
+// smallest multiple of 4 that holds the charts.
+// Errors: INVALID_ARGUMENT naming the setting or the mesh (missing, non-finite
+// or all zero-area TEXCOORD_1; UVs outside [0,1] in shared mode), "scene has
+// no geometry" without instances; RESOURCE_EXHAUSTED naming max_resolution
+// and the size needed.
+Result<Atlas> build_atlas(const scene::Scene& scene, const AtlasSettings& settings);
+
+}  // namespace luxel::atlas

@@ -1,0 +1,33 @@
+// Crash-safe file replacement.
+//
+// Every file the output stage produces is written whole or not at all: bytes
+// go to "<path>.tmp", which is fsync'ed and renamed over `path` (rename is
+// atomic on POSIX file systems), then the directory is fsync'ed so the rename
+// itself survives a power cut. A crash therefore leaves either the old file or
+// the new one, never a torn one; at worst a stale "<path>.tmp" remains, which
+// the next write to `path` truncates and reuses.
+//
+// Two writers of the same `path` at the same time share "<path>.tmp" and may
+// clobber each other's temporary; callers serialise writes per path (each bake
+// writes into its own result folder).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "common/status.h"
+
+namespace luxel::output {
+
+// Replaces `path` atomically with `bytes` bytes from `data` (permissions 0644
+// before the umask). Errors name the path:
+//   INVALID_ARGUMENT   empty path, missing or unwritable directory, path is a directory
+//   RESOURCE_EXHAUSTED the disk or quota is full
+//   INTERNAL           any other I/O failure
+// On error no "<path>.tmp" is left behind and `path` is unchanged.
+Status write_file_atomic(const std::string& path, const void* data, size_t bytes);
+
+// The temporary name write_file_atomic uses for `path` ("<path>.tmp").
+std::string atomic_temp_path(const std::string& path);
+
+}  // namespace luxel::output

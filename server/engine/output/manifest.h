@@ -1,0 +1,100 @@
+// The manifest of a baked lightmap: a JSON file beside the images that tells
+// an engine everything it needs to use them without guessing (what the
+// numbers mean and in which units, which UV set and how instances map into
+// the atlas, which file holds what), plus how the bake was made.
+//
+// JSON layout (version 1): the members of Manifest under the same names, in
+// one object with "format": "luxel-lightmap-manifest" and "version": 1.
+// Instances are objects {"name", "node", "mesh", "scale": [s, t],
+// "offset": [u, v], "rect": [x, y, width, height]}, files are objects
+// {"role", "path", "format", "description"}, "settings" is an object of
+// strings and "stats" an object. Non-finite stats (JSON has no NaN or Inf) are
+// written as null and read back as NaN. Readers ignore members they do not
+// know, so version 1 may grow optional members.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+
+namespace luxel::output {
+
+inline constexpr const char* kManifestFormat = "luxel-lightmap-manifest";
+inline constexpr int kManifestVersion = 1;
+
+struct Manifest {
+  std::string luxel_version = LUXEL_VERSION;
+  std::string git_revision = LUXEL_GIT_REVISION;
+  std::string scene_name;
+  std::string scene_sha256;             // hex; may be empty (scene not from the store)
+  int width = 0, height = 0;            // lightmap size in texels (both > 0)
+  std::string encoding = "irradiance";  // later "sh2", "sg12", ...; not empty
+  // What the values are, e.g. "irradiance E in W/m^2 (radiometric; glTF
+  // emissive radiance and light intensities taken 1:1)"; not empty.
+  std::string units;
+  std::string uv_set = "TEXCOORD_1";  // not empty
+  // "shared": every instance uses its TEXCOORD_1 as atlas UV directly (scale
+  // 1, offset 0); "packed": Luxel packed per-instance charts, see Instance.
+  std::string atlas_mode = "shared";
+
+  struct Instance {
+    std::string name;
+    int node = -1;  // glTF node index (-1: none)
+    int mesh = -1;  // glTF mesh index (-1: none)
+    // atlas_uv = uv1 * scale + offset, in glTF UV convention (v = 0 at the top
+    // row of the images); finite.
+    float scale[2]{1, 1};
+    float offset[2]{0, 0};
+    // The instance's texel block in the atlas: x, y (from the top row),
+    // width, height; inside the lightmap.
+    int rect[4]{0, 0, 0, 0};
+  };
+  std::vector<Instance> instances;
+
+  struct File {
+    std::string role;    // "irradiance", "preview", "samples", ...; not empty
+    std::string path;    // relative to the manifest's folder; not empty
+    std::string format;  // e.g. "exr", "png"
+    std::string description;
+  };
+  std::vector<File> files;
+
+  std::map<std::string, std::string> settings;  // bake settings as given
+  std::string features;                         // compiled feature list
+  std::string device;                           // device description
+
+  struct Stats {
+    double seconds = 0;
+    uint64_t paths = 0;
+    double mean_spp = 0, min_spp = 0;
+    double error_estimate = 0;  // mean relative standard error (DESIGN.md)
+    uint64_t nonfinite_dropped = 0;
+    std::string termination;  // why the bake stopped: "samples", "time", "error", ...
+    size_t covered_texels = 0;
+  } stats;
+
+  int dilation_texels = 0;  // dilation radius applied to the images (>= 0)
+};
+
+// The manifest as pretty-printed JSON (2-space indent, trailing newline).
+// INVALID_ARGUMENT naming the first field that breaks the rules above.
+Result<std::string> manifest_to_json(const Manifest& manifest);
+
+// Parses and validates manifest JSON. `what` names the source in errors.
+// DATA_LOSS for text that is not JSON; INVALID_ARGUMENT naming the field
+// (e.g. "instances[2].rect") that is missing, has the wrong type or breaks a
+// rule, or for another format / an unsupported version.
+Result<Manifest> manifest_from_json(const std::string& text, const std::string& what);
+
+// Validates, then writes atomically (atomic_file.h). Errors name the path.
+Status write_manifest(const std::string& path, const Manifest& manifest);
+
+// Reads and validates; NOT_FOUND for a missing file, otherwise as
+// manifest_from_json with the path named.
+Result<Manifest> read_manifest(const std::string& path);
+
+}  // namespace luxel::output

@@ -1,0 +1,130 @@
+// bench_bake: throughput of the bake engine (issue 3 "Measurements").
+//
+//   bench_bake [--spp N] [--resolution N] [--quick] [SCENE...]
+//
+// For each scene, in one run on one device:
+//  1. paths/s and the per-kernel breakdown at 1 and 4 bounces, peak device memory;
+//  2. paths/s against the batch size (paths per iteration);
+//  3. ablations at 4 bounces: stream compaction off, ray-direction sorting on
+//     (time for the same number of paths, as a ratio to the default).
+// Scenes get a constant sky and a sun so outdoor scenes have light.
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "device/context.h"
+#include "pipeline/bake.h"
+#include "scene/gltf_import.h"
+
+using namespace luxel;
+
+namespace {
+
+struct Run {
+  double seconds = 0, mpaths_per_s = 0, kernel_ms = 0;
+  size_t device_mib = 0;
+  std::string top_kernels;
+};
+
+// Each configuration is first baked at 1 sample per texel: that builds and
+// caches its program variant (and PoCL's per-launch JIT), so the measured
+// bake pays for no compilation.
+Run bake_once(const scene::Scene& s, pipeline::BakeSettings st, device::Context& ctx) {
+  auto warm = st;
+  warm.samples_per_texel = 1;
+  if (!pipeline::bake(s, warm, ctx)) std::exit(1);
+  auto r = pipeline::bake(s, st, ctx);
+  if (!r) {
+    std::fprintf(stderr, "bench_bake: %s\n", r.status().to_string().c_str());
+    std::exit(1);
+  }
+  Run run;
+  run.seconds = r.value().seconds;
+  run.mpaths_per_s = r.value().paths / r.value().seconds / 1e6;
+  run.device_mib = r.value().peak_device_bytes >> 20;
+  auto kernels = r.value().kernel_ms;
+  std::sort(kernels.begin(), kernels.end(), [](auto& a, auto& b) { return a.second > b.second; });
+  for (const auto& k : kernels) run.kernel_ms += k.second;
+  for (size_t i = 0; i < kernels.size() && i < 4; ++i)
+    run.top_kernels += strprintf("%s%s %.0f%%", i ? ", " : "", kernels[i].first.c_str(),
+                                 100.0 * kernels[i].second / run.kernel_ms);
+  return run;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  uint32_t spp = 16;
+  int resolution = 256;
+  bool quick = false;
+  std::vector<std::string> scenes;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--spp" && i + 1 < argc) spp = static_cast<uint32_t>(std::atoi(argv[++i]));
+    else if (a == "--resolution" && i + 1 < argc) resolution = std::atoi(argv[++i]);
+    else if (a == "--quick") quick = true;
+    else scenes.push_back(a);
+  }
+  if (scenes.empty())
+    scenes = {LUXEL_SCENES_DIR "/cornell_box.gltf", LUXEL_SCENES_DIR "/foliage_instanced.glb",
+              LUXEL_SCENES_DIR "/procedural_city.glb"};
+  auto ctx = device::Context::create();
+  if (!ctx) {
+    std::fprintf(stderr, "bench_bake: %s\n", ctx.status().to_string().c_str());
+    return 1;
+  }
+  std::printf("device: %s\nlightmap %d^2, %u samples per texel per measurement\n\n",
+              ctx.value()->info().describe().c_str(), resolution, spp);
+
+  for (const auto& path : scenes) {
+    auto s = scene::import_gltf_file(path);
+    if (!s) {
+      std::fprintf(stderr, "bench_bake: %s\n", s.status().to_string().c_str());
+      return 1;
+    }
+    pipeline::BakeSettings base;
+    base.atlas.resolution = resolution;
+    base.samples_per_texel = spp;
+    base.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+    base.lights.sky.color = {0.4f, 0.5f, 0.7f};
+    base.lights.sun.enabled = true;
+    base.lights.sun.direction = {0.3f, -1.0f, 0.2f};
+    base.lights.sun.illuminance = 5.0f;
+    base.progress_interval_s = 1e9;
+    std::printf("scene %s\n", path.c_str());
+
+    std::printf("  %-28s %9s %9s %10s %8s  %s\n", "configuration", "seconds", "Mpaths/s",
+                "kernel ms", "dev MiB", "largest kernels");
+    auto row = [&](const std::string& name, const Run& r) {
+      std::printf("  %-28s %9.2f %9.3f %10.0f %8zu  %s\n", name.c_str(), r.seconds, r.mpaths_per_s,
+                  r.kernel_ms, r.device_mib, r.top_kernels.c_str());
+    };
+    for (int bounces : {1, 4}) {
+      auto st = base;
+      st.max_bounces = bounces;
+      row(strprintf("bounces %d", bounces), bake_once(s.value(), st, *ctx.value()));
+    }
+    if (!quick) {
+      for (uint32_t batch : {1u << 14, 1u << 16, 1u << 18, 1u << 20}) {
+        auto st = base;
+        st.paths_per_iteration = batch;
+        row(strprintf("bounces 4, batch %u", batch), bake_once(s.value(), st, *ctx.value()));
+      }
+    }
+    auto st = base;
+    const Run ref = bake_once(s.value(), st, *ctx.value());
+    st.compaction = false;
+    const Run no_compaction = bake_once(s.value(), st, *ctx.value());
+    st = base;
+    st.sort_directions = true;
+    const Run sorted = bake_once(s.value(), st, *ctx.value());
+    row("bounces 4 (default)", ref);
+    row("  compaction off", no_compaction);
+    row("  direction sort on", sorted);
+    std::printf("  time ratio vs default: compaction off %.2fx, direction sort on %.2fx\n\n",
+                no_compaction.seconds / ref.seconds, sorted.seconds / ref.seconds);
+  }
+  return 0;
+}
