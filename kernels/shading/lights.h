@@ -23,6 +23,7 @@
 #define LUXEL_SHADING_LIGHTS_H
 
 #include "shared/light.h"
+#include "sampling/warp.h"
 #include "shading/distribution.h"
 
 typedef struct LuxLightSample {
@@ -37,42 +38,18 @@ typedef struct LuxLightSample {
   float2 bary;  /* emissive triangles: barycentrics of v1 and v2 (like LuxHit u, v) */
 } LuxLightSample;
 
-/* ---- Private warps (lux_lights_ prefix; kernels/sampling/warp.h has the
- * public ones once it exists). ---- */
-
-/* Orthonormal basis around unit n (Duff et al. 2017, branchless). */
-inline void lux_lights_onb(float3 n, float3* t, float3* b) {
-  const float sign = n.z >= 0.0f ? 1.0f : -1.0f;
-  const float a = -1.0f / (sign + n.z);
-  const float c = n.x * n.y * a;
-  *t = (float3)(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
-  *b = (float3)(c, sign + n.y * n.y * a, -n.y);
-}
-
-/* Uniform direction in the cone of half-angle a around `axis`, given
- * one_minus_cos = 1 - cos(a). Working with 1 - cos keeps tiny cones (the sun,
- * a ~ 0.27 deg, 1 - cos ~ 1e-5) accurate where cos itself rounds to 1. */
+/* Uniform direction in the cone of half-angle a around unit `axis`, given
+ * one_minus_cos = 1 - cos(a). sampling/warp.h's lux_uniform_cone takes
+ * cos(a), which a float cannot hold for the sun (a ~ 0.27 deg, 1 - cos ~ 1e-5:
+ * the float cos keeps ~2 digits of it), so the table stores 1 - cos and this
+ * warp starts from it. */
 inline float3 lux_lights_uniform_cone(float2 u, float one_minus_cos, float3 axis) {
   const float h = u.x * one_minus_cos; /* 1 - cos(theta), uniform */
-  const float cos_t = 1.0f - h;
   const float sin_t = sqrt(max(h * (2.0f - h), 0.0f));
   const float phi = 2.0f * M_PI_F * u.y;
   float3 t, b;
-  lux_lights_onb(axis, &t, &b);
-  return normalize(t * (cos(phi) * sin_t) + b * (sin(phi) * sin_t) + axis * cos_t);
-}
-
-inline float3 lux_lights_uniform_sphere(float2 u) {
-  const float z = 1.0f - 2.0f * u.x;
-  const float r = sqrt(max(1.0f - z * z, 0.0f));
-  const float phi = 2.0f * M_PI_F * u.y;
-  return (float3)(r * cos(phi), r * sin(phi), z);
-}
-
-/* Uniform point on a triangle: barycentrics of (v1, v2). */
-inline float2 lux_lights_uniform_triangle(float2 u) {
-  const float su = sqrt(u.x);
-  return (float2)(1.0f - su, u.y * su);
+  lux_onb(axis, &t, &b);
+  return normalize(lux_to_world((float3)(cos(phi) * sin_t, sin(phi) * sin_t, 1.0f - h), t, b, axis));
 }
 
 /* ---- Sky mapping (shared/light.h, EQUIRECT MAPPING). ---- */
@@ -210,7 +187,7 @@ inline int lux_lights_sample_directional(const LuxLight* light, float2 u, LuxLig
 #if LUX_LIGHT_EMISSIVE
 /* Uniform by area, converted to solid angle: pdf = d^2 / (A |cos theta_l|). */
 inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u, LuxLightSample* s) {
-  const float2 bary = lux_lights_uniform_triangle(u);
+  const float2 bary = lux_uniform_triangle(u); /* area-uniform (b1, b2) */
   const float3 x = light->a.xyz + bary.x * light->b.xyz + bary.y * light->c.xyz;
   const float3 to = x - p;
   const float d2 = dot(to, to);
@@ -251,7 +228,7 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
 #endif
 #if LUX_SKY
   if (sky.kind == LUX_SKY_KIND_CONSTANT) {
-    s->wi = lux_lights_uniform_sphere(u);
+    s->wi = lux_uniform_sphere(u);
     s->pdf = 1.0f / (4.0f * M_PI_F);
     s->radiance = sky.radiance.xyz;
     return 1;

@@ -1,0 +1,115 @@
+/* Light table and sky records shared by host and device (next-event
+ * estimation, thesis §6.1; light selection by power, §6.3.2).
+ *
+ * UNITS. Radiometric throughout; glTF values are taken 1:1, no photometric
+ * conversion:
+ *   emissive triangle  radiance W/(m^2 sr) = emissiveFactor * emissive_strength
+ *                      (times the emissive texture, which the caller applies)
+ *   point, spot        radiant intensity W/sr = color * glTF intensity (cd)
+ *   directional, sun   irradiance W/m^2 on a surface facing the light
+ *                      = color * glTF intensity (lux) / bake illuminance
+ *   sky                radiance = color * intensity (times the image texel)
+ * glTF `range` is ignored: falloff is the physical inverse square.
+ * World space is +Y up; distances are scene units.
+ *
+ * LuxLight: 80 bytes, five float4. Integers are stored as bits in float
+ * lanes (lux_as_int / lux_as_float).
+ *
+ *   field  point          spot           directional       triangle (3)        sky (4)
+ *   a.xyz  position       position       -                 v0                  -
+ *   a.w    type (int)     type           type              type                type
+ *   b.xyz  -              unit direction unit direction    edge1 = v1 - v0     -
+ *                         light travels  light travels
+ *   b.w    flags (int)    flags          flags             flags               flags
+ *   c.xyz  -              -              -                 edge2 = v2 - v0     -
+ *   c.w    -              -              -                 world triangle id   -
+ *   d.xyz  intensity      intensity      irradiance E, or  radiance            mean radiance
+ *          W/sr           W/sr           disc radiance                         (information)
+ *          (rgb)                         E/(pi sin^2 a)
+ *                                        when a > 0
+ *   d.w    -              -              -                 area                -
+ *   e.x    -              cos inner      -                 unit front normal x
+ *   e.y    -              cos outer      -                 normal y
+ *   e.z    -              -              1 - cos(a)        normal z
+ *   e.w    -              -              -                 material (int)
+ *
+ * "-" lanes are 0. Triangle barycentrics (LuxLightSample.bary) weigh v1 and
+ * v2, like LuxHit.u/v. The triangle's front normal follows its world winding
+ * (cross(edge1, edge2)), flipped for instances whose transform mirrors
+ * (glTF: a negative determinant reverses the winding). A directional light
+ * with angular radius a > 0 is a disc of uniform radiance (the sun) sampled
+ * over its cone of directions.
+ *
+ * FEATURES (-D from the FeatureSet). A type whose macro is absent is
+ * compiled out: sampling it returns "no contribution".
+ *   LUX_LIGHT_POINT        point lights
+ *   LUX_LIGHT_SPOT         spot lights
+ *   LUX_LIGHT_DIRECTIONAL  directional lights and the bake-settings sun
+ *   LUX_LIGHT_EMISSIVE     emissive triangles
+ *   LUX_SKY                a constant-colour sky (uniform sphere sampling)
+ *   LUX_SKY_IMAGE          an equirectangular sky, importance sampled
+ *
+ * EQUIRECT MAPPING. A world direction d is first rotated by -rotation about
+ * +Y into image space l (so the image appears turned by +rotation,
+ * right-handed about +Y); then
+ *   u = 0.5 + atan2(l.x, -l.z) / (2 pi)     (-Z is the image centre, +X at 0.75)
+ *   v = acos(l.y) / pi                      (row 0 = straight up)
+ * Texels are looked up nearest (the importance-sampling distribution is
+ * piecewise constant over the same texels, so pdf and radiance agree). */
+#ifndef LUXEL_SHARED_LIGHT_H
+#define LUXEL_SHARED_LIGHT_H
+
+#include "shared/compat.h"
+
+#define LUX_LIGHT_TYPE_POINT 0
+#define LUX_LIGHT_TYPE_SPOT 1
+#define LUX_LIGHT_TYPE_DIRECTIONAL 2
+#define LUX_LIGHT_TYPE_TRIANGLE 3
+#define LUX_LIGHT_TYPE_SKY 4
+
+/* LuxLight flags (b.w). */
+#define LUX_LIGHT_FLAG_DOUBLE_SIDED 1 /* emits from both faces (glTF doubleSided) */
+#define LUX_LIGHT_FLAG_TEXTURED 2     /* material has an emissiveTexture: the caller
+                                         multiplies radiance by it */
+
+#define LUX_SKY_KIND_NONE 0
+#define LUX_SKY_KIND_CONSTANT 1
+#define LUX_SKY_KIND_IMAGE 2
+
+#ifndef LUX_DEVICE
+namespace luxel::cl {
+#endif
+
+typedef struct LuxLight {
+  float4 a;
+  float4 b;
+  float4 c;
+  float4 d;
+  float4 e;
+} LuxLight;
+
+/* The sky (environment), passed to kernels by value. 48 bytes.
+ *   kind        LUX_SKY_KIND_*
+ *   width/height  equirect image size (0 for a constant sky)
+ *   light       index of the sky's entry in the light table, -1 if none
+ *   radiance    constant sky: its radiance (rgb). Image sky: the
+ *               colour * intensity already multiplied into the texels
+ *   rotation    x = sin, y = cos of the rotation about +Y
+ * Image texels: width * height * 3 floats (rgb, radiance), row 0 = up.
+ * Distribution: marginal cdf over rows (height + 1 floats) and one
+ * conditional cdf per row (height * (width + 1) floats), weights
+ * luminance * sin(theta) so samples follow radiance per solid angle. */
+typedef struct LuxSky {
+  int kind;
+  int width;
+  int height;
+  int light;
+  float4 radiance;
+  float4 rotation;
+} LuxSky;
+
+#ifndef LUX_DEVICE
+}  // namespace luxel::cl
+#endif
+
+#endif /* LUXEL_SHARED_LIGHT_H */

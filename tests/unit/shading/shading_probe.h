@@ -1,0 +1,66 @@
+// Runs the test kernels of kernels/testing/lights_probe.cl on the OpenCL
+// device (PoCL in CI): one call of a shading device function per work-item.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "device/context.h"
+#include "device/feature_set.h"
+#include "device/program_cache.h"
+#include "pipeline/shading/light_table.h"
+#include "pipeline/shading/texture_pack.h"
+
+namespace luxel::pipeline::test {
+
+// One context for the whole test binary (PoCL start-up is not free).
+device::Context& shared_context();
+
+// Every light feature: one compiled program serves most tests (the sky kind
+// is also switched at run time).
+device::FeatureSet all_light_features();
+
+struct LightSamples {
+  std::vector<cl::float4> wi_pdf;         // wi, pdf (0: no sample)
+  std::vector<cl::float4> radiance_dist;  // radiance, dist
+  std::vector<cl::int4> info;             // light, triangle, is_delta | mis << 1, returned value
+  std::vector<cl::float2> bary;
+
+  bool ok(size_t i) const { return info[i].w != 0; }
+  bool is_delta(size_t i) const { return (info[i].z & 1) != 0; }
+  bool mis(size_t i) const { return (info[i].z & 2) != 0; }
+};
+
+class LightProbe {
+ public:
+  // Uploads the table and builds the probe program with `features`.
+  static Result<std::unique_ptr<LightProbe>> create(const LightTable& table,
+                                                    const device::FeatureSet& features = all_light_features());
+
+  // lux_sample_light at points[i] with randoms[i] = (u_select, u.x, u.y, -).
+  Result<LightSamples> sample(const std::vector<cl::float4>& points, const std::vector<cl::float4>& randoms);
+  // The same point for every sample.
+  Result<LightSamples> sample_at(Vec3 p, const std::vector<cl::float4>& randoms);
+  // lux_light_pdf_triangle per query.
+  Result<std::vector<float>> triangle_pdf(const std::vector<int>& light, const std::vector<cl::float4>& p,
+                                          const std::vector<cl::float4>& hit,
+                                          const std::vector<cl::float4>& normal);
+  // lux_sky_radiance (xyz) and lux_sky_pdf (w) along each direction.
+  Result<std::vector<cl::float4>> sky(const std::vector<cl::float4>& dirs);
+
+ private:
+  LightProbe() = default;
+  const LightTable* table_ = nullptr;
+  const device::Program* program_ = nullptr;
+  device::Buffer lights_, cdf_, sky_texels_, sky_marginal_, sky_conditional_;
+};
+
+// lux_sample_cdf(cdf, n, u[i]) -> (index, pmf).
+Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u, std::vector<int>* index,
+                        std::vector<float>* pmf);
+
+// lux_texture_sample(pack.textures[texture], uv[i]).
+Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,
+                                              const std::vector<cl::float2>& uv);
+
+}  // namespace luxel::pipeline::test

@@ -1,0 +1,250 @@
+// The equirect sky (HDR/EXR read with OpenImageIO): mapping, radiance,
+// importance sampling against lux_sky_pdf (chi-square), the irradiance it
+// gives, and errors for bad images.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "chi2.h"
+#include "pipeline/shading/color.h"
+#include "shading_probe.h"
+#include "test_scenes.h"
+
+namespace luxel::pipeline {
+namespace {
+
+using test::Rng;
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr int kW = 64, kH = 32;
+
+// A dim gradient with a bright spot (peak 200) off the equator.
+std::vector<float> spot_sky() {
+  std::vector<float> rgb(size_t{kW} * kH * 3);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const double dx = x + 0.5 - 0.3 * kW, dy = y + 0.5 - 0.35 * kH;
+      const double spot = 200 * std::exp(-(dx * dx + dy * dy) / (2 * 2.0 * 2.0));
+      float* t = &rgb[(size_t(y) * kW + size_t(x)) * 3];
+      t[0] = static_cast<float>(0.2 + 0.3 * y / kH + spot);
+      t[1] = static_cast<float>(0.3 + 0.1 * x / kW + 0.8 * spot);
+      t[2] = static_cast<float>(0.5 + 0.5 * spot);
+    }
+  return rgb;
+}
+
+// World direction at image coordinates (s, t) for a sky rotated by `rot`
+// radians about +Y, written from the mapping documented in shared/light.h.
+Vec3 sky_direction(double s, double t, double rot) {
+  const double theta = kPi * t, phi = 2 * kPi * (s - 0.5);
+  const double lx = std::sin(theta) * std::sin(phi), ly = std::cos(theta), lz = -std::sin(theta) * std::cos(phi);
+  return {static_cast<float>(std::cos(rot) * lx + std::sin(rot) * lz), static_cast<float>(ly),
+          static_cast<float>(-std::sin(rot) * lx + std::cos(rot) * lz)};
+}
+
+struct SkyFixture : ::testing::Test {
+  test::TempDir dir;
+  std::string exr = dir.file("sky.exr");
+  std::vector<float> rgb = spot_sky();
+  void SetUp() override { ASSERT_TRUE(test::write_rgb_image(exr, kW, kH, rgb)) << "writing " << exr; }
+
+  Result<LightTable> table(const std::string& path, float rotation_degrees) {
+    LightSettings s;
+    s.sky.kind = SkySettings::Kind::kEquirect;
+    s.sky.equirect_path = path;
+    s.sky.rotation_degrees = rotation_degrees;
+    s.sky.color = {1, 0.5f, 2};
+    s.sky.intensity = 1.5f;
+    return build_light_table(scene::Scene{}, accel::TriangleSoup{}, s, Bounds3{});
+  }
+};
+
+TEST_F(SkyFixture, TexelCentresGiveTheTexelAndAPdfProportionalToLuminance) {
+  const double rot = 90 * kPi / 180;
+  auto t = table(exr, 90);
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  EXPECT_TRUE(t->has_sky && t->sky_is_image);
+  ASSERT_EQ(t->sky.width, kW);
+  ASSERT_EQ(t->sky.height, kH);
+  ASSERT_EQ(t->sky_texels.size(), rgb.size());
+  EXPECT_EQ(t->sky_marginal_cdf.size(), size_t{kH + 1});
+  EXPECT_EQ(t->sky_conditional_cdf.size(), size_t{kH} * (kW + 1));
+  const Vec3 scale{1.5f, 0.75f, 3.0f};
+
+  std::vector<cl::float4> dirs;
+  double weight_sum = 0;  // luminance x sin(theta_centre), the distribution's weights
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      dirs.push_back(test::f4(sky_direction((x + 0.5) / kW, (y + 0.5) / kH, rot)));
+      const float* c = &rgb[(size_t(y) * kW + size_t(x)) * 3];
+      weight_sum += luminance({c[0] * scale.x, c[1] * scale.y, c[2] * scale.z}) * std::sin(kPi * (y + 0.5) / kH);
+    }
+  auto probe = test::LightProbe::create(t.value());
+  ASSERT_TRUE(probe.is_ok()) << probe.status().to_string();
+  auto r = (*probe)->sky(dirs);
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      const size_t i = size_t(y) * kW + size_t(x);
+      const Vec3 expect{rgb[i * 3] * scale.x, rgb[i * 3 + 1] * scale.y, rgb[i * 3 + 2] * scale.z};
+      ASSERT_NEAR((*r)[i].x, expect.x, 1e-5 * expect.x) << "texel " << x << ", " << y;
+      ASSERT_NEAR((*r)[i].y, expect.y, 1e-5 * expect.y);
+      ASSERT_NEAR((*r)[i].z, expect.z, 1e-5 * expect.z);
+      // pdf(omega) = weight / sum * (w h) / (2 pi^2 sin theta)
+      const double sin_t = std::sin(kPi * (y + 0.5) / kH);
+      const double pdf = luminance(expect) * sin_t / weight_sum * kW * kH / (2 * kPi * kPi * sin_t);
+      ASSERT_NEAR((*r)[i].w / pdf, 1.0, 5e-3) << "texel " << x << ", " << y;
+    }
+}
+
+TEST_F(SkyFixture, ImportanceSamplingFollowsTheSkyPdf) {
+  auto t = table(exr, 90);  // 16 texels of turn: the cells below stay aligned with texels
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  auto probe = test::LightProbe::create(t.value());
+  ASSERT_TRUE(probe.is_ok()) << probe.status().to_string();
+  const size_t n = 500000;
+  Rng rng(21);
+  std::vector<cl::float4> r(n);
+  for (auto& v : r) v = rng.uniform4();
+  auto s = (*probe)->sample_at({0, 0, 0}, r);
+  ASSERT_TRUE(s.is_ok()) << s.status().to_string();
+
+  // Cells: 2 x 2 texels in world (s, t) (the mapping without rotation).
+  const int rows = kH / 2, cols = kW / 2;
+  std::vector<double> observed(size_t(rows * cols)), expected(size_t(rows * cols));
+  std::vector<cl::float4> sampled_dirs;
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_TRUE(s->ok(i));
+    ASSERT_TRUE(s->mis(i));
+    ASSERT_FALSE(s->is_delta(i));
+    const Vec3 d = test::xyz(s->wi_pdf[i]);
+    ASSERT_NEAR(length(d), 1.0f, 1e-5f);
+    double u = 0.5 + std::atan2(d.x, -d.z) / (2 * kPi), v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi;
+    const int c = std::min(int(u * cols), cols - 1), row = std::min(int(v * rows), rows - 1);
+    observed[size_t(row * cols + c)] += 1;
+    sampled_dirs.push_back(s->wi_pdf[i]);
+  }
+  // lux_sky_pdf integrated per cell: pdf x sin(theta) is constant inside a
+  // texel, so a 4 x 4 midpoint rule (2 x 2 per texel) is exact.
+  const int sub = 4;
+  std::vector<cl::float4> dirs;
+  std::vector<double> weight;
+  for (int row = 0; row < rows; ++row)
+    for (int c = 0; c < cols; ++c)
+      for (int i = 0; i < sub; ++i)
+        for (int j = 0; j < sub; ++j) {
+          const double u = (c + (j + 0.5) / sub) / cols, v = (row + (i + 0.5) / sub) / rows;
+          dirs.push_back(test::f4(sky_direction(u, v, 0)));
+          weight.push_back(std::sin(kPi * v) * (kPi / rows / sub) * (2 * kPi / cols / sub));
+        }
+  auto pdf = (*probe)->sky(dirs);
+  ASSERT_TRUE(pdf.is_ok());
+  double total = 0;
+  for (size_t k = 0; k < dirs.size(); ++k) {
+    const size_t cell = k / (sub * sub);
+    expected[cell] += (*pdf)[k].w * weight[k] * n;
+    total += (*pdf)[k].w * weight[k];
+  }
+  EXPECT_NEAR(total, 1.0, 1e-3) << "lux_sky_pdf integrates to 1 over the sphere";
+  const auto chi2 = test::chi2_test(observed, expected);
+  EXPECT_GT(chi2.p_value, test::sidak_alpha(0.01, 4))
+      << chi2.message << " chi2 " << chi2.statistic << " dof " << chi2.dof;
+
+  // MIS consistency: lux_sky_pdf along a sampled direction is the sampled
+  // pdf (but for directions that round into a neighbouring texel).
+  auto again = (*probe)->sky(sampled_dirs);
+  ASSERT_TRUE(again.is_ok());
+  size_t mismatches = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (std::fabs((*again)[i].w / s->wi_pdf[i].w - 1) > 1e-3) ++mismatches;
+    const Vec3 rad = test::xyz(s->radiance_dist[i]), looked_up = test::xyz((*again)[i]);
+    if (std::fabs(rad.x - looked_up.x) > 1e-4f * rad.x) ++mismatches;
+  }
+  EXPECT_LT(mismatches, n / 1000);
+}
+
+TEST_F(SkyFixture, ImageSkyIrradianceMatchesTheTexelIntegral) {
+  test::TempDir d;
+  const std::string hdr = d.file("sky.hdr");  // Radiance RGBE, as skies usually come
+  ASSERT_TRUE(test::write_rgb_image(hdr, kW, kH, rgb));
+  auto t = table(hdr, 30);
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  // Exact irradiance on +Y and -Y normals (rotation about Y changes neither):
+  // per texel L * integral of |cos| = L dphi |sin^2 t1 - sin^2 t0| / 2.
+  double up[3] = {0, 0, 0}, down[3] = {0, 0, 0};
+  for (int y = 0; y < kH; ++y) {
+    const double t0 = kPi * y / kH, t1 = kPi * (y + 1) / kH;
+    const double w = (2 * kPi / kW) * std::fabs(std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0)) / 2;
+    for (int x = 0; x < kW; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const double l = t->sky_texels[(size_t(y) * kW + size_t(x)) * 3 + size_t(c)];
+        (y < kH / 2 ? up : down)[c] += l * w;
+      }
+  }
+  auto probe = test::LightProbe::create(t.value());
+  ASSERT_TRUE(probe.is_ok());
+  const size_t n = 200000;
+  Rng rng(22);
+  std::vector<cl::float4> r(n);
+  for (auto& v : r) v = rng.uniform4();
+  auto s = (*probe)->sample_at({0, 0, 0}, r);
+  ASSERT_TRUE(s.is_ok());
+  for (int side = 0; side < 2; ++side) {
+    const double sign = side == 0 ? 1 : -1;
+    double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; ++i) {
+      const double cos = std::max(0.0, sign * s->wi_pdf[i].y);
+      const double rad[3] = {s->radiance_dist[i].x, s->radiance_dist[i].y, s->radiance_dist[i].z};
+      for (int c = 0; c < 3; ++c) {
+        const double v = rad[c] * cos / s->wi_pdf[i].w;
+        sum[c] += v;
+        sum2[c] += v * v;
+      }
+    }
+    for (int c = 0; c < 3; ++c) {
+      const double mean = sum[c] / n, se = std::sqrt(std::max(sum2[c] / n - mean * mean, 0.0) / n);
+      const double exact = side == 0 ? up[c] : down[c];
+      EXPECT_NEAR(mean, exact, 5 * se + 1e-5 * exact) << (side == 0 ? "up" : "down") << " channel " << c;
+    }
+  }
+}
+
+void expect_sky_error(const Result<LightTable>& t, const std::string& path, const std::string& detail) {
+  ASSERT_FALSE(t.is_ok()) << path;
+  EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(t.status().message().find(path), std::string::npos) << t.status().to_string();
+  EXPECT_NE(t.status().message().find(detail), std::string::npos) << t.status().to_string();
+}
+
+TEST_F(SkyFixture, BadImagesAreRejectedNamingTheFileAndTexel) {
+  auto bad = rgb;
+  bad[(size_t(5) * kW + 7) * 3 + 1] = NAN;
+  const std::string nan_path = dir.file("nan.exr");
+  ASSERT_TRUE(test::write_rgb_image(nan_path, kW, kH, bad));
+  expect_sky_error(table(nan_path, 0), nan_path, "texel (7, 5)");
+
+  bad = rgb;
+  bad[(size_t(3) * kW + 2) * 3] = -1;
+  const std::string neg_path = dir.file("negative.exr");
+  ASSERT_TRUE(test::write_rgb_image(neg_path, kW, kH, bad));
+  expect_sky_error(table(neg_path, 0), neg_path, "texel (2, 3)");
+
+  const std::string junk = dir.file("junk.hdr");
+  std::ofstream(junk) << "this is not an image";
+  expect_sky_error(table(junk, 0), junk, "cannot read");
+}
+
+TEST_F(SkyFixture, ABlackSkyIsDropped) {
+  const std::string black = dir.file("black.exr");
+  ASSERT_TRUE(test::write_rgb_image(black, 8, 4, std::vector<float>(8 * 4 * 3, 0.0f)));
+  auto t = table(black, 0);
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  EXPECT_FALSE(t->has_sky);
+  EXPECT_EQ(t->dropped_zero_power, 1u);
+  EXPECT_TRUE(t->sky_texels.empty());
+  EXPECT_EQ(t->sky.kind, LUX_SKY_KIND_NONE);
+}
+
+}  // namespace
+}  // namespace luxel::pipeline
