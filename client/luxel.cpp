@@ -1,5 +1,6 @@
 // luxel: the Luxel command-line client.
 #include <cstdio>
+#include "luxel_version.h"
 #include <cstring>
 #include <string>
 #include <vector>

@@ -1,4 +1,5 @@
 #include "common/machine_info.h"
+#include "luxel_version.h"
 
 #include <sys/utsname.h>
 

@@ -1,4 +1,5 @@
 #include "device/program_cache.h"
+#include "luxel_version.h"
 
 #include <unistd.h>
 

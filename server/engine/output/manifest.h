@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include "luxel_version.h"
 #include <cstdint>
 #include <map>
 #include <string>

@@ -1,4 +1,5 @@
 #include "pipeline/bake_outputs.h"
+#include "luxel_version.h"
 
 #include <filesystem>
 #include <system_error>

@@ -1,5 +1,6 @@
 // Manifest JSON: full round trip, validation errors that name the field.
 #include "output/manifest.h"
+#include "luxel_version.h"
 
 #include <gtest/gtest.h>
 
