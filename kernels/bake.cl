@@ -58,15 +58,6 @@ inline uint lux_permute(uint i, uint n, uint p) {
   return (i + p) % n;
 }
 
-/* Lights a BSDF-sampled ray can also reach (so NEE and BSDF sampling are
- * combined with MIS): emissive triangles and the sky. The sun disc and the
- * punctual lights are reached by NEE only, with weight 1. */
-inline int lux_light_bsdf_can_hit(const __global LuxLight* lights, int light) {
-  if (light < 0) return 0;
-  const int type = as_int(lights[light].a.w);
-  return type == LUX_LIGHT_TYPE_TRIANGLE || type == LUX_LIGHT_TYPE_SKY;
-}
-
 inline uint lux_texel_seed(uint texel, uint bake_seed) {
   return lux_hash_combine(lux_hash_u32(texel), bake_seed);
 }
@@ -127,7 +118,9 @@ inline void lux_next_event(LUX_LIGHT_PARAMS, LUX_TEXTURE_PARAMS,
   const float3 wi_local = lux_to_local(ls.wi, t, b, n);
   const float cos_i = wi_local.z;
   if (cos_i <= 0.0f) return;
-  const int mis = !ls.is_delta && lux_light_bsdf_can_hit(lights, ls.light);
+  /* MIS only for lights a BSDF ray can also reach (emissive triangles, the
+   * sky); the sun disc and punctual lights are NEE-only with weight 1. */
+  const int mis = !ls.is_delta && ls.mis;
   float3 f_weighted;
   if (sensor) {
     const float w = mis ? lux_power_heuristic(ls.pdf, lux_cosine_hemisphere_pdf(cos_i)) : 1.0f;

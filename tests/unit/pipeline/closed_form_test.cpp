@@ -17,6 +17,7 @@
 
 #include "atlas/sample_info.h"
 #include "device/context.h"
+#include "output/exr.h"
 #include "pipeline/bake.h"
 #include "shared/sample_info.h"
 #include "test_scenes.h"
@@ -178,6 +179,41 @@ TEST_F(ClosedFormTest, UniformSkyOverOpenPlane) {
   auto expected = [&](double scale) {
     return [&, scale](uint32_t, int c) { return scale * M_PI * l[c]; };
   };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
+TEST_F(ClosedFormTest, EquirectSkyOverOpenPlane) {
+  // An image sky with a bright spot, importance-sampled (LUX_SKY_IMAGE).
+  // Rows map to theta = (row + [0,1]) pi / H (kernels/shared/light.h), texels
+  // are looked up nearest, so E = sum over upper-hemisphere texels of
+  // L * (2 pi / W) * (sin^2 theta1 - sin^2 theta0) / 2, exactly.
+  const int w = 32, h = 16;
+  output::Image sky;
+  sky.width = w;
+  sky.height = h;
+  sky.channels = 4;
+  sky.pixels.assign(size_t(w) * h * 4, 0.2f);
+  for (int y = 2; y < 4; ++y)
+    for (int x = 5; x < 8; ++x)
+      for (int c = 0; c < 3; ++c) sky.at(x, y, c) = 40.0f + 10.0f * c;
+  const std::string path = ::testing::TempDir() + "/luxel_sky.exr";
+  ASSERT_TRUE(output::write_exr(path, sky, {"R", "G", "B", "A"}).is_ok());
+  double e[3] = {0, 0, 0};
+  for (int y = 0; y < h / 2; ++y) {
+    const double t0 = M_PI * y / h, t1 = M_PI * (y + 1) / h;
+    const double band = (2 * M_PI / w) * 0.5 * (std::pow(std::sin(t1), 2) - std::pow(std::sin(t0), 2));
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) e[c] += sky.at(x, y, c) * band;
+  }
+  scene::Scene s = testing::open_plane();
+  auto st = settings(16, 256, 1);
+  st.lights.sky.kind = pipeline::SkySettings::Kind::kEquirect;
+  st.lights.sky.equirect_path = path;
+  st.lights.sky.rotation_degrees = 30;
+  auto r = bake(s, st);
+  ASSERT_NE(r.features.find("sky_image"), std::string::npos) << r.features;
+  auto expected = [&](double scale) { return [&, scale](uint32_t, int c) { return scale * e[c]; }; };
   EXPECT_TRUE(check(r, expected(1.0)).ok());
   EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
 }
