@@ -82,7 +82,7 @@ typedef struct LuxBakeParams {
   int sky_light;      /* index of the sky entry in the light table, or -1 */
   float clamp_luminance; /* 0 = off */
   uint paths;          /* paths in this iteration */
-  uint pad;
+  float offset_scale;  /* ray-offset scale: min(1, scene extent) (bake/surface.h) */
 } LuxBakeParams;
 
 /* Per-work-group partial statistics of the accumulation buffer. */

@@ -178,6 +178,9 @@ Status Baker::setup() {
   params_.light_count = static_cast<uint32_t>(lights_.lights.size());
   params_.sky_light = lights_.sky.light;
   params_.clamp_luminance = settings_.clamp_luminance;
+  const Vec3 extent = soup_.bounds.empty() ? Vec3{1, 1, 1} : soup_.bounds.extent();
+  const float largest = std::max({extent.x, extent.y, extent.z});
+  params_.offset_scale = std::clamp(largest, 1e-6f, 1.0f);
 
   LUXEL_RETURN_IF_ERROR(allocate_work_buffers());
   return build_kernels();

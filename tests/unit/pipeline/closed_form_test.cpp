@@ -234,6 +234,24 @@ TEST_F(ClosedFormTest, FurnaceBox) {
   EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
 
+// DESIGN.md "stiff and extreme cases": scene scale from 1e-3 to 1e5 units
+// (robust ray offsets, no self-intersection), and a nearly white closed room
+// that needs many bounces (Russian roulette must stay unbiased).
+TEST_F(ClosedFormTest, FurnaceBoxAtExtremeScalesAndHighAlbedo) {
+  struct Case { float albedo, scale; int bounces; };
+  for (const Case c : {Case{0.5f, 1e-3f, 6}, Case{0.5f, 1e5f, 6}, Case{0.9f, 1.0f, 40}}) {
+    SCOPED_TRACE(strprintf("albedo %g scale %g bounces %d", c.albedo, c.scale, c.bounces));
+    const float le = 0.25f;
+    auto r = bake(testing::furnace_box(c.albedo, le, c.scale), settings(16, 128, c.bounces));
+    ASSERT_GT(r.covered_texels, 100u);
+    const double e = M_PI * le * (1 - std::pow(c.albedo, c.bounces + 1)) / (1 - c.albedo);
+    auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
+    EXPECT_TRUE(check(r, expected(1.0)).ok());
+    EXPECT_FALSE(check(r, expected(1.03)).ok()) << "a 3 % error must be detected";
+    EXPECT_EQ(r.nonfinite_dropped, 0u);
+  }
+}
+
 TEST_F(ClosedFormTest, SameSeedIsBitIdenticalOtherSeedDiffers) {
   scene::Scene s = testing::furnace_box(0.5f, 0.25f);
   auto st = settings(16, 16, 3);

@@ -50,9 +50,9 @@ inline scene::Scene open_plane(float albedo = 0.5f) {
   return s;
 }
 
-// Closed cube [-1,1]^3 with inward-facing walls of albedo a, each emitting
-// radiance le. Faces in a 3 x 2 grid of the atlas with a margin.
-inline scene::Scene furnace_box(float albedo, float le) {
+// Closed cube [-scale,scale]^3 with inward-facing walls of albedo a, each
+// emitting radiance le (irradiance inside does not depend on the scale). Faces in a 3 x 2 grid of the atlas with a margin.
+inline scene::Scene furnace_box(float albedo, float le, float scale = 1.0f) {
   scene::Scene s;
   s.source_name = "furnace_box";
   s.materials.push_back(diffuse_material(albedo, le));
@@ -61,9 +61,9 @@ inline scene::Scene furnace_box(float albedo, float le) {
   for (int f = 0; f < 6; ++f) {
     const Vec3 n = normals[f];  // inward normal: the wall at -n
     const Vec3 axis = std::fabs(n.y) > 0.5f ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-    const Vec3 eu = normalize(cross(n, axis)) * 2.0f;
-    const Vec3 ev = cross(n, eu);  // cross(eu, ev) = n |eu|^2
-    const Vec3 o = n * -1.0f - eu * 0.5f - ev * 0.5f;
+    const Vec3 eu = normalize(cross(n, axis)) * (2.0f * scale);
+    const Vec3 ev = normalize(cross(n, eu)) * (2.0f * scale);  // cross(eu, ev) along n
+    const Vec3 o = n * -scale - eu * 0.5f - ev * 0.5f;
     const float cu = static_cast<float>(f % 3) / 3.0f, cv = static_cast<float>(f / 3) / 2.0f;
     add_quad(s, o, eu, ev, cu + margin, cv + margin, cu + 1.0f / 3.0f - margin,
              cv + 0.5f - margin, 0);
