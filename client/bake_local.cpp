@@ -43,6 +43,7 @@ const char* kUsage =
     "  --clamp L             clamp path luminance (biased; default off)\n"
     "  --no-compaction, --sort-directions, --random-sequence   ablation switches\n"
     "  --dilate N            dilate uncovered texels by N (default 2)\n"
+    "  --progress-interval S seconds between progress updates (default 1)\n"
     "  --device SPEC         OpenCL device (see `luxel devices`)\n"
     "  --quiet               no progress bar\n";
 
@@ -93,6 +94,7 @@ bool parse(const std::vector<std::string>& args, BakeArgs& a) {
     else if (k == "--rr-depth") { if (!number(x)) return false; s.rr_depth = static_cast<int>(x); }
     else if (k == "--clamp") { if (!number(x)) return false; s.clamp_luminance = static_cast<float>(x); }
     else if (k == "--dilate") { if (!number(x)) return false; s.dilation_texels = static_cast<int>(x); }
+    else if (k == "--progress-interval") { if (!number(x)) return false; s.progress_interval_s = x; }
     else if (k == "--filter") {
       const char* v = value();
       if (!v) return false;

@@ -62,7 +62,7 @@ class Baker {
   Baker(const scene::Scene& scene, const BakeSettings& settings, device::Context& ctx)
       : scene_(scene), settings_(settings), ctx_(ctx) {}
 
-  Result<BakeResult> run(const ProgressFn& on_progress);
+  Result<BakeResult> run(const BakeHooks& hooks);
 
  private:
   Status setup();
@@ -72,6 +72,9 @@ class Baker {
   Status run_iteration(uint32_t batch);
   Status compute_stats(BakeProgress& p);
   Status read_result(BakeResult& r);
+  Status read_state(BakeCheckpoint& c);
+  Status restore_state(const BakeCheckpoint& c);
+  void fill_irradiance(const std::vector<cl::float4>& mean, std::vector<float>& rgba) const;
   void derive_features();
 
   template <typename T>
@@ -408,62 +411,113 @@ Status Baker::compute_stats(BakeProgress& progress) {
   return Status::ok();
 }
 
-Status Baker::read_result(BakeResult& r) {
-  const size_t t = params_.texel_count;
-  std::vector<cl::float4> mean(t), m2(t);
-  std::vector<cl::float2> weight(t);
-  std::vector<uint32_t> spp(t);
-  uint32_t nonfinite = 0;
-  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.mean, mean));
-  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.m2, m2));
-  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.weight, weight));
-  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.spp, spp));
-  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.nonfinite, &nonfinite, sizeof nonfinite));
-  LUXEL_RETURN_IF_ERROR(ctx_.finish());
-  r.width = atlas_.width;
-  r.height = atlas_.height;
-  r.irradiance.assign(t * 4, 0.0f);
-  r.samples.assign(t, 0.0f);
-  r.rel_error.assign(t, 0.0f);
+// Irradiance RGBA from the running means; alpha = fraction of the texel's
+// 64 sample positions that lie on geometry.
+void Baker::fill_irradiance(const std::vector<cl::float4>& mean, std::vector<float>& rgba) const {
+  rgba.assign(size_t{params_.texel_count} * 4, 0.0f);
   for (uint32_t texel : info_.covered_texels) {
     const uint32_t off = info_.offsets[texel];
     const int valid = std::popcount(info_.words[off]) + std::popcount(info_.words[off + 1]);
-    float* px = &r.irradiance[size_t{texel} * 4];
+    float* px = &rgba[size_t{texel} * 4];
     px[0] = mean[texel].x;
     px[1] = mean[texel].y;
     px[2] = mean[texel].z;
     px[3] = static_cast<float>(valid) / 64.0f;
-    r.samples[texel] = static_cast<float>(spp[texel]);
-    const double w = weight[texel].x, w2 = weight[texel].y;
-    if (spp[texel] >= 2 && w > 0 && mean[texel].w > 0) {
-      const double var = std::max(0.0, double{m2[texel].w} / w);
-      const double n_eff = w * w / std::max(w2, 1e-30);
-      r.rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / mean[texel].w);
-    }
   }
-  r.nonfinite_dropped = nonfinite;
+}
+
+Status Baker::read_state(BakeCheckpoint& c) {
+  const size_t t = params_.texel_count;
+  c.width = params_.width;
+  c.height = params_.height;
+  c.mean.resize(t);
+  c.m2.resize(t);
+  c.weight.resize(t);
+  c.spp.resize(t);
+  uint32_t nonfinite = 0;
+  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.mean, c.mean));
+  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.m2, c.m2));
+  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.weight, c.weight));
+  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.spp, c.spp));
+  LUXEL_RETURN_IF_ERROR(ctx_.read(b_.nonfinite, &nonfinite, sizeof nonfinite));
+  LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  c.nonfinite = nonfinite;
+  c.paths_done = paths_done_;
   return Status::ok();
 }
 
-Result<BakeResult> Baker::run(const ProgressFn& on_progress) {
+Status Baker::restore_state(const BakeCheckpoint& c) {
+  if (c.width != params_.width || c.height != params_.height)
+    return invalid_argument(strprintf("checkpoint is for a %ux%u lightmap, this bake is %ux%u",
+                                      c.width, c.height, params_.width, params_.height));
+  const uint32_t nonfinite = static_cast<uint32_t>(c.nonfinite);
+  LUXEL_RETURN_IF_ERROR(ctx_.write(b_.mean, c.mean.data(), c.mean.size() * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx_.write(b_.m2, c.m2.data(), c.m2.size() * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx_.write(b_.weight, c.weight.data(), c.weight.size() * sizeof(cl::float2)));
+  LUXEL_RETURN_IF_ERROR(ctx_.write(b_.spp, c.spp.data(), c.spp.size() * sizeof(uint32_t)));
+  LUXEL_RETURN_IF_ERROR(ctx_.write(b_.nonfinite, &nonfinite, sizeof nonfinite));
+  paths_done_ = c.paths_done;
+  return ctx_.finish();
+}
+
+Status Baker::read_result(BakeResult& r) {
+  BakeCheckpoint state;
+  LUXEL_RETURN_IF_ERROR(read_state(state));
+  const size_t t = params_.texel_count;
+  r.width = atlas_.width;
+  r.height = atlas_.height;
+  fill_irradiance(state.mean, r.irradiance);
+  r.samples.assign(t, 0.0f);
+  r.rel_error.assign(t, 0.0f);
+  for (uint32_t texel : info_.covered_texels) {
+    r.samples[texel] = static_cast<float>(state.spp[texel]);
+    const double w = state.weight[texel].x, w2 = state.weight[texel].y;
+    if (state.spp[texel] >= 2 && w > 0 && state.mean[texel].w > 0) {
+      const double var = std::max(0.0, double{state.m2[texel].w} / w);
+      const double n_eff = w * w / std::max(w2, 1e-30);
+      r.rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[texel].w);
+    }
+  }
+  r.nonfinite_dropped = state.nonfinite;
+  return Status::ok();
+}
+
+Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   LUXEL_RETURN_IF_ERROR(validate_settings(settings_));
   const auto t_setup = Clock::now();
   ctx_.timer().reset();
   LUXEL_RETURN_IF_ERROR(setup());
-  LUXEL_RETURN_IF_ERROR(ctx_.finish());
   BakeResult result;
+  BakeProgress progress;
+  double resumed_elapsed = 0;
+  if (hooks.resume) {
+    if (hooks.resume->fingerprint != hooks.fingerprint)
+      return invalid_argument("checkpoint belongs to another scene or other settings");
+    LUXEL_RETURN_IF_ERROR(restore_state(*hooks.resume));
+    resumed_elapsed = hooks.resume->elapsed_s;
+    progress.iteration = hooks.resume->iteration;
+    const auto& s = hooks.resume->series;
+    for (size_t i = 0; i + 4 < s.size(); i += 5)
+      result.series.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2],
+                               static_cast<uint32_t>(s[i + 3]), s[i + 4]});
+  }
+  LUXEL_RETURN_IF_ERROR(ctx_.finish());
   result.setup_s = seconds_since(t_setup);
 
-  const auto t0 = Clock::now();
+  const auto t_start = Clock::now();
+  // Tracing time, continued across a resume.
+  auto elapsed = [&] { return resumed_elapsed + seconds_since(t_start); };
+  const auto& on_progress = hooks.on_progress;
   const uint64_t covered = params_.covered_count;
   const uint64_t target_paths =
       settings_.samples_per_texel > 0 ? uint64_t{settings_.samples_per_texel} * covered : 0;
-  BakeProgress progress;
   auto last_report = Clock::now();
+  auto last_snapshot = Clock::now();
+  auto last_checkpoint = Clock::now();
   Termination why = Termination::kSamples;
   auto report = [&](bool final_report) -> Result<bool> {
     LUXEL_RETURN_IF_ERROR(compute_stats(progress));
-    progress.elapsed_s = seconds_since(t0);
+    progress.elapsed_s = elapsed();
     // Progress towards the nearest rule, and its ETA.
     double fraction = 0, eta = -1;
     const double rate = progress.elapsed_s > 0 ? paths_done_ / progress.elapsed_s : 0;
@@ -499,7 +553,8 @@ Result<BakeResult> Baker::run(const ProgressFn& on_progress) {
     LUXEL_RETURN_IF_ERROR(ctx_.finish());
     ++progress.iteration;
     if (target_paths > 0 && paths_done_ >= target_paths) { why = Termination::kSamples; break; }
-    if (settings_.time_budget_s > 0 && seconds_since(t0) >= settings_.time_budget_s) {
+    if (hooks.cancel && hooks.cancel->load()) { why = Termination::kCancelled; break; }
+    if (settings_.time_budget_s > 0 && elapsed() >= settings_.time_budget_s) {
       why = Termination::kTime;
       break;
     }
@@ -514,8 +569,36 @@ Result<BakeResult> Baker::run(const ProgressFn& on_progress) {
       }
       if (!keep_going.value()) { why = Termination::kCancelled; break; }
     }
+    if (hooks.on_snapshot && hooks.snapshot_interval_s > 0 &&
+        seconds_since(last_snapshot) >= hooks.snapshot_interval_s) {
+      BakeCheckpoint state;
+      LUXEL_RETURN_IF_ERROR(read_state(state));
+      BakeSnapshot snap;
+      snap.width = atlas_.width;
+      snap.height = atlas_.height;
+      fill_irradiance(state.mean, snap.irradiance);
+      snap.progress = progress;
+      snap.progress.elapsed_s = elapsed();
+      snap.progress.paths = paths_done_;
+      snap.progress.mean_spp = double(paths_done_) / params_.covered_count;
+      hooks.on_snapshot(snap);
+      last_snapshot = Clock::now();
+    }
+    if (hooks.on_checkpoint && hooks.checkpoint_interval_s > 0 &&
+        seconds_since(last_checkpoint) >= hooks.checkpoint_interval_s) {
+      BakeCheckpoint state;
+      LUXEL_RETURN_IF_ERROR(read_state(state));
+      state.fingerprint = hooks.fingerprint;
+      state.iteration = progress.iteration;
+      state.elapsed_s = elapsed();
+      for (const auto& e : result.series)
+        state.series.insert(state.series.end(), {e.elapsed_s, double(e.paths), e.mean_spp,
+                                                 double(e.min_spp), e.error});
+      hooks.on_checkpoint(state);
+      last_checkpoint = Clock::now();
+    }
   }
-  result.seconds = seconds_since(t0);
+  result.seconds = elapsed();
   auto final_report = report(true);
   if (!final_report) return final_report.status();
 
@@ -541,9 +624,16 @@ Result<BakeResult> Baker::run(const ProgressFn& on_progress) {
 }  // namespace
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
-                        device::Context& ctx, const ProgressFn& on_progress) {
+                        device::Context& ctx, const BakeHooks& hooks) {
   Baker baker(scene, settings, ctx);
-  return baker.run(on_progress);
+  return baker.run(hooks);
+}
+
+Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
+                        device::Context& ctx, const ProgressFn& on_progress) {
+  BakeHooks hooks;
+  hooks.on_progress = on_progress;
+  return bake(scene, settings, ctx, hooks);
 }
 
 }  // namespace luxel::pipeline

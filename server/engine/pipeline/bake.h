@@ -19,6 +19,7 @@
 #include "common/status.h"
 #include "device/context.h"
 #include "pipeline/bake_settings.h"
+#include "pipeline/checkpoint.h"
 #include "scene/scene.h"
 
 namespace luxel::pipeline {
@@ -76,6 +77,28 @@ struct BakeResult {
 // false to cancel the bake; the result then holds what was accumulated.
 using ProgressFn = std::function<bool(const BakeProgress&)>;
 
+// A progressive image of the bake so far (not dilated).
+struct BakeSnapshot {
+  int width = 0, height = 0;
+  std::vector<float> irradiance;   // RGBA like BakeResult::irradiance
+  BakeProgress progress;
+};
+
+// Everything a long-running host (the daemon) hooks into a bake. All
+// callbacks run on the bake's thread between iterations.
+struct BakeHooks {
+  ProgressFn on_progress;                      // every settings.progress_interval_s
+  double snapshot_interval_s = 0;              // 0: no snapshots
+  std::function<void(const BakeSnapshot&)> on_snapshot;
+  double checkpoint_interval_s = 0;            // 0: no checkpoints
+  std::function<void(const BakeCheckpoint&)> on_checkpoint;
+  std::string fingerprint;                     // stored in checkpoints (scene + settings)
+  const BakeCheckpoint* resume = nullptr;      // continue from this state
+  const std::atomic<bool>* cancel = nullptr;   // set to stop after the current iteration
+};
+
+Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
+                        device::Context& ctx, const BakeHooks& hooks);
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const ProgressFn& on_progress = {});
 

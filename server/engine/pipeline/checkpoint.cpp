@@ -1,0 +1,113 @@
+#include "pipeline/checkpoint.h"
+
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
+#include "common/hash.h"
+#include "output/atomic_file.h"
+
+namespace luxel::pipeline {
+namespace {
+
+constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
+
+class Writer {
+ public:
+  template <typename T>
+  void pod(const T& v) { raw(&v, sizeof v); }
+  template <typename T>
+  void vec(const std::vector<T>& v) {
+    pod<uint64_t>(v.size());
+    raw(v.data(), v.size() * sizeof(T));
+  }
+  void raw(const void* p, size_t n) {
+    const auto* c = static_cast<const char*>(p);
+    bytes_.insert(bytes_.end(), c, c + n);
+  }
+  std::string& bytes() { return bytes_; }
+
+ private:
+  std::string bytes_;
+};
+
+class Reader {
+ public:
+  Reader(const std::string& b, size_t end) : b_(b), end_(end) {}
+  template <typename T>
+  bool pod(T& v) { return raw(&v, sizeof v); }
+  template <typename T>
+  bool vec(std::vector<T>& v, uint64_t max_elements) {
+    uint64_t n = 0;
+    if (!pod(n) || n > max_elements || n * sizeof(T) > end_ - pos_) return false;
+    v.resize(n);
+    return raw(v.data(), n * sizeof(T));
+  }
+  bool raw(void* p, size_t n) {
+    if (n > end_ - pos_) return false;
+    std::memcpy(p, b_.data() + pos_, n);
+    pos_ += n;
+    return true;
+  }
+  size_t pos() const { return pos_; }
+
+ private:
+  const std::string& b_;
+  size_t end_;
+  size_t pos_ = 0;
+};
+
+}  // namespace
+
+Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
+  Writer w;
+  w.raw(kMagic, sizeof kMagic);
+  w.vec(std::vector<char>(c.fingerprint.begin(), c.fingerprint.end()));
+  w.pod(c.width);
+  w.pod(c.height);
+  w.pod(c.paths_done);
+  w.pod(c.iteration);
+  w.pod(c.elapsed_s);
+  w.pod(c.nonfinite);
+  w.vec(c.series);
+  w.vec(c.mean);
+  w.vec(c.m2);
+  w.vec(c.weight);
+  w.vec(c.spp);
+  const std::string sum = Hasher().add(w.bytes()).hex();
+  w.raw(sum.data(), sum.size());
+  return output::write_file_atomic(path, w.bytes().data(), w.bytes().size());
+}
+
+Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return not_found(strprintf("checkpoint '%s' does not exist", path.c_str()));
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto corrupt = [&](const char* why) {
+    return data_loss(strprintf("checkpoint '%s' is corrupt (%s)", path.c_str(), why));
+  };
+  if (bytes.size() < sizeof kMagic + 32) return corrupt("too short");
+  const size_t body = bytes.size() - 32;
+  if (Hasher().add(std::string_view(bytes).substr(0, body)).hex() != bytes.substr(body))
+    return corrupt("checksum mismatch");
+  Reader r(bytes, body);
+  char magic[8];
+  BakeCheckpoint c;
+  std::vector<char> fp;
+  const uint64_t texels_max = uint64_t{1} << 28;
+  if (!r.raw(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+    return corrupt("not a Luxel checkpoint");
+  if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
+      !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
+      !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
+      !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max))
+    return corrupt("truncated record");
+  c.fingerprint.assign(fp.begin(), fp.end());
+  const size_t texels = size_t{c.width} * c.height;
+  if (c.mean.size() != texels || c.m2.size() != texels || c.weight.size() != texels ||
+      c.spp.size() != texels || c.series.size() % 5 != 0)
+    return corrupt("array sizes do not match the lightmap");
+  return c;
+}
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,38 @@
+// Bake checkpoints: the accumulation state of a bake, enough to continue it
+// after a restart and produce the same bits as an uninterrupted bake (the
+// texel domain and every sample index derive from the path count, which is
+// part of the state). Written atomically with a checksum; a torn or
+// mismatched file is refused, never half-read.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "shared/compat.h"
+
+namespace luxel::pipeline {
+
+
+struct BakeCheckpoint {
+  // What the state belongs to: a hash of the scene content and of the
+  // settings that shape the result. Resuming with another fingerprint fails.
+  std::string fingerprint;
+  uint32_t width = 0, height = 0;
+  uint64_t paths_done = 0;
+  uint32_t iteration = 0;
+  double elapsed_s = 0;           // tracing time before the checkpoint
+  uint64_t nonfinite = 0;
+  std::vector<double> series;     // ErrorSample fields flattened, 5 per point
+  std::vector<cl::float4> mean, m2;
+  std::vector<cl::float2> weight;
+  std::vector<uint32_t> spp;
+};
+
+// Binary, little-endian, "LUXCKPT1" magic, 128-bit checksum at the end.
+Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
+// NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
+Result<BakeCheckpoint> read_checkpoint(const std::string& path);
+
+}  // namespace luxel::pipeline
