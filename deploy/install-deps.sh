@@ -12,8 +12,10 @@ PACKAGES=(
   # geometry and images
   libembree-dev libopenimageio-dev openimageio-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
-  # service (later issues) and tests
-  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc
+  # service: gRPC + protobuf (C++ and Python), OpenSSL for SHA-256 and TLS
+  libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libssl-dev
+  python3-grpcio python3-protobuf
+  # tests
   googletest libgtest-dev libgmock-dev
   python3 python3-numpy
 )
