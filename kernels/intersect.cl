@@ -113,24 +113,38 @@ inline int lux_trace(__global const LuxBvhNode* nodes, __global const LuxTriangl
   return hit_prim;
 }
 
+#if LUX_ALPHA_MASK
+#define LUX_ALPHA_ARGS , tri_uvs, masks, alpha_texels
+#else
+#define LUX_ALPHA_ARGS
+#endif
+
+/* Closest hit of one ray as a LuxHit (prim -1 on a miss). */
+inline LuxHit lux_closest_hit(__global const LuxBvhNode* nodes,
+                              __global const LuxTriangle* tris LUX_ALPHA_PARAMS, const LuxRay ray) {
+  float t, u = 0.0f, v = 0.0f;
+  LuxHit h;
+  h.prim = lux_trace(nodes, tris LUX_ALPHA_ARGS, ray, 0, &t, &u, &v);
+  h.t = t;
+  h.u = u;
+  h.v = v;
+  return h;
+}
+
+/* 1 when anything blocks the ray within its interval. */
+inline int lux_occluded(__global const LuxBvhNode* nodes,
+                        __global const LuxTriangle* tris LUX_ALPHA_PARAMS, const LuxRay ray) {
+  float t, u, v;
+  return lux_trace(nodes, tris LUX_ALPHA_ARGS, ray, 1, &t, &u, &v) >= 0 ? 1 : 0;
+}
+
 __kernel void intersect_closest(__global const LuxBvhNode* nodes, __global const LuxTriangle* tris
                                     LUX_ALPHA_PARAMS,
                                 __global const LuxRay* rays, __global const int* ray_count,
                                 __global LuxHit* hits) {
   const int gid = (int)get_global_id(0);
   if (gid >= *ray_count) return;
-  float t, u = 0.0f, v = 0.0f;
-  const int prim = lux_trace(nodes, tris
-#if LUX_ALPHA_MASK
-                             , tri_uvs, masks, alpha_texels
-#endif
-                             , rays[gid], 0, &t, &u, &v);
-  LuxHit h;
-  h.t = t;
-  h.u = u;
-  h.v = v;
-  h.prim = prim;
-  hits[gid] = h;
+  hits[gid] = lux_closest_hit(nodes, tris LUX_ALPHA_ARGS, rays[gid]);
 }
 
 __kernel void intersect_any(__global const LuxBvhNode* nodes, __global const LuxTriangle* tris
@@ -139,13 +153,7 @@ __kernel void intersect_any(__global const LuxBvhNode* nodes, __global const Lux
                             __global int* occluded) {
   const int gid = (int)get_global_id(0);
   if (gid >= *ray_count) return;
-  float t, u, v;
-  const int prim = lux_trace(nodes, tris
-#if LUX_ALPHA_MASK
-                             , tri_uvs, masks, alpha_texels
-#endif
-                             , rays[gid], 1, &t, &u, &v);
-  occluded[gid] = prim >= 0 ? 1 : 0;
+  occluded[gid] = lux_occluded(nodes, tris LUX_ALPHA_ARGS, rays[gid]);
 }
 
 /* Indexed variants for the wavefront bake (thesis §5.1, §5.4): work-item i
@@ -161,18 +169,7 @@ __kernel void intersect_closest_indexed(__global const LuxBvhNode* nodes,
   const int gid = (int)get_global_id(0);
   if (gid >= *ray_count) return;
   const uint r = indices[gid] & index_mask;
-  float t, u = 0.0f, v = 0.0f;
-  const int prim = lux_trace(nodes, tris
-#if LUX_ALPHA_MASK
-                             , tri_uvs, masks, alpha_texels
-#endif
-                             , rays[r], 0, &t, &u, &v);
-  LuxHit h;
-  h.t = t;
-  h.u = u;
-  h.v = v;
-  h.prim = prim;
-  hits[r] = h;
+  hits[r] = lux_closest_hit(nodes, tris LUX_ALPHA_ARGS, rays[r]);
 }
 
 __kernel void intersect_any_indexed(__global const LuxBvhNode* nodes,
@@ -185,15 +182,5 @@ __kernel void intersect_any_indexed(__global const LuxBvhNode* nodes,
   const uint r = indices[gid] & index_mask;
   const LuxRay ray = rays[r];
   /* An empty interval (tmax < tmin) marks "no shadow ray": skip traversal. */
-  if (!(ray.dir_tmax.w > ray.org_tmin.w)) {
-    occluded[r] = 0;
-    return;
-  }
-  float t, u, v;
-  const int prim = lux_trace(nodes, tris
-#if LUX_ALPHA_MASK
-                             , tri_uvs, masks, alpha_texels
-#endif
-                             , ray, 1, &t, &u, &v);
-  occluded[r] = prim >= 0 ? 1 : 0;
+  occluded[r] = ray.dir_tmax.w > ray.org_tmin.w ? lux_occluded(nodes, tris LUX_ALPHA_ARGS, ray) : 0;
 }
