@@ -22,7 +22,21 @@ void usage(FILE* out) {
                "        bake an irradiance lightmap in-process (luxel bake --help for all options)\n"
                "  devices\n"
                "        list OpenCL devices (SPEC for --device: gpu, cpu, P:D, or a name substring;\n"
-               "        the LUXEL_DEVICE environment variable sets the default)\n",
+               "        the LUXEL_DEVICE environment variable sets the default)\n\n"
+               "commands on a luxeld daemon (each: --help for its options):\n"
+               "  upload SCENE [--name N]\n"
+               "        upload a .gltf (with its buffers and images) or .glb; print its id and statistics\n"
+               "  bake SCENE --out DIR [settings] [--priority P] [--snapshots DIR] [--detach]\n"
+               "        upload if needed, submit, watch with a progress bar, download the results\n"
+               "  status BAKE           state, progress, ETA and artifacts of a bake\n"
+               "  list [--state S] | --scenes   bakes (optionally in state S) or scenes\n"
+               "  watch BAKE [--snapshots DIR]  follow a bake; write its snapshots to DIR\n"
+               "  cancel BAKE           cancel a queued or running bake\n"
+               "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
+               "  common options: --server HOST:PORT (default $LUXEL_SERVER or 127.0.0.1:50051),\n"
+               "        --token T ($LUXEL_TOKEN), --tls-ca FILE, --tls, --timeout S, --json\n\n"
+               "exit codes: 0 success, 1 error (daemon, network, files), 2 usage error,\n"
+               "            3 the bake failed, was cancelled or interrupted\n",
                LUXEL_VERSION, LUXEL_GIT_REVISION);
 }
 
@@ -47,6 +61,12 @@ int main(int argc, char** argv) {
   if (cmd == "inspect") return luxel::cli::run_inspect(args);
   if (cmd == "devices") return luxel::cli::run_devices(args);
   if (cmd == "bake") return luxel::cli::run_bake(args);
+  if (cmd == "upload") return luxel::cli::run_upload(args);
+  if (cmd == "status") return luxel::cli::run_status(args);
+  if (cmd == "list") return luxel::cli::run_list(args);
+  if (cmd == "watch") return luxel::cli::run_watch(args);
+  if (cmd == "cancel") return luxel::cli::run_cancel(args);
+  if (cmd == "fetch") return luxel::cli::run_fetch(args);
   std::fprintf(stderr, "luxel: unknown command '%s'\n\n", cmd.c_str());
   usage(stderr);
   return 2;

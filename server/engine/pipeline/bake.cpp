@@ -577,10 +577,11 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       snap.width = atlas_.width;
       snap.height = atlas_.height;
       fill_irradiance(state.mean, snap.irradiance);
+      // The image's own statistics (error, min spp), not those of the last
+      // progress report.
+      LUXEL_RETURN_IF_ERROR(compute_stats(progress));
       snap.progress = progress;
       snap.progress.elapsed_s = elapsed();
-      snap.progress.paths = paths_done_;
-      snap.progress.mean_spp = double(paths_done_) / params_.covered_count;
       hooks.on_snapshot(snap);
       last_snapshot = Clock::now();
     }

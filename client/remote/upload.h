@@ -1,0 +1,24 @@
+// Scene upload: the UploadScene client stream (header, then the main file and
+// each external resource in 64 KiB chunks), and "upload unless the daemon
+// already has it" for `luxel bake`.
+#pragma once
+
+#include <string>
+
+#include "remote/connection.h"
+#include "remote/scene_files.h"
+
+namespace luxel::cli::remote {
+
+inline constexpr size_t kUploadChunkBytes = 64 * 1024;
+
+// Streams `files` to the daemon and returns what it made of them.
+grpc::Status upload_scene(Connection& conn, const SceneFiles& files, const std::string& name,
+                          luxel::v1::SceneInfo& info);
+
+// Asks GetScene for the main file's sha256 first and uploads only when the
+// daemon answers NOT_FOUND. `uploaded` says whether bytes were sent.
+grpc::Status ensure_scene(Connection& conn, const SceneFiles& files, const std::string& name,
+                          luxel::v1::SceneInfo& info, bool& uploaded);
+
+}  // namespace luxel::cli::remote

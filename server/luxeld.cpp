@@ -1,0 +1,151 @@
+// luxeld: the Luxel bake daemon. Serves luxel.v1.Luxel (plus the gRPC health
+// service and server reflection) over gRPC, stores scenes and bakes under
+// --data-dir, runs bakes on worker threads. See server/service/ and
+// `luxeld --help`.
+//
+// SIGTERM / SIGINT: graceful stop. New uploads and bakes are refused, running
+// bakes write a checkpoint and stop (left INTERRUPTED, resumed by the next
+// start), open streams end, stores are flushed, exit status 0.
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include <csignal>
+#include <cstdio>
+#include <memory>
+#include <thread>
+
+#include "device/context.h"
+#include "service/bake_runner.h"
+#include "service/bake_store.h"
+#include "service/daemon_config.h"
+#include "service/files.h"
+#include "service/job_queue.h"
+#include "service/log.h"
+#include "service/luxel_service.h"
+#include "service/scene_store.h"
+
+namespace {
+
+using namespace luxel;
+using namespace luxel::service;
+
+std::shared_ptr<grpc::ServerCredentials> credentials(const DaemonConfig& c, Status* error) {
+  if (c.tls_cert.empty()) return grpc::InsecureServerCredentials();
+  auto cert = read_whole_file(c.tls_cert);
+  auto key = read_whole_file(c.tls_key);
+  if (!cert || !key) {
+    *error = invalid_argument("TLS: " + (cert ? key.status() : cert.status()).message());
+    return nullptr;
+  }
+  grpc::SslServerCredentialsOptions ssl;
+  ssl.pem_key_cert_pairs.push_back({key.value(), cert.value()});
+  return grpc::SslServerCredentials(ssl);
+}
+
+bool is_loopback(const std::string& address) {
+  return address.rfind("127.", 0) == 0 || address.rfind("localhost:", 0) == 0 ||
+         address.rfind("[::1]:", 0) == 0 || address.rfind("unix:", 0) == 0;
+}
+
+int run(const DaemonConfig& config) {
+  auto scenes = SceneStore::open(config.data_dir);
+  if (!scenes) { log_event("fatal", {{"error", scenes.status().to_string()}}); return 1; }
+  auto bakes = BakeStore::open(config.data_dir);
+  if (!bakes) { log_event("fatal", {{"error", bakes.status().to_string()}}); return 1; }
+
+  std::string device_description;
+  if (auto dev = device::choose_device(config.device)) device_description = dev->describe();
+  else {
+    device_description = "unavailable: " + dev.status().to_string();
+    log_event("device_unavailable", {{"error", dev.status().to_string()}});
+  }
+
+  JobQueue queue(config.max_queued);
+  RunnerOptions ro;
+  ro.max_concurrent_bakes = config.max_concurrent_bakes;
+  ro.device_spec = config.device;
+  ro.checkpoint_interval_s = config.checkpoint_interval_s;
+  ro.limits.max_resolution = config.max_resolution;
+  BakeRunner runner(*scenes.value(), *bakes.value(), queue, ro);
+  if (Status st = runner.recover(); !st.is_ok()) {
+    log_event("fatal", {{"error", st.to_string()}});
+    return 1;
+  }
+
+  ServiceOptions so;
+  so.upload.max_upload_bytes = config.max_upload_bytes;
+  so.settings = ro.limits;
+  so.token = config.token;
+  so.device_description = device_description;
+  so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
+  LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
+
+  Status cred_error;
+  auto creds = credentials(config, &cred_error);
+  if (!creds) { log_event("fatal", {{"error", cred_error.to_string()}}); return 1; }
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(config.listen, creds, &port);
+  builder.RegisterService(&service);
+  builder.SetMaxReceiveMessageSize(config.max_message_bytes);
+  std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
+  if (!server || port == 0) {
+    log_event("fatal", {{"error", "cannot listen on " + config.listen}});
+    runner.shutdown();
+    return 1;
+  }
+  server->GetHealthCheckService()->SetServingStatus("luxel.v1.Luxel", true);
+  runner.start();
+  log_event("listening", {{"address", config.listen}, {"port", std::to_string(port)},
+                          {"tls", config.tls_cert.empty() ? "off" : "on"},
+                          {"auth", config.token.empty() ? "off" : "bearer"},
+                          {"device", device_description},
+                          {"data_dir", config.data_dir}});
+  if (!is_loopback(config.listen) && config.token.empty())
+    log_event("warning", {{"message", "listening beyond loopback without --token"}});
+
+  // Signals are blocked in every thread (see main); this one takes them.
+  std::thread signal_thread([&] {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGTERM);
+    sigaddset(&set, SIGINT);
+    int sig = 0;
+    sigwait(&set, &sig);
+    log_event("shutdown_requested", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}});
+    service.begin_shutdown();
+    server->GetHealthCheckService()->SetServingStatus("luxel.v1.Luxel", false);
+    runner.shutdown();  // checkpoints and stops running bakes
+    server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(3));
+  });
+  server->Wait();
+  signal_thread.join();
+  log_event("stopped", {});
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Block before any thread exists so every thread inherits the mask.
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
+
+  auto config = parse_daemon_args(std::vector<std::string>(argv + 1, argv + argc));
+  if (!config) {
+    std::fprintf(stderr, "luxeld: %s\n%s", config.status().message().c_str(), kDaemonUsage);
+    return 2;
+  }
+  if (config->help) {
+    std::fputs(kDaemonUsage, stdout);
+    return 0;
+  }
+  return run(config.value());
+}

@@ -1,0 +1,281 @@
+#include "service/bake_runner.h"
+
+#include <chrono>
+#include <filesystem>
+
+#include "pipeline/bake.h"
+#include "pipeline/bake_outputs.h"
+#include "scene/gltf_import.h"
+#include "service/files.h"
+#include "service/log.h"
+
+namespace luxel::service {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+// The engine's checkpoint hook fires at most this often; the runner writes
+// to disk only every --checkpoint-interval, but a short hook period lets a
+// graceful shutdown take a fresh checkpoint within about this long.
+constexpr double kCheckpointHookPeriodS = 1.0;
+
+const char* kArtifacts[] = {"irradiance.exr", "preview.png", "samples.exr",
+                            "rel_error.exr", "error_series.csv", "manifest.json"};
+
+}  // namespace
+
+BakeRunner::BakeRunner(SceneStore& scenes, BakeStore& bakes, JobQueue& queue, RunnerOptions options)
+    : scenes_(scenes), bakes_(bakes), queue_(queue), options_(std::move(options)) {}
+
+BakeRunner::~BakeRunner() { shutdown(); }
+
+Status BakeRunner::recover() {
+  for (const v1::BakeInfo& info : bakes_.list({})) {
+    const std::string& id = info.bake_id();
+    if (info.state() == v1::BAKE_STATE_RUNNING) {
+      LUXEL_RETURN_IF_ERROR(bakes_.update(id, [](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_INTERRUPTED);
+        b.add_notes("interrupted: the daemon stopped while the bake ran");
+      }, /*persist=*/true));
+      log_event("bake_interrupted", {{"bake", id}, {"scene", info.scene_id()}});
+    }
+    if (!is_terminal(info.state())) {
+      LUXEL_RETURN_IF_ERROR(queue_.push(id, info.settings().priority(), bakes_.sequence(id), /*force=*/true));
+      log_event("bake_requeued", {{"bake", id}, {"scene", info.scene_id()}});
+    }
+  }
+  return Status::ok();
+}
+
+void BakeRunner::start() {
+  for (int i = 0; i < std::max(1, options_.max_concurrent_bakes); ++i)
+    workers_.emplace_back([this] { worker_loop(); });
+}
+
+void BakeRunner::shutdown() {
+  if (shutting_down_.exchange(true)) {
+    for (auto& w : workers_)
+      if (w.joinable()) w.join();
+    return;
+  }
+  queue_.close();
+  {
+    // Bakes without checkpoints stop at once; the others stop in their next
+    // checkpoint hook, right after writing the checkpoint.
+    std::lock_guard<std::mutex> lock(mu_);
+    if (options_.checkpoint_interval_s <= 0)
+      for (auto& [id, r] : running_) r->cancel = true;
+  }
+  for (auto& w : workers_)
+    if (w.joinable()) w.join();
+  bakes_.wake_all();
+}
+
+Result<v1::BakeInfo> BakeRunner::cancel(const std::string& bake_id) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto info = bakes_.get(bake_id);
+    if (!info) return info.status();
+    if (is_terminal(info->state())) return info;
+    if (auto it = running_.find(bake_id); it != running_.end()) {
+      it->second->by_user = true;
+      it->second->cancel = true;
+    } else {
+      // Queued (or popped by a worker that has not registered it yet: the
+      // worker checks the state under mu_ before it starts).
+      queue_.remove(bake_id);
+      LUXEL_RETURN_IF_ERROR(bakes_.update(bake_id, [](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_CANCELLED);
+        b.set_termination("cancelled");
+        b.set_finished_at(unix_now());
+      }, true));
+      log_event("bake_cancelled", {{"bake", bake_id}, {"scene", info->scene_id()}, {"while", "queued"}});
+      return bakes_.get(bake_id);
+    }
+  }
+  const auto deadline = Clock::now() + std::chrono::seconds(5);
+  uint64_t seen = 0;
+  while (Clock::now() < deadline) {
+    auto view = bakes_.wait_for_change(bake_id, seen, std::chrono::milliseconds(100));
+    if (!view) return view.status();
+    if (is_terminal(view->info.state())) return view->info;
+    seen = view->version;
+  }
+  return bakes_.get(bake_id);
+}
+
+void BakeRunner::worker_loop() {
+  std::unique_ptr<device::Context> ctx;
+  while (!shutting_down_) {
+    auto id = queue_.pop();
+    if (!id) break;
+    auto running = std::make_shared<Running>();
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      auto info = bakes_.get(*id);
+      if (!info || is_terminal(info->state())) continue;  // cancelled meanwhile
+      running_[*id] = running;
+    }
+    run_bake(*id, ctx, *running);
+    std::lock_guard<std::mutex> lock(mu_);
+    running_.erase(*id);
+  }
+}
+
+void BakeRunner::finish_failed(const std::string& bake_id, const Status& why) {
+  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
+    b.set_state(v1::BAKE_STATE_FAILED);
+    b.set_error_message(why.to_string());
+    b.set_finished_at(unix_now());
+  }, true);
+  log_event("bake_failed", {{"bake", bake_id}, {"error", why.to_string()}});
+}
+
+void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Context>& ctx,
+                          Running& running) {
+  auto info = bakes_.get(bake_id);
+  if (!info) return;
+  ServiceBakeOptions opts;
+  auto settings = to_engine_settings(info->settings(), options_.limits, &opts);
+  if (!settings) return finish_failed(bake_id, settings.status());
+  auto scene_info = scenes_.get(info->scene_id());
+  if (!scene_info) return finish_failed(bake_id, scene_info.status());
+  auto scene = scene::import_gltf_file(scenes_.main_file_path(scene_info.value()));
+  if (!scene) return finish_failed(bake_id, scene.status());
+  if (!ctx) {
+    auto created = device::Context::create(options_.device_spec);
+    if (!created) return finish_failed(bake_id, created.status());
+    ctx = std::move(created.value());
+  }
+
+  // Resume from the last checkpoint when there is a usable one.
+  const std::string fingerprint = bake_fingerprint(info->scene_id(), settings.value());
+  const std::string ckpt_path = bakes_.checkpoint_path(bake_id);
+  std::optional<pipeline::BakeCheckpoint> resume;
+  std::string note;
+  if (fs::exists(ckpt_path)) {
+    auto ckpt = pipeline::read_checkpoint(ckpt_path);
+    if (!ckpt) {
+      note = "checkpoint unreadable (" + ckpt.status().to_string() + "): restarted from zero";
+    } else if (ckpt->fingerprint != fingerprint) {
+      note = "checkpoint belongs to other settings: restarted from zero";
+    } else {
+      resume = std::move(ckpt.value());
+      note = strprintf("resumed from checkpoint at %llu paths (iteration %u, %.1f s traced)",
+                       static_cast<unsigned long long>(resume->paths_done), resume->iteration,
+                       resume->elapsed_s);
+    }
+    if (!resume) std::remove(ckpt_path.c_str());
+  }
+  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
+    b.set_state(v1::BAKE_STATE_RUNNING);
+    if (b.started_at() == 0) b.set_started_at(unix_now());
+    if (resume) b.set_resumed(b.resumed() + 1);
+    if (!note.empty()) b.add_notes(note);
+  }, true);
+  log_event("bake_started", {{"bake", bake_id}, {"scene", info->scene_id()},
+                             {"resume", resume ? "yes" : "no"}, {"note", note}});
+
+  uint64_t last_paths = resume ? resume->paths_done : 0;
+  auto last_checkpoint_write = Clock::now();
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = fingerprint;
+  hooks.resume = resume ? &*resume : nullptr;
+  hooks.cancel = &running.cancel;
+  hooks.on_progress = [&](const pipeline::BakeProgress& p) {
+    paths_traced_ += p.paths - std::min(p.paths, last_paths);
+    last_paths = std::max(last_paths, p.paths);
+    (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
+    return true;
+  };
+  if (opts.snapshot_format != v1::SNAPSHOT_FORMAT_NONE) {
+    hooks.snapshot_interval_s = opts.snapshot_interval_s;
+    hooks.on_snapshot = [&](const pipeline::BakeSnapshot& s) {
+      output::Image image{s.width, s.height, 4, s.irradiance};
+      bakes_.publish_snapshot(bake_id, std::make_shared<SnapshotFrame>(
+          std::move(image), to_proto(s.progress), opts.snapshot_format, opts.snapshot_max_side,
+          bakes_.bake_dir(bake_id)));
+    };
+  }
+  if (options_.checkpoint_interval_s > 0) {
+    hooks.checkpoint_interval_s = std::min(options_.checkpoint_interval_s, kCheckpointHookPeriodS);
+    hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) {
+      const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint_write).count();
+      const bool stopping = shutting_down_.load();
+      if (!stopping && since < options_.checkpoint_interval_s) return;
+      if (Status st = pipeline::write_checkpoint(ckpt_path, c); !st.is_ok()) {
+        log_event("checkpoint_failed", {{"bake", bake_id}, {"error", st.to_string()}});
+      } else {
+        last_checkpoint_write = Clock::now();
+        (void)bakes_.update(bake_id, [](v1::BakeInfo&) {}, true);  // progress on disk too
+        log_event("checkpoint_written", {{"bake", bake_id}, {"paths", std::to_string(c.paths_done)}});
+      }
+      if (stopping) running.cancel = true;
+    };
+  }
+
+  auto result = pipeline::bake(scene.value(), settings.value(), *ctx, hooks);
+  if (!result) {
+    ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
+    return finish_failed(bake_id, result.status());
+  }
+  const pipeline::BakeResult& r = result.value();
+  paths_traced_ += r.paths - std::min(r.paths, last_paths);
+
+  if (r.termination == pipeline::Termination::kCancelled) {
+    const bool by_user = running.by_user.load();
+    // Logged before the record changes, so whoever sees the new state finds the line.
+    log_event(by_user ? "bake_cancelled" : "bake_interrupted",
+              {{"bake", bake_id}, {"scene", info->scene_id()}, {"paths", std::to_string(r.paths)}});
+    (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
+      b.set_state(by_user ? v1::BAKE_STATE_CANCELLED : v1::BAKE_STATE_INTERRUPTED);
+      if (by_user) {
+        b.set_termination("cancelled");
+        b.set_finished_at(unix_now());
+      } else {
+        b.add_notes("interrupted: the daemon shut down; resumes from its checkpoint");
+      }
+    }, true);
+    if (by_user) std::remove(ckpt_path.c_str());
+    return;
+  }
+
+  // Results: the whole folder appears at once (rename), then the record.
+  const std::string partial = bakes_.bake_dir(bake_id) + "/results.partial";
+  const std::string final_dir = bakes_.results_dir(bake_id);
+  remove_tree(partial);
+  remove_tree(final_dir);
+  auto written = pipeline::write_bake_outputs(partial, scene.value(), settings.value(), r, info->scene_id());
+  if (!written) return finish_failed(bake_id, written.status());
+  if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
+  if (Status st = rename_durable(partial, final_dir); !st.is_ok()) return finish_failed(bake_id, st);
+
+  log_event("bake_finished", {{"bake", bake_id}, {"scene", info->scene_id()},
+                              {"termination", pipeline::termination_name(r.termination)},
+                              {"seconds", strprintf("%.3f", r.seconds)},
+                              {"paths", std::to_string(r.paths)}});
+  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
+    b.set_state(v1::BAKE_STATE_SUCCEEDED);
+    b.set_finished_at(unix_now());
+    b.set_features(r.features);
+    b.set_termination(pipeline::termination_name(r.termination));
+    b.set_nonfinite_dropped(r.nonfinite_dropped);
+    v1::BakeProgress* p = b.mutable_progress();
+    p->set_elapsed_s(r.seconds);
+    p->set_paths(r.paths);
+    p->set_mean_spp(r.mean_spp);
+    p->set_min_spp(r.min_spp);
+    p->set_error(r.error);
+    p->set_eta_s(0);
+    p->set_fraction(1);
+    b.clear_artifacts();
+    for (const char* a : kArtifacts) b.add_artifacts(a);
+  }, true);
+  // Only once the record says SUCCEEDED: a crash before this line re-runs
+  // the bake from the checkpoint rather than from zero.
+  std::remove(ckpt_path.c_str());
+}
+
+}  // namespace luxel::service

@@ -1,0 +1,77 @@
+#include "service/daemon_config.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+
+#include "service/files.h"
+
+namespace luxel::service {
+
+const char* kDaemonUsage =
+    "usage: luxeld --data-dir DIR [options]\n"
+    "  --listen HOST:PORT        address to serve on (default 127.0.0.1:50051, loopback)\n"
+    "  --data-dir DIR            scenes, bake records, checkpoints and results (required)\n"
+    "  --max-concurrent-bakes N  bakes running at once (default 1)\n"
+    "  --device SPEC             OpenCL device: gpu, cpu, P:D or a name substring\n"
+    "  --token TOKEN             require \"authorization: Bearer TOKEN\" on every call\n"
+    "  --token-file FILE         the same, token read from FILE (trailing newline ignored)\n"
+    "  --tls-cert PEM --tls-key PEM   serve TLS instead of plaintext\n"
+    "  --max-upload-bytes N      largest scene upload, main file + resources (default 1 GiB)\n"
+    "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
+    "  --max-queued N            most bakes waiting in the queue (default 256)\n"
+    "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
+    "  --max-message-bytes N     largest request message (default 16 MiB)\n";
+
+Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args) {
+  DaemonConfig c;
+  std::string token_file;
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& k = args[i];
+    std::string v;
+    auto value = [&]() -> Status {
+      if (i + 1 >= args.size()) return invalid_argument(k + ": needs a value");
+      v = args[++i];
+      return Status::ok();
+    };
+    auto number = [&](double lo, double hi, double* out) -> Status {
+      LUXEL_RETURN_IF_ERROR(value());
+      char* end = nullptr;
+      errno = 0;
+      const double x = std::strtod(v.c_str(), &end);
+      if (v.empty() || *end != '\0' || errno != 0 || !std::isfinite(x) || x < lo || x > hi)
+        return invalid_argument(strprintf("%s: expected a number in [%g, %g], got '%s'", k.c_str(), lo, hi, v.c_str()));
+      *out = x;
+      return Status::ok();
+    };
+    double x = 0;
+    if (k == "--help" || k == "-h") c.help = true;
+    else if (k == "--listen") { LUXEL_RETURN_IF_ERROR(value()); c.listen = v; }
+    else if (k == "--data-dir") { LUXEL_RETURN_IF_ERROR(value()); c.data_dir = v; }
+    else if (k == "--device") { LUXEL_RETURN_IF_ERROR(value()); c.device = v; }
+    else if (k == "--token") { LUXEL_RETURN_IF_ERROR(value()); c.token = v; }
+    else if (k == "--token-file") { LUXEL_RETURN_IF_ERROR(value()); token_file = v; }
+    else if (k == "--tls-cert") { LUXEL_RETURN_IF_ERROR(value()); c.tls_cert = v; }
+    else if (k == "--tls-key") { LUXEL_RETURN_IF_ERROR(value()); c.tls_key = v; }
+    else if (k == "--max-concurrent-bakes") { LUXEL_RETURN_IF_ERROR(number(1, 64, &x)); c.max_concurrent_bakes = int(x); }
+    else if (k == "--max-upload-bytes") { LUXEL_RETURN_IF_ERROR(number(1, 1e15, &x)); c.max_upload_bytes = uint64_t(x); }
+    else if (k == "--max-resolution") { LUXEL_RETURN_IF_ERROR(number(1, 65536, &x)); c.max_resolution = int(x); }
+    else if (k == "--max-queued") { LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x)); c.max_queued = size_t(x); }
+    else if (k == "--checkpoint-interval") { LUXEL_RETURN_IF_ERROR(number(0, 1e6, &x)); c.checkpoint_interval_s = x; }
+    else if (k == "--max-message-bytes") { LUXEL_RETURN_IF_ERROR(number(1024, 2147483647.0, &x)); c.max_message_bytes = int(x); }
+    else return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
+  }
+  if (c.help) return c;
+  if (c.data_dir.empty()) return invalid_argument("--data-dir: required");
+  if (c.tls_cert.empty() != c.tls_key.empty()) return invalid_argument("--tls-cert and --tls-key go together");
+  if (!token_file.empty()) {
+    auto t = read_whole_file(token_file);
+    if (!t) return invalid_argument("--token-file: " + t.status().message());
+    c.token = t.value();
+    while (!c.token.empty() && (c.token.back() == '\n' || c.token.back() == '\r')) c.token.pop_back();
+    if (c.token.empty()) return invalid_argument("--token-file: " + token_file + " is empty");
+  }
+  return c;
+}
+
+}  // namespace luxel::service

@@ -1,0 +1,33 @@
+// luxeld's command line. parse_daemon_args never exits: --help and errors
+// come back as a Status / flag so main() decides the exit code.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+
+namespace luxel::service {
+
+struct DaemonConfig {
+  std::string listen = "127.0.0.1:50051";   // loopback unless told otherwise
+  std::string data_dir;                     // required
+  int max_concurrent_bakes = 1;
+  std::string device;                       // OpenCL device spec ("" = LUXEL_DEVICE, then default)
+  std::string token;                        // bearer token ("" = no authentication)
+  std::string tls_cert, tls_key;            // PEM files; both or neither
+  uint64_t max_upload_bytes = uint64_t{1} << 30;
+  int max_resolution = 4096;
+  size_t max_queued = 256;
+  double checkpoint_interval_s = 10;
+  int max_message_bytes = 16 << 20;         // largest request message accepted
+  bool help = false;
+};
+
+extern const char* kDaemonUsage;
+
+// INVALID_ARGUMENT naming the flag. Reads --token-file.
+Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args);
+
+}  // namespace luxel::service

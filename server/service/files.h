@@ -1,0 +1,29 @@
+// File-system helpers for the stores. Every store write is atomic: write a
+// temporary file, fsync it, rename it over the target, fsync the directory
+// (output::write_file_atomic), so a crash leaves the old or the new version.
+#pragma once
+
+#include <string>
+
+#include "common/status.h"
+
+namespace luxel::service {
+
+Status write_file_durable(const std::string& path, const std::string& bytes);
+Result<std::string> read_whole_file(const std::string& path);
+
+// fsyncs a directory so renames and creations inside it survive a crash.
+Status fsync_directory(const std::string& dir);
+// rename(2) then fsync of the destination's directory.
+Status rename_durable(const std::string& from, const std::string& to);
+// Creates `dir` and its parents; INTERNAL naming the path on failure.
+Status make_directories(const std::string& dir);
+// Removes a file or a folder tree; errors are logged, never fatal.
+void remove_tree(const std::string& path);
+
+// 32 lowercase hex digits from the system's random source (bake ids).
+std::string random_hex_id();
+// Seconds since the Unix epoch.
+double unix_now();
+
+}  // namespace luxel::service

@@ -1,0 +1,333 @@
+#include "service/luxel_service.h"
+
+#include <openssl/crypto.h>
+
+#include <algorithm>
+#include <fstream>
+
+#include "luxel_version.h"
+#include "service/files.h"
+#include "service/log.h"
+#include "service/sha256.h"
+
+namespace luxel::service {
+
+namespace {
+
+constexpr size_t kDownloadChunkBytes = 64 * 1024;
+
+grpc::Status invalid(const std::string& message) {
+  return {grpc::StatusCode::INVALID_ARGUMENT, message};
+}
+
+// Ids are validated before they reach a path or a log line.
+grpc::Status check_id(const std::string& id, const char* field, size_t length) {
+  bool ok = id.size() == length;
+  for (char c : id)
+    if (!((c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'))) ok = false;
+  if (id.empty()) return invalid(strprintf("%s: required", field));
+  if (!ok)
+    return {grpc::StatusCode::NOT_FOUND,
+            strprintf("%s: no such id '%s' (ids are %zu lowercase hex digits)", field,
+                      id.substr(0, 80).c_str(), length)};
+  return grpc::Status::OK;
+}
+
+}  // namespace
+
+grpc::Status to_grpc(const Status& status) {
+  switch (status.code()) {
+    case StatusCode::kOk: return grpc::Status::OK;
+    case StatusCode::kInvalidArgument: return {grpc::StatusCode::INVALID_ARGUMENT, status.message()};
+    case StatusCode::kNotFound: return {grpc::StatusCode::NOT_FOUND, status.message()};
+    case StatusCode::kDataLoss: return {grpc::StatusCode::DATA_LOSS, status.message()};
+    case StatusCode::kResourceExhausted: return {grpc::StatusCode::RESOURCE_EXHAUSTED, status.message()};
+    case StatusCode::kUnavailable: return {grpc::StatusCode::UNAVAILABLE, status.message()};
+    case StatusCode::kInternal: return {grpc::StatusCode::INTERNAL, status.message()};
+  }
+  return {grpc::StatusCode::UNKNOWN, status.message()};
+}
+
+LuxelService::LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue,
+                           BakeRunner& runner, ServiceOptions options)
+    : scenes_(scenes), bakes_(bakes), queue_(queue), runner_(runner),
+      options_(std::move(options)), started_at_(unix_now()) {}
+
+grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rpc) const {
+  if (options_.token.empty()) return grpc::Status::OK;
+  const std::string expected = "Bearer " + options_.token;
+  const auto& md = ctx->client_metadata();
+  auto it = md.find("authorization");
+  if (it != md.end() && it->second.size() == expected.size() &&
+      CRYPTO_memcmp(it->second.data(), expected.data(), expected.size()) == 0)
+    return grpc::Status::OK;
+  log_event("unauthenticated", {{"rpc", rpc}, {"peer", ctx->peer()}});
+  return {grpc::StatusCode::UNAUTHENTICATED,
+          it == md.end() ? "missing \"authorization: Bearer <token>\" metadata"
+                         : "wrong bearer token"};
+}
+
+grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
+                                       grpc::ServerReader<v1::UploadSceneRequest>* reader,
+                                       v1::SceneInfo* response) {
+  if (auto st = authenticate(ctx, "UploadScene"); !st.ok()) return st;
+  if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
+  v1::UploadSceneRequest msg;
+  if (!reader->Read(&msg)) return {grpc::StatusCode::DATA_LOSS, "upload: stream ended before the header"};
+  if (!msg.has_header()) return invalid("upload: the first message must carry a header");
+  auto upload = SceneUpload::begin(scenes_, msg.header(), options_.upload);
+  if (!upload) {
+    log_event("upload_refused", {{"name", msg.header().name()}, {"error", upload.status().to_string()}});
+    return to_grpc(upload.status());
+  }
+  SceneUpload& up = *upload.value();
+  log_event("upload_started", {{"scene", msg.header().sha256()}, {"name", msg.header().name()}});
+  while (reader->Read(&msg)) {
+    if (msg.has_header()) return invalid("upload: a header may only be the first message");
+    const uint64_t before = up.received();
+    Status st = up.write(msg.chunk());
+    upload_bytes_ += up.received() - before;
+    if (!st.is_ok()) {
+      log_event("upload_failed", {{"scene", up.header().sha256()}, {"error", st.to_string()}});
+      return to_grpc(st);
+    }
+  }
+  if (ctx->IsCancelled()) {
+    log_event("upload_cancelled", {{"scene", up.header().sha256()}});
+    return {grpc::StatusCode::CANCELLED, "upload cancelled by the client"};
+  }
+  auto info = up.finish();
+  if (!info) {
+    log_event("upload_failed", {{"scene", up.header().sha256()}, {"error", info.status().to_string()}});
+    return to_grpc(info.status());
+  }
+  *response = info.value();
+  log_event("scene_stored", {{"scene", info->scene_id()}, {"name", info->name()},
+                             {"bytes", std::to_string(info->size())},
+                             {"already_stored", info->already_stored() ? "true" : "false"}});
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
+                                    v1::SceneInfo* response) {
+  if (auto st = authenticate(ctx, "GetScene"); !st.ok()) return st;
+  if (auto st = check_id(req->scene_id(), "scene_id", 64); !st.ok()) return st;
+  auto info = scenes_.get(req->scene_id());
+  if (!info) return to_grpc(info.status());
+  *response = info.value();
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::ListScenes(grpc::ServerContext* ctx, const v1::ListScenesRequest*,
+                                      v1::ListScenesResponse* response) {
+  if (auto st = authenticate(ctx, "ListScenes"); !st.ok()) return st;
+  for (auto& s : scenes_.list()) *response->add_scenes() = std::move(s);
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::DeleteScene(grpc::ServerContext* ctx, const v1::DeleteSceneRequest* req,
+                                       v1::DeleteSceneResponse*) {
+  if (auto st = authenticate(ctx, "DeleteScene"); !st.ok()) return st;
+  if (auto st = check_id(req->scene_id(), "scene_id", 64); !st.ok()) return st;
+  std::lock_guard<std::mutex> lock(submit_mu_);
+  std::string user;
+  if (bakes_.scene_in_use(req->scene_id(), &user)) {
+    auto b = bakes_.get(user);
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            strprintf("scene_id: scene %s is used by bake %s (%s); cancel it or wait",
+                      req->scene_id().c_str(), user.c_str(),
+                      b ? v1::BakeState_Name(b->state()).c_str() : "?")};
+  }
+  if (Status st = scenes_.remove(req->scene_id()); !st.is_ok()) return to_grpc(st);
+  log_event("scene_deleted", {{"scene", req->scene_id()}});
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::SubmitBakeRequest* req,
+                                      v1::BakeInfo* response) {
+  if (auto st = authenticate(ctx, "SubmitBake"); !st.ok()) return st;
+  if (auto st = check_id(req->scene_id(), "scene_id", 64); !st.ok()) return st;
+  if (req->idempotency_key().size() > 256) return invalid("idempotency_key: longer than 256 bytes");
+  auto settings = to_engine_settings(req->settings(), options_.settings);
+  if (!settings) return to_grpc(settings.status());
+
+  std::lock_guard<std::mutex> lock(submit_mu_);
+  if (auto existing = bakes_.find_by_key(req->idempotency_key())) {
+    if (existing->scene_id() != req->scene_id())
+      return invalid(strprintf("idempotency_key '%s' was used for bake %s of another scene",
+                               req->idempotency_key().c_str(), existing->bake_id().c_str()));
+    *response = *existing;
+    log_event("bake_submit_retried", {{"bake", existing->bake_id()}, {"key", req->idempotency_key()}});
+    return grpc::Status::OK;
+  }
+  if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
+  if (!scenes_.contains(req->scene_id()))
+    return {grpc::StatusCode::NOT_FOUND, strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
+  if (Status st = queue_.check_room(); !st.is_ok()) return to_grpc(st);
+  auto created = bakes_.create(req->scene_id(), req->settings(), req->idempotency_key());
+  if (!created) return to_grpc(created.status());
+  const v1::BakeInfo& info = created->info;
+  if (Status st = queue_.push(info.bake_id(), info.settings().priority(),
+                              bakes_.sequence(info.bake_id()), /*force=*/true); !st.is_ok())
+    return to_grpc(st);
+  log_event("bake_submitted", {{"bake", info.bake_id()}, {"scene", info.scene_id()},
+                               {"priority", std::to_string(info.settings().priority())}});
+  *response = info;
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::GetBake(grpc::ServerContext* ctx, const v1::GetBakeRequest* req,
+                                   v1::BakeInfo* response) {
+  if (auto st = authenticate(ctx, "GetBake"); !st.ok()) return st;
+  if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
+  auto info = bakes_.get(req->bake_id());
+  if (!info) return to_grpc(info.status());
+  *response = info.value();
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::ListBakes(grpc::ServerContext* ctx, const v1::ListBakesRequest* req,
+                                     v1::ListBakesResponse* response) {
+  if (auto st = authenticate(ctx, "ListBakes"); !st.ok()) return st;
+  std::vector<v1::BakeState> states;
+  for (int s : req->states()) {
+    if (!v1::BakeState_IsValid(s) || s == v1::BAKE_STATE_UNSPECIFIED)
+      return invalid(strprintf("states: unknown bake state %d", s));
+    states.push_back(static_cast<v1::BakeState>(s));
+  }
+  for (auto& b : bakes_.list(states)) *response->add_bakes() = std::move(b);
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::CancelBake(grpc::ServerContext* ctx, const v1::CancelBakeRequest* req,
+                                      v1::BakeInfo* response) {
+  if (auto st = authenticate(ctx, "CancelBake"); !st.ok()) return st;
+  if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
+  auto info = runner_.cancel(req->bake_id());
+  if (!info) return to_grpc(info.status());
+  *response = info.value();
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::WatchBake(grpc::ServerContext* ctx, const v1::WatchBakeRequest* req,
+                                     grpc::ServerWriter<v1::BakeEvent>* writer) {
+  if (auto st = authenticate(ctx, "WatchBake"); !st.ok()) return st;
+  if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
+  auto first = bakes_.view(req->bake_id());
+  if (!first) return to_grpc(first.status());
+  struct WatcherCount {
+    std::atomic<uint32_t>& n;
+    explicit WatcherCount(std::atomic<uint32_t>& c) : n(c) { ++n; }
+    ~WatcherCount() { --n; }
+  } count(watchers_);
+  log_event("watch_started", {{"bake", req->bake_id()}, {"peer", ctx->peer()}});
+
+  uint64_t sent_snapshot = 0;
+  // One event from the newest view: a watcher that fell behind skips every
+  // intermediate snapshot and progress value (coalescing).
+  auto send = [&](const BakeView& v, bool final) {
+    v1::BakeEvent event;
+    *event.mutable_info() = v.info;
+    if (v.snapshot && v.snapshot_seq != sent_snapshot) {
+      auto encoded = v.snapshot->encoded();
+      if (encoded) *event.mutable_snapshot() = std::move(encoded.value());
+      else log_event("snapshot_encode_failed", {{"bake", req->bake_id()}, {"error", encoded.status().to_string()}});
+      sent_snapshot = v.snapshot_seq;
+    }
+    event.set_final(final);
+    return writer->Write(event);
+  };
+  auto gone = [&] {
+    log_event("watch_ended", {{"bake", req->bake_id()}, {"why", "client went away"}});
+    return grpc::Status(grpc::StatusCode::CANCELLED, "watcher went away");
+  };
+
+  uint64_t seen = first->version;
+  if (!send(first.value(), is_terminal(first->info.state()))) return gone();
+  if (is_terminal(first->info.state())) return grpc::Status::OK;
+  for (;;) {
+    if (ctx->IsCancelled()) return gone();
+    if (shutting_down_)
+      return {grpc::StatusCode::UNAVAILABLE,
+              "daemon shutting down; the bake resumes after restart, watch again then"};
+    auto v = bakes_.wait_for_change(req->bake_id(), seen, std::chrono::milliseconds(250));
+    if (!v) return to_grpc(v.status());
+    if (v->version == seen) continue;
+    seen = v->version;
+    const bool final = is_terminal(v->info.state());
+    if (!send(v.value(), final)) return gone();
+    if (final) {
+      log_event("watch_ended", {{"bake", req->bake_id()}, {"why", "final"}});
+      return grpc::Status::OK;
+    }
+  }
+}
+
+grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
+                                          const v1::DownloadResultRequest* req,
+                                          grpc::ServerWriter<v1::DownloadResultResponse>* writer) {
+  if (auto st = authenticate(ctx, "DownloadResult"); !st.ok()) return st;
+  if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
+  auto info = bakes_.get(req->bake_id());
+  if (!info) return to_grpc(info.status());
+  if (info->state() != v1::BAKE_STATE_SUCCEEDED)
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            strprintf("bake_id: bake %s is %s; artifacts exist once it has SUCCEEDED",
+                      req->bake_id().c_str(), v1::BakeState_Name(info->state()).c_str())};
+  const auto& names = info->artifacts();
+  if (std::find(names.begin(), names.end(), req->artifact()) == names.end()) {
+    std::string list;
+    for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+    return {grpc::StatusCode::NOT_FOUND,
+            strprintf("artifact: no artifact '%s' (have: %s)", req->artifact().substr(0, 80).c_str(),
+                      list.c_str())};
+  }
+  const std::string path = bakes_.results_dir(req->bake_id()) + "/" + req->artifact();
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return {grpc::StatusCode::DATA_LOSS, strprintf("artifact %s is missing on disk", req->artifact().c_str())};
+  const uint64_t total = static_cast<uint64_t>(in.tellg());
+  in.seekg(0);
+  Sha256 hash;
+  auto read_chunk = [&] {
+    std::string chunk(kDownloadChunkBytes, '\0');
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    chunk.resize(static_cast<size_t>(in.gcount()));
+    hash.update(chunk);
+    return chunk;
+  };
+  // One chunk of look-ahead, so the checksum rides on the last data message.
+  std::string current = read_chunk();
+  bool first = true;
+  for (;;) {
+    std::string next = in ? read_chunk() : std::string();
+    v1::DownloadResultResponse msg;
+    if (first) msg.set_total_size(total);
+    first = false;
+    msg.set_chunk(std::move(current));
+    const bool last = next.empty();
+    if (last) msg.set_sha256(hash.hex_digest());
+    if (!writer->Write(msg)) return {grpc::StatusCode::CANCELLED, "client went away"};
+    if (last) break;
+    current = std::move(next);
+  }
+  log_event("artifact_downloaded", {{"bake", req->bake_id()}, {"artifact", req->artifact()},
+                                    {"bytes", std::to_string(total)}});
+  return grpc::Status::OK;
+}
+
+grpc::Status LuxelService::GetServerStatus(grpc::ServerContext* ctx, const v1::GetServerStatusRequest*,
+                                           v1::ServerStatus* response) {
+  if (auto st = authenticate(ctx, "GetServerStatus"); !st.ok()) return st;
+  response->set_version(std::string(LUXEL_VERSION) + " (" + LUXEL_GIT_REVISION + ")");
+  response->set_device(options_.device_description);
+  response->set_started_at(started_at_);
+  for (const auto& [state, n] : bakes_.count_by_state()) (*response->mutable_bakes_by_state())[state] = n;
+  response->set_paths_traced(runner_.paths_traced());
+  response->set_upload_bytes(upload_bytes_.load());
+  response->set_scenes(static_cast<uint32_t>(scenes_.size()));
+  response->set_max_concurrent_bakes(options_.max_concurrent_bakes);
+  response->set_watchers(watchers_.load());
+  return grpc::Status::OK;
+}
+
+}  // namespace luxel::service

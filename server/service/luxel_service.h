@@ -1,0 +1,82 @@
+// The luxel.v1.Luxel gRPC service: translates requests to the stores, the
+// queue and the runner, and engine statuses to gRPC status codes. Every
+// handler returns a status (a bad request never ends the daemon); with a
+// token configured every call must carry "authorization: Bearer <token>".
+// Synchronous API: each streaming call holds one server thread, so a slow
+// WatchBake client blocks only its own thread, never a bake.
+#pragma once
+
+#include <atomic>
+#include <mutex>
+#include <string>
+
+#include "luxel/v1/luxel.grpc.pb.h"
+#include "service/bake_runner.h"
+#include "service/bake_store.h"
+#include "service/job_queue.h"
+#include "service/scene_store.h"
+#include "service/scene_upload.h"
+#include "service/settings_translate.h"
+
+namespace luxel::service {
+
+struct ServiceOptions {
+  UploadLimits upload;
+  SettingsLimits settings;
+  std::string token;               // empty: no authentication
+  std::string device_description;  // reported by GetServerStatus
+  uint32_t max_concurrent_bakes = 1;
+};
+
+grpc::Status to_grpc(const Status& status);
+
+class LuxelService final : public v1::Luxel::Service {
+ public:
+  LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue, BakeRunner& runner,
+               ServiceOptions options);
+
+  // Refuse new uploads and bakes; end open WatchBake streams.
+  void begin_shutdown() { shutting_down_ = true; }
+
+  grpc::Status UploadScene(grpc::ServerContext* ctx, grpc::ServerReader<v1::UploadSceneRequest>* reader,
+                           v1::SceneInfo* response) override;
+  grpc::Status GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
+                        v1::SceneInfo* response) override;
+  grpc::Status ListScenes(grpc::ServerContext* ctx, const v1::ListScenesRequest* req,
+                          v1::ListScenesResponse* response) override;
+  grpc::Status DeleteScene(grpc::ServerContext* ctx, const v1::DeleteSceneRequest* req,
+                           v1::DeleteSceneResponse* response) override;
+  grpc::Status SubmitBake(grpc::ServerContext* ctx, const v1::SubmitBakeRequest* req,
+                          v1::BakeInfo* response) override;
+  grpc::Status GetBake(grpc::ServerContext* ctx, const v1::GetBakeRequest* req,
+                       v1::BakeInfo* response) override;
+  grpc::Status ListBakes(grpc::ServerContext* ctx, const v1::ListBakesRequest* req,
+                         v1::ListBakesResponse* response) override;
+  grpc::Status CancelBake(grpc::ServerContext* ctx, const v1::CancelBakeRequest* req,
+                          v1::BakeInfo* response) override;
+  grpc::Status WatchBake(grpc::ServerContext* ctx, const v1::WatchBakeRequest* req,
+                         grpc::ServerWriter<v1::BakeEvent>* writer) override;
+  grpc::Status DownloadResult(grpc::ServerContext* ctx, const v1::DownloadResultRequest* req,
+                              grpc::ServerWriter<v1::DownloadResultResponse>* writer) override;
+  grpc::Status GetServerStatus(grpc::ServerContext* ctx, const v1::GetServerStatusRequest* req,
+                               v1::ServerStatus* response) override;
+
+ private:
+  // UNAUTHENTICATED unless the call carries the configured bearer token.
+  grpc::Status authenticate(grpc::ServerContext* ctx, const char* rpc) const;
+
+  SceneStore& scenes_;
+  BakeStore& bakes_;
+  JobQueue& queue_;
+  BakeRunner& runner_;
+  const ServiceOptions options_;
+  const double started_at_;
+  std::atomic<bool> shutting_down_{false};
+  std::atomic<uint64_t> upload_bytes_{0};
+  std::atomic<uint32_t> watchers_{0};
+  // Serialises SubmitBake against DeleteScene (a bake never lands on a
+  // scene being deleted) and the queue-limit check against the push.
+  std::mutex submit_mu_;
+};
+
+}  // namespace luxel::service

@@ -1,0 +1,62 @@
+// Scenes on disk, content-addressed by the sha256 of the main file:
+//
+//   <data>/scenes/<sha256>/scene.gltf|scene.glb   the main file
+//   <data>/scenes/<sha256>/<uri>                  external resources of a .gltf
+//   <data>/scenes/<sha256>/info.json              SceneInfo (protobuf JSON)
+//   <data>/staging/<random>/                      uploads in progress
+//
+// An upload is written into its own staging folder; only a verified and
+// imported upload is renamed into scenes/ (one atomic rename of the whole
+// folder, info.json written inside it first), so scenes/ never holds a
+// partial scene. Staging folders left by a crash are removed by open().
+#pragma once
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "common/status.h"
+#include "luxel/v1/luxel.pb.h"
+
+namespace luxel::service {
+
+class SceneStore {
+ public:
+  // Creates the folders, removes stale staging folders, loads every scene's info.
+  static Result<std::unique_ptr<SceneStore>> open(const std::string& data_dir);
+
+  // A new, empty staging folder for one upload.
+  Result<std::string> new_staging_dir();
+
+  // Name of the main file inside a scene folder for a format.
+  static const char* main_file_name(v1::SceneFormat format);
+
+  // Takes a staging folder whose files are verified (size and sha256): when
+  // the scene is already stored, removes the folder and returns the stored
+  // info with already_stored = true; otherwise imports and validates the main
+  // file (INVALID_ARGUMENT naming what fails), writes info.json and moves the
+  // folder into place. The folder is gone afterwards in every case.
+  Result<v1::SceneInfo> commit(const std::string& staging_dir, const v1::SceneUploadHeader& header,
+                               uint64_t stored_bytes);
+
+  Result<v1::SceneInfo> get(const std::string& scene_id) const;
+  std::vector<v1::SceneInfo> list() const;
+  bool contains(const std::string& scene_id) const;
+  // NOT_FOUND for an unknown id. The caller checks that no bake uses it.
+  Status remove(const std::string& scene_id);
+  // Path of the main file of a stored scene.
+  std::string main_file_path(const v1::SceneInfo& info) const;
+  size_t size() const;
+
+ private:
+  explicit SceneStore(std::string data_dir);
+  std::string scene_dir(const std::string& scene_id) const;
+
+  std::string scenes_dir_, staging_dir_;
+  mutable std::mutex mu_;
+  std::map<std::string, v1::SceneInfo> scenes_;
+};
+
+}  // namespace luxel::service

@@ -1,0 +1,241 @@
+#!/usr/bin/python3
+"""End-to-end test of the `luxel` CLI against a real luxeld on loopback.
+
+Starts luxeld on a free port with a fresh data folder, then drives every
+remote command of the CLI and checks exit codes, JSON output and the files
+written (artifacts verified against sha256 computed here, independently of
+the CLI). Also: a missing bearer token gives UNAUTHENTICATED (exit 1), and a
+TLS daemon is reachable with --tls-ca. Stdlib only (Debian's python3).
+"""
+import argparse
+import hashlib
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+
+ARGS = None
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def sha256_file(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+
+
+def luxel(*args, rc=0, env=None):
+    """Runs the CLI; checks its exit code; returns (stdout, stderr)."""
+    cmd = [ARGS.luxel] + [str(a) for a in args]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=120, env=env)
+    if p.returncode != rc:
+        raise AssertionError(
+            f"{' '.join(cmd)}: exit {p.returncode}, expected {rc}\n"
+            f"stdout:\n{p.stdout}\nstderr:\n{p.stderr}")
+    return p.stdout, p.stderr
+
+
+def json_lines(text):
+    return [json.loads(line) for line in text.splitlines() if line.strip()]
+
+
+class Daemon:
+    """One luxeld process started by this test (and only it is stopped)."""
+
+    def __init__(self, name, extra=()):
+        self.port = free_port()
+        self.server = f"127.0.0.1:{self.port}"
+        data = os.path.join(ARGS.work, name)
+        self.log = open(os.path.join(ARGS.work, name + ".log"), "w")
+        self.proc = subprocess.Popen(
+            [ARGS.luxeld, "--listen", self.server, "--data-dir", data] + list(extra),
+            stdout=self.log, stderr=subprocess.STDOUT)
+
+    def wait_ready(self, *client_args):
+        deadline = time.time() + 60
+        while time.time() < deadline:
+            if self.proc.poll() is not None:
+                raise AssertionError(f"luxeld exited with {self.proc.returncode}; see {self.log.name}")
+            p = subprocess.run([ARGS.luxel, "list", "--server", self.server, "--timeout", "2"]
+                               + list(client_args), capture_output=True, text=True)
+            if p.returncode == 0:
+                return
+            time.sleep(0.2)
+        raise AssertionError(f"luxeld at {self.server} did not answer within 60 s")
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self.log.close()
+
+
+def test_main_flow(d):
+    s = ["--server", d.server]
+    scene_sha = sha256_file(ARGS.scene)
+
+    # upload: the scene id is the sha256 of the main file.
+    out, _ = luxel("upload", ARGS.scene, "--name", "cornell", "--json", *s)
+    info = json_lines(out)
+    check(len(info) == 1 and info[0]["scene_id"] == scene_sha, f"upload --json: {out}")
+    check(info[0]["statistics"]["triangles"] not in ("0", 0), "upload: no triangles in statistics")
+    out, _ = luxel("upload", ARGS.scene, *s)
+    check(scene_sha in out, f"upload (human) does not print the scene id: {out}")
+
+    # bake: the scene is already there (no upload), watch, download, verify.
+    out_dir = os.path.join(ARGS.work, "out")
+    snaps = os.path.join(ARGS.work, "snaps")
+    out, _ = luxel("bake", ARGS.scene, "--samples", 8, "--resolution", 32, "--out", out_dir,
+                   "--snapshot-interval", 0.05, "--snapshots", snaps, "--json", *s)
+    lines = json_lines(out)
+    kinds = [l["type"] for l in lines]
+    check(kinds[0] == "scene" and lines[0]["uploaded"] is False,
+          f"bake re-uploaded a stored scene: {lines[0]}")
+    check(kinds[1] == "bake" and "event" in kinds and kinds[-1] == "result", f"bake --json kinds: {kinds}")
+    bake_id = lines[1]["bake"]["bake_id"]
+    check(lines[-1]["bake"]["state"] == "BAKE_STATE_SUCCEEDED", f"bake result: {lines[-1]}")
+    finals = [l for l in lines if l["type"] == "event" and l["final"]]
+    check(len(finals) == 1, "exactly one final event")
+    artifacts = [l for l in lines if l["type"] == "artifact"]
+    check({a["name"] for a in artifacts} == set(lines[-1]["bake"]["artifacts"]) and artifacts,
+          f"downloaded {[a['name'] for a in artifacts]}")
+    for a in artifacts:
+        path = os.path.join(out_dir, a["name"])
+        check(os.path.isfile(path) and sha256_file(path) == a["sha256"], f"artifact {path} verifies")
+        check(os.path.getsize(path) == a["size"] and a["size"] > 0, f"artifact {path} size")
+    check("irradiance.exr" in {a["name"] for a in artifacts}, "irradiance.exr downloaded")
+    check(not [f for f in os.listdir(out_dir) if f.endswith(".part")], "no .part files left")
+    for l in lines:
+        if l.get("snapshot_file"):
+            check(os.path.isfile(l["snapshot_file"]), f"snapshot {l['snapshot_file']} written")
+
+    # list / status
+    out, _ = luxel("list", "--json", *s)
+    bakes = {b["bake_id"]: b for b in json_lines(out)}
+    check(bake_id in bakes and bakes[bake_id]["state"] == "BAKE_STATE_SUCCEEDED", f"list: {out}")
+    out, _ = luxel("list", "--state", "running,queued", "--json", *s)
+    check(bake_id not in out, "list --state running,queued excludes the finished bake")
+    out, _ = luxel("list", "--scenes", "--json", *s)
+    check(scene_sha in {x["scene_id"] for x in json_lines(out)}, "list --scenes")
+    out, _ = luxel("status", bake_id, *s)
+    check("SUCCEEDED" in out and bake_id in out, f"status: {out}")
+
+    # fetch: all artifacts again, byte-identical; then a single one.
+    again = os.path.join(ARGS.work, "fetched")
+    luxel("fetch", bake_id, "--out", again, *s)
+    for a in artifacts:
+        check(sha256_file(os.path.join(again, a["name"])) == a["sha256"], f"fetch {a['name']}")
+    one = os.path.join(ARGS.work, "one")
+    luxel("fetch", bake_id, "--out", one, "--artifact", "manifest.json", *s)
+    check(os.listdir(one) == ["manifest.json"], f"fetch --artifact: {os.listdir(one)}")
+
+    # --detach prints only the id; watch follows it to the end; cancel of a
+    # finished bake is a no-op that succeeds.
+    out, _ = luxel("bake", scene_sha, "--samples", 8, "--resolution", 32, "--seed", 7, "--detach", *s)
+    detached = out.strip()
+    check(len(detached) > 0 and "\n" not in detached, f"--detach output: {out!r}")
+    luxel("watch", detached, "--quiet", *s)
+    out, _ = luxel("cancel", detached, "--json", *s)
+    check(json_lines(out)[0]["state"] == "BAKE_STATE_SUCCEEDED", "cancel of a finished bake")
+    return bake_id
+
+
+def test_errors(d):
+    s = ["--server", d.server]
+    _, err = luxel("status", "0123456789abcdef0123456789abcdef", *s, rc=1)
+    check("NOT_FOUND" in err, f"unknown bake: {err}")
+    _, err = luxel("list", "--server", f"127.0.0.1:{free_port()}", rc=1)
+    check("cannot reach luxeld" in err and "UNAVAILABLE" in err, f"no daemon: {err}")
+    luxel("bake", ARGS.scene, *s, rc=2)                        # no --out
+    luxel("bake", ARGS.scene, "--out", "x", "--clamp", 2, *s, rc=2)  # local-only setting
+    luxel("bake", ARGS.scene, "--out", "x", "--bounces", 99, *s, rc=2)  # invalid setting
+    luxel("list", "--state", "sleeping", *s, rc=2)
+    luxel("frobnicate", rc=2)
+    _, err = luxel("upload", os.path.join(ARGS.work, "missing.gltf"), *s, rc=1)
+    check("missing.gltf" in err, f"missing file: {err}")
+    # A cancelled bake: exit 3 from watch.
+    out, _ = luxel("bake", ARGS.scene, "--samples", 0, "--time", 60, "--resolution", 32,
+                   "--detach", *s)
+    bake_id = out.strip()
+    luxel("cancel", bake_id, *s)
+    _, err = luxel("watch", bake_id, "--quiet", *s, rc=3)
+    check("CANCELLED" in err, f"watch of a cancelled bake: {err}")
+
+
+def test_token():
+    d = Daemon("token", ["--token", "s3cret"])
+    try:
+        d.wait_ready("--token", "s3cret")
+        _, err = luxel("list", "--server", d.server, rc=1)
+        check("UNAUTHENTICATED" in err, f"missing token: {err}")
+        env = dict(os.environ, LUXEL_TOKEN="s3cret", LUXEL_SERVER=d.server)
+        luxel("list", env=env)
+    finally:
+        d.stop()
+
+
+def test_tls():
+    cert, key = os.path.join(ARGS.work, "cert.pem"), os.path.join(ARGS.work, "key.pem")
+    openssl = shutil.which("openssl")
+    if not openssl:
+        print("skip TLS: no openssl binary")
+        return
+    subprocess.run([openssl, "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1",
+                    "-subj", "/CN=localhost", "-addext", "subjectAltName=IP:127.0.0.1,DNS:localhost",
+                    "-keyout", key, "-out", cert], check=True, capture_output=True)
+    d = Daemon("tls", ["--tls-cert", cert, "--tls-key", key])
+    try:
+        d.wait_ready("--tls-ca", cert)
+        luxel("upload", ARGS.scene, "--server", d.server, "--tls-ca", cert)
+        luxel("list", "--server", d.server, "--timeout", 3, rc=1)  # plaintext to a TLS port
+    finally:
+        d.stop()
+
+
+def main():
+    global ARGS
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--luxel", required=True)
+    ap.add_argument("--luxeld", required=True)
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--work", required=True)
+    ARGS = ap.parse_args()
+    shutil.rmtree(ARGS.work, ignore_errors=True)
+    os.makedirs(ARGS.work)
+    d = Daemon("data")
+    try:
+        d.wait_ready()
+        test_main_flow(d)
+        test_errors(d)
+    finally:
+        d.stop()
+    test_token()
+    test_tls()
+    print("cli_e2e: all checks passed")
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except AssertionError as e:
+        print(f"FAILED: {e}", file=sys.stderr)
+        sys.exit(1)

@@ -1,0 +1,122 @@
+"""The Python client's pieces that need no daemon: stub loading, resource
+discovery and hashing of scene uploads, chunking, settings mapping.
+
+Run: PYTHONPATH=client/python:<build>/python /usr/bin/python3 -m unittest tests/python/test_client_helpers.py
+"""
+
+import hashlib
+import json
+import os
+import pathlib
+import tempfile
+import unittest
+
+import luxel_client
+from luxel_client import LuxelError, collect_scene_files, luxel_pb2, make_settings, referenced_uris
+from luxel_client.scene_files import CHUNK_SIZE, iter_chunks, sha256_file
+
+SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
+                                     pathlib.Path(__file__).resolve().parents[2] / "scenes"))
+
+
+class ResourceDiscoveryTest(unittest.TestCase):
+    def test_lists_buffers_then_images_skipping_data_uris_and_repeats(self):
+        gltf = {"buffers": [{"uri": "a.bin"}, {"uri": "data:application/octet-stream;base64,AAAA"},
+                            {"byteLength": 4}],
+                "images": [{"uri": "tex/b%20c.png"}, {"uri": "a.bin"}, {"bufferView": 0}]}
+        self.assertEqual(referenced_uris(gltf),
+                         [("a.bin", "buffers[0].uri"), ("tex/b%20c.png", "images[0].uri")])
+
+    def test_cornell_box_brings_its_bin(self):
+        fmt, files = collect_scene_files(SCENES / "cornell_box.gltf")
+        self.assertEqual(fmt, "gltf")
+        self.assertEqual([f.uri for f in files], ["", "cornell_box.bin"])
+        for f in files:
+            data = f.path.read_bytes()
+            self.assertEqual(f.size, len(data))
+            self.assertEqual(f.sha256, hashlib.sha256(data).hexdigest())
+
+    def test_glb_is_one_file(self):
+        fmt, files = collect_scene_files(SCENES / "foliage_instanced.glb")
+        self.assertEqual(fmt, "glb")
+        self.assertEqual(len(files), 1)
+
+    def test_percent_encoded_uri_is_sent_verbatim_and_read_decoded(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            (tmp / "my tex.png").write_bytes(b"\x89PNG fake")
+            (tmp / "s.gltf").write_text(json.dumps({"images": [{"uri": "my%20tex.png"}]}))
+            _, files = collect_scene_files(tmp / "s.gltf")
+            self.assertEqual(files[1].uri, "my%20tex.png")
+            self.assertEqual(files[1].path, tmp / "my tex.png")
+
+    def test_missing_or_escaping_resources_are_refused_naming_the_field(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            cases = {"gone.bin": "NOT_FOUND", "../up.bin": "INVALID_ARGUMENT",
+                     "/etc/passwd": "INVALID_ARGUMENT", "http://x/y.bin": "INVALID_ARGUMENT"}
+            for uri, code in cases.items():
+                (tmp / "s.gltf").write_text(json.dumps({"buffers": [{"uri": uri}]}))
+                with self.assertRaises(LuxelError) as caught:
+                    collect_scene_files(tmp / "s.gltf")
+                self.assertEqual(caught.exception.code, code, uri)
+                self.assertIn("buffers[0].uri", caught.exception.message)
+                self.assertTrue(caught.exception.local)
+
+
+class HashingAndChunkingTest(unittest.TestCase):
+    def test_chunks_are_64k_per_file_and_rebuild_the_files(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            sizes = [0, 1, CHUNK_SIZE, CHUNK_SIZE + 1, 3 * CHUNK_SIZE - 7]
+            payloads = [os.urandom(n) for n in sizes]
+            files = []
+            for i, payload in enumerate(payloads):
+                path = tmp / f"f{i}"
+                path.write_bytes(payload)
+                digest, size = sha256_file(path)
+                self.assertEqual((digest, size), (hashlib.sha256(payload).hexdigest(), len(payload)))
+                files.append(luxel_client.SceneFile(f"f{i}", path, size, digest))
+            chunks = list(iter_chunks(files))
+            self.assertTrue(all(0 < len(c) <= CHUNK_SIZE for c in chunks))
+            # A chunk never spans two files: the per-file chunk counts add up.
+            expected = sum(-(-n // CHUNK_SIZE) for n in sizes)
+            self.assertEqual(len(chunks), expected)
+            self.assertEqual(b"".join(chunks), b"".join(payloads))
+
+
+class SettingsTest(unittest.TestCase):
+    def test_keywords_map_onto_bake_settings(self):
+        s = make_settings(resolution=32, samples_per_texel=8, max_bounces=0, filter="gaussian",
+                          snapshot_format="EXR", sky=(0.5, 0.6, 0.7),
+                          sun={"direction": [0, -1, 0], "illuminance": 2.0}, priority=-3)
+        self.assertEqual(s.resolution, 32)
+        self.assertTrue(s.HasField("max_bounces"))  # optional: 0 differs from unset
+        self.assertEqual(s.max_bounces, 0)
+        self.assertEqual(s.filter, luxel_pb2.FILTER_GAUSSIAN)
+        self.assertEqual(s.snapshot_format, luxel_pb2.SNAPSHOT_FORMAT_EXR)
+        self.assertEqual(s.sky.kind, luxel_pb2.Sky.KIND_CONSTANT)
+        for got, want in zip(s.sky.color, (0.5, 0.6, 0.7)):
+            self.assertAlmostEqual(got, want, places=6)
+        self.assertEqual(list(s.sun.direction), [0, -1, 0])
+        self.assertEqual(s.priority, -3)
+        self.assertFalse(make_settings(resolution=8).HasField("max_bounces"))
+
+    def test_bad_keywords_name_the_field(self):
+        for kwargs, field in [({"resolutoin": 3}, "settings.resolutoin"),
+                              ({"resolution": -1}, "settings.resolution"),
+                              ({"filter": "bilinear"}, "settings.filter"),
+                              ({"sun": {"power": 1}}, "settings.sun.power")]:
+            with self.assertRaises(LuxelError) as caught:
+                make_settings(**kwargs)
+            self.assertEqual(caught.exception.code, "INVALID_ARGUMENT")
+            self.assertIn(field, caught.exception.message)
+
+    def test_state_names(self):
+        self.assertEqual(luxel_client.state_value("running"), luxel_pb2.BAKE_STATE_RUNNING)
+        self.assertEqual(luxel_client.state_value("BAKE_STATE_QUEUED"), luxel_pb2.BAKE_STATE_QUEUED)
+        self.assertEqual(luxel_client.state_name(luxel_pb2.BAKE_STATE_SUCCEEDED), "SUCCEEDED")
+
+
+if __name__ == "__main__":
+    unittest.main()

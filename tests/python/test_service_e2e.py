@@ -1,0 +1,335 @@
+"""End-to-end through the Python client against a real luxeld on loopback.
+
+Needs LUXELD (path of the daemon binary) and the generated stubs on the path;
+CMake's ctest entry python_client_e2e sets both. By hand:
+
+    LUXELD=build/server/service/luxeld LUXEL_CACHE_DIR=build/cl-cache \
+    PYTHONPATH=client/python:build/python /usr/bin/python3 -m unittest -v tests/python/test_service_e2e.py
+"""
+
+import hashlib
+import json
+import os
+import pathlib
+import shutil
+import tempfile
+import threading
+import time
+import unittest
+
+from luxel_client import Client, LuxelError, luxel_pb2, state_name
+from luxeld_process import Luxeld
+
+SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
+                                     pathlib.Path(__file__).resolve().parents[2] / "scenes"))
+CORNELL = SCENES / "cornell_box.gltf"
+FOLIAGE = SCENES / "foliage_instanced.glb"
+# Small bakes (a few hundredths of a second on PoCL), batches of the minimum
+# size so a bake runs several iterations.
+SMALL = dict(resolution=32, samples_per_texel=16, paths_per_iteration=1024, snapshot_interval_s=0.05,
+             snapshot_max_side=64)
+# The watched bakes must outlast the daemon's shortest snapshot interval
+# (0.05 s) on any machine, so they stop on time rather than on samples.
+TIMED = dict(SMALL, samples_per_texel=0, time_budget_s=0.5)
+EXPECTED_ARTIFACTS = {"irradiance.exr", "preview.png", "manifest.json"}
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+EXR_MAGIC = b"\x76\x2f\x31\x01"
+
+
+def sha256_of(path):
+    return hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
+
+
+def collect(client, bake_id):
+    """All events of one WatchBake stream, to its end."""
+    with client.watch_bake(bake_id) as watch:
+        return list(watch)
+
+
+class ServiceEndToEndTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        binary = os.environ.get("LUXELD")
+        if not binary or not os.access(binary, os.X_OK):
+            raise unittest.SkipTest("LUXELD does not name the luxeld binary")
+        cls.daemon = Luxeld(binary, ["--max-concurrent-bakes", "2"])
+        try:
+            cls.daemon.start()
+        except Exception:
+            cls.daemon.cleanup()
+            raise
+        cls.client = Client(cls.daemon.address, timeout=120)
+        cls.out = tempfile.TemporaryDirectory(prefix="luxel_py_out_")
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+        status = cls.daemon.stop()
+        log = cls.daemon.log()
+        cls.daemon.cleanup()
+        cls.out.cleanup()
+        if status != 0:
+            raise AssertionError(f"luxeld exited {status} after SIGTERM (expected 0); its log:\n{log}")
+
+    # ---------------------------------------------------------------- helpers
+
+    def out_dir(self, name):
+        path = pathlib.Path(self.out.name) / name
+        path.mkdir(parents=True, exist_ok=True)
+        return path
+
+    def check_events(self, events, bake_id):
+        """The WatchBake contract: the first event is the current state, the
+        stream ends with exactly one final event of a finished bake."""
+        self.assertTrue(events, "the stream carried no event")
+        self.assertEqual(events[0].info.bake_id, bake_id)
+        self.assertNotEqual(events[0].info.state, luxel_pb2.BAKE_STATE_UNSPECIFIED)
+        self.assertTrue(events[-1].final, "the stream ended without a final event")
+        self.assertEqual(sum(e.final for e in events), 1)
+        self.assertEqual(state_name(events[-1].info.state), "SUCCEEDED", events[-1].info.error_message)
+        spp = [e.info.progress.mean_spp for e in events]
+        self.assertEqual(spp, sorted(spp), "progress went backwards")
+
+    def check_snapshot(self, snapshot):
+        self.assertIn(snapshot.format, (luxel_pb2.SNAPSHOT_FORMAT_PNG, luxel_pb2.SNAPSHOT_FORMAT_UNSPECIFIED))
+        self.assertTrue(snapshot.data.startswith(PNG_MAGIC), "snapshot is not a PNG")
+        self.assertGreater(snapshot.width, 0)
+        self.assertGreater(snapshot.height, 0)
+        self.assertLessEqual(max(snapshot.width, snapshot.height), 64)
+
+    def download_all(self, client, info, folder):
+        """Downloads every artifact (the client checks size and the daemon's
+        sha256) and re-hashes the files on disk independently."""
+        self.assertTrue(EXPECTED_ARTIFACTS <= set(info.artifacts), list(info.artifacts))
+        for artifact in info.artifacts:
+            got = client.download(info.bake_id, artifact, folder / artifact)
+            self.assertEqual(got.sha256, sha256_of(got.path), artifact)
+            self.assertEqual(got.size, got.path.stat().st_size)
+            self.assertGreater(got.size, 0, artifact)
+        self.assertTrue((folder / "preview.png").read_bytes().startswith(PNG_MAGIC))
+        self.assertTrue((folder / "irradiance.exr").read_bytes().startswith(EXR_MAGIC))
+        json.loads((folder / "manifest.json").read_text())
+        self.assertEqual([p.name for p in folder.iterdir() if p.name.endswith(".part")], [])
+
+    def bake_and_verify(self, scene_path, name):
+        scene = self.client.upload_scene(scene_path)
+        self.assertEqual(scene.scene_id, sha256_of(scene_path))
+        self.assertGreater(scene.statistics.triangles, 0)
+        info = self.client.submit_bake(scene.scene_id, **TIMED)
+        self.assertEqual(info.scene_id, scene.scene_id)
+        events = collect(self.client, info.bake_id)
+        self.check_events(events, info.bake_id)
+        snapshots = [e.snapshot for e in events if e.HasField("snapshot") and e.snapshot.data]
+        self.assertTrue(snapshots, f"no snapshot in {len(events)} events")
+        for snapshot in snapshots:
+            self.check_snapshot(snapshot)
+        spp = [s.progress.mean_spp for s in snapshots]
+        self.assertEqual(spp, sorted(spp), "snapshots out of order")
+        final = self.client.get_bake(info.bake_id)
+        self.assertEqual(state_name(final.state), "SUCCEEDED")
+        self.assertEqual(final.termination, "time")
+        self.assertGreaterEqual(final.progress.elapsed_s, TIMED["time_budget_s"])
+        self.assertGreater(final.progress.mean_spp, 0)
+        self.download_all(self.client, final, self.out_dir(name))
+        return scene, final
+
+    # ---------------------------------------------------------------- tests
+
+    def test_gltf_with_external_buffer_end_to_end(self):
+        scene, info = self.bake_and_verify(CORNELL, "cornell")
+        self.assertEqual(scene.size, CORNELL.stat().st_size + (SCENES / "cornell_box.bin").stat().st_size)
+        self.assertEqual(scene.statistics.triangles, 32)
+        self.assertIn(scene.scene_id, [s.scene_id for s in self.client.list_scenes()])
+        self.assertEqual(self.client.get_scene(scene.scene_id).scene_id, scene.scene_id)
+        self.assertTrue(self.client.upload_scene(CORNELL).already_stored)
+        succeeded = self.client.list_bakes(states=["SUCCEEDED"])
+        self.assertIn(info.bake_id, [b.bake_id for b in succeeded])
+        self.assertTrue(all(b.state == luxel_pb2.BAKE_STATE_SUCCEEDED for b in succeeded))
+        # A late watcher sees the finished state at once, then the stream ends.
+        late = collect(self.client, info.bake_id)
+        self.assertTrue(late[0].final or late[-1].final)
+        self.assertEqual(state_name(late[-1].info.state), "SUCCEEDED")
+
+    def test_glb_end_to_end(self):
+        scene, _ = self.bake_and_verify(FOLIAGE, "foliage")
+        self.assertEqual(scene.format, luxel_pb2.SCENE_FORMAT_GLB)
+
+    def test_idempotency_key_returns_the_same_job(self):
+        scene = self.client.upload_scene(CORNELL)
+        first = self.client.submit_bake(scene.scene_id, idempotency_key="py-e2e-key", **SMALL)
+        again = self.client.submit_bake(scene.scene_id, idempotency_key="py-e2e-key", **SMALL)
+        self.assertEqual(first.bake_id, again.bake_id)
+        self.assertEqual(state_name(self.client.wait(first.bake_id).state), "SUCCEEDED")
+
+    def test_unknown_ids_are_not_found(self):
+        unknown = "0123456789abcdef0123456789abcdef"
+        calls = {
+            "GetBake": lambda: self.client.get_bake(unknown),
+            "CancelBake": lambda: self.client.cancel_bake(unknown),
+            "WatchBake": lambda: collect(self.client, unknown),
+            "DownloadResult": lambda: self.client.download(unknown, "preview.png", self.out_dir("nf")),
+            "GetScene": lambda: self.client.get_scene("ab" * 32),
+            "DeleteScene": lambda: self.client.delete_scene("ab" * 32),
+            "SubmitBake": lambda: self.client.submit_bake("ab" * 32, **SMALL),
+        }
+        for rpc, call in calls.items():
+            with self.subTest(rpc=rpc), self.assertRaises(LuxelError) as caught:
+                call()
+            self.assertEqual(caught.exception.code, "NOT_FOUND", f"{rpc}: {caught.exception}")
+            self.assertFalse(caught.exception.local)
+        self.assertEqual(list(self.out_dir("nf").iterdir()), [], "a failed download left a file")
+
+    def test_wrong_hash_or_short_stream_is_data_loss_and_stores_nothing(self):
+        # Unique bytes, so no other test can have stored this content.
+        data = CORNELL.read_bytes() + b"\n" * 7
+        bin_bytes = (SCENES / "cornell_box.bin").read_bytes()
+        true_id = hashlib.sha256(data).hexdigest()
+        resource = luxel_pb2.ResourceHeader(uri="cornell_box.bin", size=len(bin_bytes),
+                                            sha256=hashlib.sha256(bin_bytes).hexdigest())
+
+        def header(**overrides):
+            fields = dict(name="bad.gltf", format=luxel_pb2.SCENE_FORMAT_GLTF, total_size=len(data),
+                          sha256=true_id, resources=[resource])
+            fields.update(overrides)
+            return luxel_pb2.SceneUploadHeader(**fields)
+
+        bad_resource = luxel_pb2.ResourceHeader(uri="cornell_box.bin", size=len(bin_bytes), sha256="0" * 64)
+        cases = {
+            "wrong main hash": (header(sha256="f" * 64), [data, bin_bytes]),
+            "wrong resource hash": (header(resources=[bad_resource]), [data, bin_bytes]),
+            "truncated stream": (header(), [data, bin_bytes[:100]]),
+        }
+        for case, (head, chunks) in cases.items():
+            with self.subTest(case=case), self.assertRaises(LuxelError) as caught:
+                self.client._upload(head, iter(chunks))
+            self.assertEqual(caught.exception.code, "DATA_LOSS", f"{case}: {caught.exception}")
+        stored = [s.scene_id for s in self.client.list_scenes()]
+        self.assertNotIn(true_id, stored)
+        self.assertNotIn("f" * 64, stored)
+        with self.assertRaises(LuxelError) as caught:
+            self.client.get_scene(true_id)
+        self.assertEqual(caught.exception.code, "NOT_FOUND")
+
+    def test_invalid_settings_name_the_field(self):
+        scene = self.client.upload_scene(CORNELL)
+        before = len(self.client.list_bakes())
+        cases = [({"max_bounces": 99}, "max_bounces"),
+                 ({"resolution": 1_000_000}, "resolution"),
+                 ({"samples_per_texel": 0}, "samples_per_texel"),
+                 ({"paths_per_iteration": 7}, "paths_per_iteration"),
+                 ({"time_budget_s": -1.0}, "time_budget_s")]
+        for overrides, field in cases:
+            settings = dict(SMALL, **overrides)
+            with self.subTest(field=field), self.assertRaises(LuxelError) as caught:
+                self.client.submit_bake(scene.scene_id, **settings)
+            self.assertEqual(caught.exception.code, "INVALID_ARGUMENT", str(caught.exception))
+            self.assertIn(field, caught.exception.message)
+            self.assertFalse(caught.exception.local, "the daemon, not the client, should refuse it")
+        self.assertEqual(len(self.client.list_bakes()), before, "an invalid bake was queued")
+
+    def test_concurrent_clients_with_two_watchers_each(self):
+        scenes = [CORNELL, FOLIAGE, CORNELL]
+        errors, results = [], {}
+        lock = threading.Lock()
+
+        def watcher(bake_id, slot):
+            try:
+                with Client(self.daemon.address) as own:
+                    events = collect(own, bake_id)
+                with lock:
+                    results.setdefault(bake_id, []).append(events)
+            except Exception as e:  # reported by the main thread
+                errors.append(f"watcher {slot} of {bake_id}: {e!r}")
+
+        def submitter(index):
+            try:
+                with Client(self.daemon.address, timeout=120) as own:
+                    scene = own.upload_scene(scenes[index])
+                    info = own.submit_bake(scene.scene_id, seed=index + 1, **SMALL)
+                    watchers = [threading.Thread(target=watcher, args=(info.bake_id, w)) for w in range(2)]
+                    for t in watchers:
+                        t.start()
+                    for t in watchers:
+                        t.join(timeout=240)
+                    final = own.get_bake(info.bake_id)
+                    self.assertEqual(state_name(final.state), "SUCCEEDED")
+                    self.assertEqual(final.termination, "samples")
+                    self.assertGreaterEqual(final.progress.mean_spp, SMALL["samples_per_texel"])
+                    self.download_all(own, final, self.out_dir(f"concurrent_{index}"))
+            except Exception as e:
+                errors.append(f"client {index}: {e!r}")
+
+        threads = [threading.Thread(target=submitter, args=(i,)) for i in range(len(scenes))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(timeout=300)
+        self.assertEqual(errors, [])
+        self.assertEqual(len(results), 3)
+        for bake_id, streams in results.items():
+            self.assertEqual(len(streams), 2)
+            for events in streams:
+                self.check_events(events, bake_id)
+
+    def test_watcher_that_disconnects_does_not_disturb_the_bake(self):
+        scene = self.client.upload_scene(CORNELL)
+        info = self.client.submit_bake(scene.scene_id, **TIMED)
+        with Client(self.daemon.address) as quitter:
+            watch = quitter.watch_bake(info.bake_id)
+            first, second = next(watch), next(watch)
+            self.assertEqual(first.info.bake_id, info.bake_id)
+            self.assertFalse(second.final, "the bake ended before the watcher could leave mid-stream")
+            watch.cancel()
+            self.assertEqual(list(watch), [], "events after cancel()")
+        events = collect(self.client, info.bake_id)
+        self.check_events(events, info.bake_id)
+        self.download_all(self.client, events[-1].info, self.out_dir("after_disconnect"))
+        # The daemon forgets the closed stream (ServerStatus.watchers counts open ones).
+        deadline = time.monotonic() + 10
+        while self.client.server_status().watchers > 0 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        self.assertEqual(self.client.server_status().watchers, 0)
+
+    def test_cancel_and_scene_in_use(self):
+        # A private copy of the scene (unique bytes) so deleting it touches no other test.
+        folder = self.out_dir("private_scene")
+        shutil.copy(SCENES / "cornell_box.bin", folder)
+        (folder / "cornell.gltf").write_bytes(CORNELL.read_bytes() + b"\n\n")
+        scene = self.client.upload_scene(folder / "cornell.gltf")
+        info = self.client.submit_bake(scene.scene_id, resolution=32, samples_per_texel=1_000_000,
+                                       time_budget_s=60, paths_per_iteration=1024)
+        with self.assertRaises(LuxelError) as caught:
+            self.client.delete_scene(scene.scene_id)
+        self.assertEqual(caught.exception.code, "FAILED_PRECONDITION")
+        self.client.cancel_bake(info.bake_id)
+        final = self.client.wait(info.bake_id)
+        self.assertEqual(state_name(final.state), "CANCELLED")
+        self.client.delete_scene(scene.scene_id)
+        self.assertNotIn(scene.scene_id, [s.scene_id for s in self.client.list_scenes()])
+
+
+class TokenTest(unittest.TestCase):
+    """With --token, calls without the bearer token (or with a wrong one) get
+    UNAUTHENTICATED; the client's token= sends it."""
+
+    def test_bearer_token(self):
+        binary = os.environ.get("LUXELD")
+        if not binary or not os.access(binary, os.X_OK):
+            self.skipTest("LUXELD does not name the luxeld binary")
+        daemon = Luxeld(binary, ["--token", "py-e2e-secret"])
+        try:
+            daemon.start()
+            for token in (None, "wrong"):
+                with Client(daemon.address, token=token) as client, self.assertRaises(LuxelError) as caught:
+                    client.list_scenes()
+                self.assertEqual(caught.exception.code, "UNAUTHENTICATED", str(token))
+            with Client(daemon.address, token="py-e2e-secret") as client:
+                scene = client.upload_scene(FOLIAGE)
+                self.assertEqual([s.scene_id for s in client.list_scenes()], [scene.scene_id])
+            self.assertEqual(daemon.stop(), 0, daemon.log())
+        finally:
+            daemon.cleanup()
+
+
+if __name__ == "__main__":
+    unittest.main()

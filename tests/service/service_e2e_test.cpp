@@ -1,0 +1,260 @@
+// End to end through the real daemon: upload (a .gltf with its external
+// buffer, a .glb), content addressing, submit, watch (current state first,
+// snapshots, final event), download and verify every artifact, idempotency,
+// server counters and structured logs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "daemon_harness.h"
+#include "output/exr.h"
+
+namespace luxel::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kToken = "e2e-token";
+
+class ServiceE2E : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir();
+    daemon_ = new Daemon(dir_->path() + "/data", {"--max-upload-bytes", "4000000"}, kToken);
+  }
+  static void TearDownTestSuite() {
+    EXPECT_EQ(daemon_->stop(SIGTERM), 0) << daemon_->log();
+    delete daemon_;
+    delete dir_;
+  }
+  static std::string upload_cornell(v1::SceneInfo* info) {
+    const std::string gltf = read_file(LUXEL_SCENES_DIR "/cornell_box.gltf");
+    const std::string bin = read_file(LUXEL_SCENES_DIR "/cornell_box.bin");
+    auto st = upload_scene(*daemon_, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, gltf,
+                           {{"cornell_box.bin", bin}}, info);
+    EXPECT_TRUE(st.ok()) << st.error_message();
+    return info->scene_id();
+  }
+  static TempDir* dir_;
+  static Daemon* daemon_;
+};
+TempDir* ServiceE2E::dir_ = nullptr;
+Daemon* ServiceE2E::daemon_ = nullptr;
+
+TEST_F(ServiceE2E, UploadStoresContentAddressedSceneOnce) {
+  v1::SceneInfo first, second;
+  const std::string id = upload_cornell(&first);
+  EXPECT_EQ(id, sha256_hex(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf")));
+  EXPECT_GT(first.statistics().triangles(), 0u);
+  EXPECT_GT(first.statistics().emissive_triangles(), 0u);
+  EXPECT_EQ(first.size(), fs::file_size(LUXEL_SCENES_DIR "/cornell_box.gltf") +
+                              fs::file_size(LUXEL_SCENES_DIR "/cornell_box.bin"));
+  upload_cornell(&second);
+  EXPECT_TRUE(second.already_stored());
+  EXPECT_EQ(second.scene_id(), id);
+  EXPECT_EQ(second.uploaded_at(), first.uploaded_at());
+
+  // One folder per scene; the resource sits beside the main file.
+  const std::string scenes = daemon_->data_dir() + "/scenes";
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(scenes)) { (void)e; ++n; }
+  EXPECT_GE(n, 1u);
+  EXPECT_TRUE(fs::exists(scenes + "/" + id + "/cornell_box.bin"));
+  EXPECT_TRUE(fs::is_empty(daemon_->data_dir() + "/staging"));
+
+  auto stub = daemon_->stub();
+  v1::GetSceneRequest get;
+  get.set_scene_id(id);
+  v1::SceneInfo got;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->GetScene(ctx.get(), get, &got).ok());
+  EXPECT_EQ(got.name(), "cornell_box.gltf");
+  v1::ListScenesResponse list;
+  ctx = daemon_->context();
+  ASSERT_TRUE(stub->ListScenes(ctx.get(), {}, &list).ok());
+  bool listed = false;
+  for (const auto& s : list.scenes()) listed |= s.scene_id() == id;
+  EXPECT_TRUE(listed);
+}
+
+TEST_F(ServiceE2E, UploadsGlb) {
+  const std::string glb = read_file(LUXEL_SCENES_DIR "/foliage_instanced.glb");
+  v1::SceneInfo info;
+  auto st = upload_scene(*daemon_, "foliage_instanced.glb", v1::SCENE_FORMAT_GLB, glb, {}, &info,
+                         {.chunk_bytes = 10000});
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  EXPECT_EQ(info.scene_id(), sha256_hex(glb));
+  EXPECT_GT(info.statistics().instances(), 1u);
+}
+
+TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  v1::SubmitBakeRequest submit;
+  submit.set_scene_id(scene_id);
+  *submit.mutable_settings() = small_settings(256);
+  v1::BakeInfo bake;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
+  ASSERT_EQ(bake.bake_id().size(), 32u);
+
+  // Watch from the start: the first event is the current state.
+  v1::WatchBakeRequest watch;
+  watch.set_bake_id(bake.bake_id());
+  auto wctx = daemon_->context(std::chrono::seconds(60));
+  auto reader = stub->WatchBake(wctx.get(), watch);
+  v1::BakeEvent event;
+  ASSERT_TRUE(reader->Read(&event));
+  EXPECT_TRUE(event.info().state() == v1::BAKE_STATE_QUEUED || event.info().state() == v1::BAKE_STATE_RUNNING)
+      << v1::BakeState_Name(event.info().state());
+  EXPECT_FALSE(event.final());
+  int snapshots = 0, events = 1;
+  bool saw_final = false;
+  double last_paths = 0;
+  while (reader->Read(&event)) {
+    ++events;
+    ASSERT_FALSE(saw_final) << "event after the final one";
+    EXPECT_GE(double(event.info().progress().paths()), last_paths);  // progress never goes back
+    last_paths = double(event.info().progress().paths());
+    if (event.has_snapshot()) {
+      ++snapshots;
+      const auto& s = event.snapshot();
+      EXPECT_EQ(s.format(), v1::SNAPSHOT_FORMAT_PNG);
+      ASSERT_GE(s.data().size(), 8u);
+      EXPECT_EQ(s.data().substr(1, 3), "PNG");
+      EXPECT_LE(std::max(s.width(), s.height()), 32u);
+      EXPECT_GT(s.progress().paths(), 0u);
+    }
+    saw_final = event.final();
+  }
+  ASSERT_TRUE(reader->Finish().ok());
+  ASSERT_TRUE(saw_final);
+  EXPECT_EQ(event.info().state(), v1::BAKE_STATE_SUCCEEDED) << event.info().error_message();
+  EXPECT_GE(snapshots, 1) << events << " events";
+  EXPECT_EQ(event.info().termination(), "samples");
+  EXPECT_GE(event.info().progress().min_spp(), 256u);
+  EXPECT_FALSE(event.info().features().empty());
+  EXPECT_GT(event.info().finished_at(), event.info().started_at());
+
+  // Every artifact downloads with a matching checksum; the EXR reads back.
+  ASSERT_EQ(event.info().artifacts_size(), 6);
+  for (const auto& artifact : event.info().artifacts()) {
+    std::string bytes, sha;
+    uint64_t total = 0;
+    auto st = download(*daemon_, bake.bake_id(), artifact, &bytes, &sha, &total);
+    ASSERT_TRUE(st.ok()) << artifact << ": " << st.error_message();
+    EXPECT_EQ(total, bytes.size()) << artifact;
+    EXPECT_EQ(sha, sha256_hex(bytes)) << artifact;
+    EXPECT_GT(bytes.size(), 0u) << artifact;
+    if (artifact == "irradiance.exr") {
+      const std::string path = dir_->path() + "/downloaded.exr";
+      std::ofstream(path, std::ios::binary) << bytes;
+      auto image = output::read_exr(path);
+      ASSERT_TRUE(image.is_ok()) << image.status().to_string();
+      EXPECT_EQ(image->width, 64);
+      EXPECT_EQ(image->channels, 4);
+      double lit = 0;
+      for (size_t i = 0; i < image->texel_count(); ++i) lit += image->pixels[i * 4 + 1];
+      EXPECT_GT(lit, 0.0) << "the Cornell box lightmap is black";
+    }
+  }
+
+  // A late watcher gets the final state at once.
+  auto late_ctx = daemon_->context();
+  auto late = stub->WatchBake(late_ctx.get(), watch);
+  ASSERT_TRUE(late->Read(&event));
+  EXPECT_TRUE(event.final());
+  EXPECT_EQ(event.info().state(), v1::BAKE_STATE_SUCCEEDED);
+  EXPECT_FALSE(late->Read(&event));
+  EXPECT_TRUE(late->Finish().ok());
+
+  // Counters and logs.
+  v1::ServerStatus status;
+  ctx = daemon_->context();
+  ASSERT_TRUE(stub->GetServerStatus(ctx.get(), {}, &status).ok());
+  EXPECT_GE(status.paths_traced(), event.info().progress().paths());
+  EXPECT_GT(status.upload_bytes(), 0u);
+  EXPECT_GE(status.bakes_by_state().at("BAKE_STATE_SUCCEEDED"), 1u);
+  EXPECT_GE(status.scenes(), 1u);
+  EXPECT_EQ(status.max_concurrent_bakes(), 1u);
+  const std::string log = daemon_->log();
+  EXPECT_NE(log.find("event=bake_started bake=" + bake.bake_id() + " scene=" + scene_id), std::string::npos) << log;
+  EXPECT_NE(log.find("event=bake_finished bake=" + bake.bake_id()), std::string::npos);
+}
+
+TEST_F(ServiceE2E, StalledWatcherNeitherBlocksTheBakeNorGetsABacklog) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  v1::SubmitBakeRequest submit;
+  submit.set_scene_id(scene_id);
+  *submit.mutable_settings() = small_settings(256);
+  submit.mutable_settings()->set_snapshot_format(v1::SNAPSHOT_FORMAT_EXR);  // ~40 KB per event
+  submit.mutable_settings()->set_snapshot_interval_s(0.05);
+  v1::BakeInfo bake;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
+  v1::WatchBakeRequest watch;
+  watch.set_bake_id(bake.bake_id());
+  auto wctx = daemon_->context(std::chrono::seconds(60));
+  auto reader = stub->WatchBake(wctx.get(), watch);
+  v1::BakeEvent event;
+  ASSERT_TRUE(reader->Read(&event));
+  // Stop reading: the bake must still finish.
+  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(30));
+  ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+  // Reading again: newest state only, snapshots in order, then the final event.
+  uint64_t last_snapshot_paths = 0;
+  int events = 0;
+  while (reader->Read(&event)) {
+    ++events;
+    if (event.has_snapshot()) {
+      EXPECT_GT(event.snapshot().progress().paths(), last_snapshot_paths);
+      last_snapshot_paths = event.snapshot().progress().paths();
+    }
+  }
+  EXPECT_TRUE(reader->Finish().ok());
+  EXPECT_TRUE(event.final());
+  EXPECT_EQ(event.info().state(), v1::BAKE_STATE_SUCCEEDED);
+  EXPECT_GE(events, 1);
+}
+
+TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  v1::SubmitBakeRequest submit;
+  submit.set_scene_id(scene_id);
+  *submit.mutable_settings() = small_settings(16, 32);
+  submit.set_idempotency_key("retry-me-" + dir_->path());
+  v1::BakeInfo a, b;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &a).ok());
+  ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &b).ok());
+  EXPECT_EQ(a.bake_id(), b.bake_id());
+  EXPECT_EQ(b.idempotency_key(), submit.idempotency_key());
+  v1::ListBakesRequest list_req;
+  v1::ListBakesResponse list;
+  ctx = daemon_->context();
+  ASSERT_TRUE(stub->ListBakes(ctx.get(), list_req, &list).ok());
+  int with_key = 0;
+  for (const auto& x : list.bakes()) with_key += x.idempotency_key() == submit.idempotency_key();
+  EXPECT_EQ(with_key, 1);
+  auto done = wait_for_bake(*daemon_, a.bake_id(), is_finished);
+  EXPECT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+
+  // Filter by state.
+  list_req.add_states(v1::BAKE_STATE_SUCCEEDED);
+  ctx = daemon_->context();
+  list.Clear();
+  ASSERT_TRUE(stub->ListBakes(ctx.get(), list_req, &list).ok());
+  for (const auto& x : list.bakes()) EXPECT_EQ(x.state(), v1::BAKE_STATE_SUCCEEDED);
+  EXPECT_GE(list.bakes_size(), 1);
+}
+
+}  // namespace
+}  // namespace luxel::test
