@@ -12,6 +12,33 @@ namespace luxel::service {
 
 namespace fs = std::filesystem;
 
+// glTF uris are URI references: "tex%20a.png" names the file "tex a.png" (the
+// importer decodes them the same way). Decoding first also means "%2e%2e"
+// cannot slip past the path checks below.
+Result<std::string> decode_resource_uri(const std::string& uri) {
+  std::string out;
+  out.reserve(uri.size());
+  for (size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] != '%') {
+      out.push_back(uri[i]);
+      continue;
+    }
+    auto hex = [](char c) -> int {
+      if (c >= '0' && c <= '9') return c - '0';
+      if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+      if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+      return -1;
+    };
+    const int hi = i + 2 < uri.size() ? hex(uri[i + 1]) : -1;
+    const int lo = i + 2 < uri.size() ? hex(uri[i + 2]) : -1;
+    if (hi < 0 || lo < 0)
+      return invalid_argument(strprintf("header.resources.uri '%s': malformed %%-escape", uri.c_str()));
+    out.push_back(static_cast<char>(hi * 16 + lo));
+    i += 2;
+  }
+  return out;
+}
+
 Status check_resource_uri(const std::string& uri) {
   auto bad = [&](const char* why) {
     return invalid_argument(strprintf("header.resources.uri '%s': %s", uri.c_str(), why));
@@ -49,9 +76,13 @@ Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
                                         header.resources_size(), limits.max_resources));
   uint64_t total = header.total_size();
   std::set<std::string> uris;
+  std::vector<std::string> paths;  // decoded, relative to the scene folder
   for (const auto& r : header.resources()) {
-    LUXEL_RETURN_IF_ERROR(check_resource_uri(r.uri()));
-    if (!uris.insert(r.uri()).second)
+    auto decoded = decode_resource_uri(r.uri());
+    if (!decoded) return decoded.status();
+    LUXEL_RETURN_IF_ERROR(check_resource_uri(decoded.value()));
+    paths.push_back(decoded.value());
+    if (!uris.insert(decoded.value()).second)
       return invalid_argument(strprintf("header.resources.uri '%s': listed twice", r.uri().c_str()));
     if (!is_sha256_hex(r.sha256()))
       return invalid_argument(strprintf("header.resources.sha256 of '%s': expected 64 lowercase hex digits",
@@ -70,8 +101,11 @@ Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
   up->expected_ = total;
   up->files_.push_back({staging.value() + "/" + SceneStore::main_file_name(header.format()),
                         "main file '" + header.name() + "'", header.sha256(), header.total_size()});
-  for (const auto& r : header.resources())
-    up->files_.push_back({staging.value() + "/" + r.uri(), "resource '" + r.uri() + "'", r.sha256(), r.size()});
+  for (int i = 0; i < header.resources_size(); ++i) {
+    const auto& r = header.resources(i);
+    up->files_.push_back({staging.value() + "/" + paths[static_cast<size_t>(i)],
+                          "resource '" + r.uri() + "'", r.sha256(), r.size()});
+  }
   LUXEL_RETURN_IF_ERROR(up->open_next_file());
   return up;
 }
