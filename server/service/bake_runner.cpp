@@ -184,6 +184,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   hooks.fingerprint = fingerprint;
   hooks.resume = resume ? &*resume : nullptr;
   hooks.cancel = &running.cancel;
+  hooks.device_turn = &device_turn_;  // concurrent bakes take turns on the one device
   hooks.on_progress = [&](const pipeline::BakeProgress& p) {
     paths_traced_ += p.paths - std::min(p.paths, last_paths);
     last_paths = std::max(last_paths, p.paths);

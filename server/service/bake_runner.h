@@ -76,6 +76,7 @@ class BakeRunner {
   JobQueue& queue_;
   const RunnerOptions options_;
   std::mutex mu_;
+  std::mutex device_turn_;  // held by a bake for each iteration (pipeline::BakeHooks)
   std::map<std::string, std::shared_ptr<Running>> running_;
   std::atomic<bool> shutting_down_{false};
   std::vector<std::thread> workers_;

@@ -549,8 +549,12 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   for (;;) {
     uint64_t batch = capacity_;
     if (target_paths > 0) batch = std::min<uint64_t>(batch, target_paths - paths_done_);
-    LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
-    LUXEL_RETURN_IF_ERROR(ctx_.finish());
+    {
+      std::unique_lock<std::mutex> turn;
+      if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+      LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
+      LUXEL_RETURN_IF_ERROR(ctx_.finish());
+    }
     ++progress.iteration;
     if (target_paths > 0 && paths_done_ >= target_paths) { why = Termination::kSamples; break; }
     if (hooks.cancel && hooks.cancel->load()) { why = Termination::kCancelled; break; }

@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,11 @@ struct BakeHooks {
   std::string fingerprint;                     // stored in checkpoints (scene + settings)
   const BakeCheckpoint* resume = nullptr;      // continue from this state
   const std::atomic<bool>* cancel = nullptr;   // set to stop after the current iteration
+  // Held around every iteration's device work. Bakes that share one device
+  // (a daemon running several at once) pass the same mutex, so they take
+  // turns on the device instead of oversubscribing it (two PoCL contexts on
+  // one CPU would each start a thread per core).
+  std::mutex* device_turn = nullptr;
 };
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
