@@ -16,11 +16,6 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-// The engine's checkpoint hook fires at most this often; the runner writes
-// to disk only every --checkpoint-interval, but a short hook period lets a
-// graceful shutdown take a fresh checkpoint within about this long.
-constexpr double kCheckpointHookPeriodS = 1.0;
-
 const char* kArtifacts[] = {"irradiance.exr", "preview.png", "samples.exr",
                             "rel_error.exr", "error_series.csv", "manifest.json"};
 
@@ -179,7 +174,6 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
                              {"resume", resume ? "yes" : "no"}, {"note", note}});
 
   uint64_t last_paths = resume ? resume->paths_done : 0;
-  auto last_checkpoint_write = Clock::now();
   pipeline::BakeHooks hooks;
   hooks.fingerprint = fingerprint;
   hooks.resume = resume ? &*resume : nullptr;
@@ -201,15 +195,13 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     };
   }
   if (options_.checkpoint_interval_s > 0) {
-    hooks.checkpoint_interval_s = std::min(options_.checkpoint_interval_s, kCheckpointHookPeriodS);
+    hooks.checkpoint_interval_s = options_.checkpoint_interval_s;
+    hooks.checkpoint_now = &shutting_down_;  // a graceful stop checkpoints at once
     hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) {
-      const double since = std::chrono::duration<double>(Clock::now() - last_checkpoint_write).count();
       const bool stopping = shutting_down_.load();
-      if (!stopping && since < options_.checkpoint_interval_s) return;
       if (Status st = pipeline::write_checkpoint(ckpt_path, c); !st.is_ok()) {
         log_event("checkpoint_failed", {{"bake", bake_id}, {"error", st.to_string()}});
       } else {
-        last_checkpoint_write = Clock::now();
         (void)bakes_.update(bake_id, [](v1::BakeInfo&) {}, true);  // progress on disk too
         log_event("checkpoint_written", {{"bake", bake_id}, {"paths", std::to_string(c.paths_done)}});
       }

@@ -589,8 +589,11 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       hooks.on_snapshot(snap);
       last_snapshot = Clock::now();
     }
-    if (hooks.on_checkpoint && hooks.checkpoint_interval_s > 0 &&
-        seconds_since(last_checkpoint) >= hooks.checkpoint_interval_s) {
+    const bool checkpoint_due =
+        (hooks.checkpoint_interval_s > 0 &&
+         seconds_since(last_checkpoint) >= hooks.checkpoint_interval_s) ||
+        (hooks.checkpoint_now && hooks.checkpoint_now->load());
+    if (hooks.on_checkpoint && checkpoint_due) {
       BakeCheckpoint state;
       LUXEL_RETURN_IF_ERROR(read_state(state));
       state.fingerprint = hooks.fingerprint;
@@ -601,6 +604,9 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
                                                  double(e.min_spp), e.error});
       hooks.on_checkpoint(state);
       last_checkpoint = Clock::now();
+      // A host that checkpoints to stop (daemon shutdown) cancels in the
+      // hook: stop here rather than trace an iteration the checkpoint lacks.
+      if (hooks.cancel && hooks.cancel->load()) { why = Termination::kCancelled; break; }
     }
   }
   result.seconds = elapsed();

@@ -91,8 +91,9 @@ struct BakeHooks {
   ProgressFn on_progress;                      // every settings.progress_interval_s
   double snapshot_interval_s = 0;              // 0: no snapshots
   std::function<void(const BakeSnapshot&)> on_snapshot;
-  double checkpoint_interval_s = 0;            // 0: no checkpoints
+  double checkpoint_interval_s = 0;            // 0: no periodic checkpoints
   std::function<void(const BakeCheckpoint&)> on_checkpoint;
+  const std::atomic<bool>* checkpoint_now = nullptr;  // set: checkpoint after the current iteration
   std::string fingerprint;                     // stored in checkpoints (scene + settings)
   const BakeCheckpoint* resume = nullptr;      // continue from this state
   const std::atomic<bool>* cancel = nullptr;   // set to stop after the current iteration
