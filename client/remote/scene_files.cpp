@@ -102,6 +102,20 @@ grpc::Status collect_scene_files(const std::string& path, SceneFiles& out) {
   return add_resources(json, "images", dir, seen, out.resources);
 }
 
+std::string scene_id(const SceneFiles& files) {
+  if (files.resources.empty()) return files.main.sha256;
+  std::vector<const SceneFile*> sorted;
+  for (const SceneFile& r : files.resources) sorted.push_back(&r);
+  // std::string's operator< compares bytes as unsigned char: byte order.
+  std::sort(sorted.begin(), sorted.end(), [](const SceneFile* a, const SceneFile* b) { return a->uri < b->uri; });
+  std::string manifest = "luxel-scene-v1\n" + files.main.sha256 + "\n";
+  for (const SceneFile* r : sorted)
+    manifest += r->uri + "\t" + std::to_string(r->size) + "\t" + r->sha256 + "\n";
+  Sha256 hasher;
+  hasher.update(manifest.data(), manifest.size());
+  return hasher.hex_digest();
+}
+
 luxel::v1::SceneUploadHeader upload_header(const SceneFiles& files, const std::string& name) {
   luxel::v1::SceneUploadHeader h;
   h.set_name(name.empty() ? fs::path(files.main.path).filename().string() : name);

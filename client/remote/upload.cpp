@@ -65,7 +65,7 @@ grpc::Status ensure_scene(Connection& conn, const SceneFiles& files, const std::
   grpc::ClientContext ctx;
   conn.prepare_unary(ctx);
   luxel::v1::GetSceneRequest req;
-  req.set_scene_id(files.main.sha256);
+  req.set_scene_id(scene_id(files));
   grpc::Status st = conn.stub().GetScene(&ctx, req, &info);
   if (st.error_code() != grpc::StatusCode::NOT_FOUND) return st;
   uploaded = true;

@@ -81,24 +81,24 @@ grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
     return to_grpc(upload.status());
   }
   SceneUpload& up = *upload.value();
-  log_event("upload_started", {{"scene", msg.header().sha256()}, {"name", msg.header().name()}});
+  log_event("upload_started", {{"scene", scene_id_of(msg.header())}, {"name", msg.header().name()}});
   while (reader->Read(&msg)) {
     if (msg.has_header()) return invalid("upload: a header may only be the first message");
     const uint64_t before = up.received();
     Status st = up.write(msg.chunk());
     upload_bytes_ += up.received() - before;
     if (!st.is_ok()) {
-      log_event("upload_failed", {{"scene", up.header().sha256()}, {"error", st.to_string()}});
+      log_event("upload_failed", {{"scene", scene_id_of(up.header())}, {"error", st.to_string()}});
       return to_grpc(st);
     }
   }
   if (ctx->IsCancelled()) {
-    log_event("upload_cancelled", {{"scene", up.header().sha256()}});
+    log_event("upload_cancelled", {{"scene", scene_id_of(up.header())}});
     return {grpc::StatusCode::CANCELLED, "upload cancelled by the client"};
   }
   auto info = up.finish();
   if (!info) {
-    log_event("upload_failed", {{"scene", up.header().sha256()}, {"error", info.status().to_string()}});
+    log_event("upload_failed", {{"scene", scene_id_of(up.header())}, {"error", info.status().to_string()}});
     return to_grpc(info.status());
   }
   *response = info.value();

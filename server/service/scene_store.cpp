@@ -2,6 +2,7 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "scene/gltf_import.h"
@@ -44,6 +45,21 @@ Result<v1::SceneInfo> load_info(const std::string& path) {
 }
 
 }  // namespace
+
+std::string scene_id_of(const v1::SceneUploadHeader& header) {
+  if (header.resources_size() == 0) return header.sha256();
+  std::vector<const v1::ResourceHeader*> sorted;
+  for (const auto& r : header.resources()) sorted.push_back(&r);
+  // std::string's operator< compares bytes as unsigned char: byte order.
+  std::sort(sorted.begin(), sorted.end(),
+            [](const v1::ResourceHeader* a, const v1::ResourceHeader* b) { return a->uri() < b->uri(); });
+  Sha256 manifest;
+  manifest.update("luxel-scene-v1\n");
+  manifest.update(header.sha256() + "\n");
+  for (const v1::ResourceHeader* r : sorted)
+    manifest.update(r->uri() + "\t" + std::to_string(r->size()) + "\t" + r->sha256() + "\n");
+  return manifest.hex_digest();
+}
 
 SceneStore::SceneStore(std::string data_dir)
     : scenes_dir_(data_dir + "/scenes"), staging_dir_(data_dir + "/staging") {}
@@ -101,7 +117,7 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
     ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
   } cleanup{staging_dir};
 
-  const std::string id = header.sha256();
+  const std::string id = scene_id_of(header);
   if (auto existing = get(id)) {
     existing->set_already_stored(true);
     return existing;

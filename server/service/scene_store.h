@@ -1,8 +1,8 @@
-// Scenes on disk, content-addressed by the sha256 of the main file:
+// Scenes on disk, content-addressed by their scene id (scene_id_of below):
 //
-//   <data>/scenes/<sha256>/scene.gltf|scene.glb   the main file
-//   <data>/scenes/<sha256>/<uri>                  external resources of a .gltf
-//   <data>/scenes/<sha256>/info.json              SceneInfo (protobuf JSON)
+//   <data>/scenes/<id>/scene.gltf|scene.glb   the main file
+//   <data>/scenes/<id>/<uri>                  external resources of a .gltf
+//   <data>/scenes/<id>/info.json              SceneInfo (protobuf JSON)
 //   <data>/staging/<random>/                      uploads in progress
 //
 // An upload is written into its own staging folder; only a verified and
@@ -21,6 +21,15 @@
 #include "luxel/v1/luxel.pb.h"
 
 namespace luxel::service {
+
+// The scene id of an upload (the rule in luxel.proto's header comment): the
+// main file's sha256 when there are no external resources; otherwise the
+// sha256 of "luxel-scene-v1\n" + "<main sha256>\n" + one line
+// "<uri>\t<size>\t<sha256>\n" per resource, sorted by uri as written (byte
+// order). Covering the resources means a changed .bin is a new scene instead
+// of an already_stored hit that keeps the old bytes. The header's hashes must
+// already be verified against the bytes (SceneUpload does that).
+std::string scene_id_of(const v1::SceneUploadHeader& header);
 
 class SceneStore {
  public:

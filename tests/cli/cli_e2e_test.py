@@ -13,9 +13,11 @@ import json
 import os
 import shutil
 import socket
+import struct
 import subprocess
 import sys
 import time
+import urllib.parse
 
 ARGS = None
 
@@ -32,6 +34,26 @@ def sha256_file(path):
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
     return h.hexdigest()
+
+
+def expected_scene_id(path):
+    """The scene id rule of luxel.proto, computed here independently of the
+    CLI: the main file's sha256 without external resources, else the sha256
+    of a manifest of the main hash and each resource sorted by uri."""
+    main = sha256_file(path)
+    if not path.endswith(".gltf"):
+        return main
+    with open(path, encoding="utf-8") as f:
+        gltf = json.load(f)
+    uris = {item["uri"] for array in ("buffers", "images") for item in gltf.get(array, [])
+            if "uri" in item and not item["uri"].startswith("data:")}
+    if not uris:
+        return main
+    manifest = f"luxel-scene-v1\n{main}\n".encode()
+    for uri in sorted(uris, key=lambda u: u.encode()):
+        res = os.path.join(os.path.dirname(path), urllib.parse.unquote(uri))
+        manifest += f"{uri}\t{os.path.getsize(res)}\t{sha256_file(res)}\n".encode()
+    return hashlib.sha256(manifest).hexdigest()
 
 
 def check(cond, what):
@@ -91,9 +113,9 @@ class Daemon:
 
 def test_main_flow(d):
     s = ["--server", d.server]
-    scene_sha = sha256_file(ARGS.scene)
+    scene_sha = expected_scene_id(ARGS.scene)
 
-    # upload: the scene id is the sha256 of the main file.
+    # upload: the scene id covers the main file and its resources.
     out, _ = luxel("upload", ARGS.scene, "--name", "cornell", "--json", *s)
     info = json_lines(out)
     check(len(info) == 1 and info[0]["scene_id"] == scene_sha, f"upload --json: {out}")
@@ -157,6 +179,43 @@ def test_main_flow(d):
     out, _ = luxel("cancel", detached, "--json", *s)
     check(json_lines(out)[0]["state"] == "BAKE_STATE_SUCCEEDED", "cancel of a finished bake")
     return bake_id
+
+
+def test_changed_buffer_is_uploaded(d, original_id):
+    """The same .gltf beside a changed .bin is another scene: `luxel bake`
+    must upload it rather than reuse the stored scene with the old buffer."""
+    s = ["--server", d.server]
+    folder = os.path.join(ARGS.work, "changed")
+    os.makedirs(folder)
+    gltf = os.path.join(folder, os.path.basename(ARGS.scene))
+    shutil.copyfile(ARGS.scene, gltf)
+    with open(ARGS.scene, encoding="utf-8") as f:
+        bin_uri = json.load(f)["buffers"][0]["uri"]
+    with open(os.path.join(os.path.dirname(ARGS.scene), bin_uri), "rb") as f:
+        data = bytearray(f.read())
+    # cornell_box.bin: accessor 0 (POSITION) at byte 0, 40-byte stride. Nudge
+    # vertex 0's y toward the middle of its [0, 5.488] range: still valid.
+    (y,) = struct.unpack_from("<f", data, 4)
+    struct.pack_into("<f", data, 4, 0.99 * y + 0.01 * 2.744)
+    with open(os.path.join(folder, bin_uri), "wb") as f:
+        f.write(data)
+    changed_id = expected_scene_id(gltf)
+    check(changed_id != original_id, "a changed .bin changes the expected scene id")
+
+    out, _ = luxel("bake", gltf, "--samples", 8, "--resolution", 32, "--detach", "--json", *s)
+    lines = json_lines(out)
+    check(lines[0]["type"] == "scene" and lines[0]["uploaded"] is True,
+          f"bake reused a stored scene for a changed .bin: {lines[0]}")
+    check(lines[0]["scene"]["scene_id"] == changed_id, f"changed scene id: {lines[0]}")
+    check(lines[1]["bake"]["scene_id"] == changed_id, f"bake of the changed scene: {lines[1]}")
+    luxel("watch", lines[1]["bake"]["bake_id"], "--quiet", *s)
+    out, _ = luxel("list", "--scenes", "--json", *s)
+    stored = {x["scene_id"] for x in json_lines(out)}
+    check({original_id, changed_id} <= stored, f"both scenes stored: {stored}")
+    # The CLI's own upload agrees with the rule too.
+    out, _ = luxel("upload", gltf, "--json", *s)
+    info = json_lines(out)[0]
+    check(info["scene_id"] == changed_id and info.get("already_stored") is True, f"re-upload: {info}")
 
 
 def test_errors(d):
@@ -225,6 +284,7 @@ def main():
     try:
         d.wait_ready()
         test_main_flow(d)
+        test_changed_buffer_is_uploaded(d, expected_scene_id(ARGS.scene))
         test_errors(d)
     finally:
         d.stop()

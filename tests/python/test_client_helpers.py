@@ -36,6 +36,36 @@ class ResourceDiscoveryTest(unittest.TestCase):
             self.assertEqual(f.size, len(data))
             self.assertEqual(f.sha256, hashlib.sha256(data).hexdigest())
 
+    def test_scene_id_covers_the_resources(self):
+        gltf_path = SCENES / "cornell_box.gltf"
+        main, bin_bytes = gltf_path.read_bytes(), (SCENES / "cornell_box.bin").read_bytes()
+        manifest = (f"luxel-scene-v1\n{hashlib.sha256(main).hexdigest()}\n"
+                    f"cornell_box.bin\t{len(bin_bytes)}\t{hashlib.sha256(bin_bytes).hexdigest()}\n")
+        self.assertEqual(luxel_client.scene_id(gltf_path), hashlib.sha256(manifest.encode()).hexdigest())
+        glb = SCENES / "foliage_instanced.glb"
+        self.assertEqual(luxel_client.scene_id(glb), hashlib.sha256(glb.read_bytes()).hexdigest())
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            (tmp / "cornell_box.gltf").write_bytes(main)
+            (tmp / "cornell_box.bin").write_bytes(bin_bytes)
+            self.assertEqual(luxel_client.scene_id(tmp / "cornell_box.gltf"), luxel_client.scene_id(gltf_path))
+            (tmp / "cornell_box.bin").write_bytes(bin_bytes[:-1] + bytes([bin_bytes[-1] ^ 1]))
+            self.assertNotEqual(luxel_client.scene_id(tmp / "cornell_box.gltf"),
+                                luxel_client.scene_id(gltf_path))
+
+    def test_scene_id_sorts_resources_by_uri_bytes(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = pathlib.Path(tmp)
+            (tmp / "b.bin").write_bytes(b"bb")
+            (tmp / "Z.png").write_bytes(b"z")
+            # Listed b.bin first; byte order puts "Z.png" (0x5a) before "b.bin" (0x62).
+            (tmp / "s.gltf").write_text(json.dumps({"buffers": [{"uri": "b.bin"}], "images": [{"uri": "Z.png"}]}))
+            main = hashlib.sha256((tmp / "s.gltf").read_bytes()).hexdigest()
+            manifest = (f"luxel-scene-v1\n{main}\n"
+                        f"Z.png\t1\t{hashlib.sha256(b'z').hexdigest()}\n"
+                        f"b.bin\t2\t{hashlib.sha256(b'bb').hexdigest()}\n")
+            self.assertEqual(luxel_client.scene_id(tmp / "s.gltf"), hashlib.sha256(manifest.encode()).hexdigest())
+
     def test_glb_is_one_file(self):
         fmt, files = collect_scene_files(SCENES / "foliage_instanced.glb")
         self.assertEqual(fmt, "glb")

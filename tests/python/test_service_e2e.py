@@ -17,7 +17,7 @@ import threading
 import time
 import unittest
 
-from luxel_client import Client, LuxelError, luxel_pb2, state_name
+from luxel_client import Client, LuxelError, luxel_pb2, scene_id, state_name
 from luxeld_process import Luxeld
 
 SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
@@ -38,6 +38,19 @@ EXR_MAGIC = b"\x76\x2f\x31\x01"
 
 def sha256_of(path):
     return hashlib.sha256(pathlib.Path(path).read_bytes()).hexdigest()
+
+
+def expected_scene_id(main_bytes, resources):
+    """The scene id rule of luxel.proto, computed here independently of the
+    client: ``resources`` maps each uri (as written) to its bytes."""
+    main = hashlib.sha256(main_bytes).hexdigest()
+    if not resources:
+        return main
+    manifest = f"luxel-scene-v1\n{main}\n".encode()
+    for uri in sorted(resources, key=lambda u: u.encode()):
+        data = resources[uri]
+        manifest += f"{uri}\t{len(data)}\t{hashlib.sha256(data).hexdigest()}\n".encode()
+    return hashlib.sha256(manifest).hexdigest()
 
 
 def collect(client, bake_id):
@@ -113,7 +126,12 @@ class ServiceEndToEndTest(unittest.TestCase):
 
     def bake_and_verify(self, scene_path, name):
         scene = self.client.upload_scene(scene_path)
-        self.assertEqual(scene.scene_id, sha256_of(scene_path))
+        resources = {}
+        if scene_path.suffix == ".gltf":
+            gltf = json.loads(scene_path.read_text())
+            resources = {b["uri"]: (scene_path.parent / b["uri"]).read_bytes() for b in gltf["buffers"]}
+        self.assertEqual(scene.scene_id, expected_scene_id(scene_path.read_bytes(), resources))
+        self.assertEqual(scene_id(scene_path), scene.scene_id)
         self.assertGreater(scene.statistics.triangles, 0)
         info = self.client.submit_bake(scene.scene_id, **TIMED)
         self.assertEqual(info.scene_id, scene.scene_id)
@@ -183,13 +201,13 @@ class ServiceEndToEndTest(unittest.TestCase):
         # Unique bytes, so no other test can have stored this content.
         data = CORNELL.read_bytes() + b"\n" * 7
         bin_bytes = (SCENES / "cornell_box.bin").read_bytes()
-        true_id = hashlib.sha256(data).hexdigest()
+        true_id = expected_scene_id(data, {"cornell_box.bin": bin_bytes})
         resource = luxel_pb2.ResourceHeader(uri="cornell_box.bin", size=len(bin_bytes),
                                             sha256=hashlib.sha256(bin_bytes).hexdigest())
 
         def header(**overrides):
             fields = dict(name="bad.gltf", format=luxel_pb2.SCENE_FORMAT_GLTF, total_size=len(data),
-                          sha256=true_id, resources=[resource])
+                          sha256=hashlib.sha256(data).hexdigest(), resources=[resource])
             fields.update(overrides)
             return luxel_pb2.SceneUploadHeader(**fields)
 
@@ -289,6 +307,28 @@ class ServiceEndToEndTest(unittest.TestCase):
         while self.client.server_status().watchers > 0 and time.monotonic() < deadline:
             time.sleep(0.1)
         self.assertEqual(self.client.server_status().watchers, 0)
+
+    def test_slow_watcher_gets_the_newest_event_not_a_backlog(self):
+        # gRPC's transport buffers what the daemon has sent, so a reader slower
+        # than the snapshot rate would work through a backlog; latest_only
+        # drains the stream and hands over only the newest event.
+        scene = self.client.upload_scene(CORNELL)
+        info = self.client.submit_bake(scene.scene_id, **dict(TIMED, time_budget_s=1.5))
+        received = []
+        with self.client.watch_bake(info.bake_id, latest_only=True) as watch:
+            for event in watch:
+                received.append((time.time(), event))
+                if not event.final:
+                    time.sleep(0.6)  # a slow editor redraw
+        self.assertTrue(received and received[-1][1].final, "no final event")
+        final_at, final = received[-1]
+        self.assertEqual(state_name(final.info.state), "SUCCEEDED")
+        # About one event per 0.6 s read, not one per 0.05 s snapshot, and the
+        # final event arrives within one read of the bake's end.
+        self.assertLessEqual(len(received), 8, f"{len(received)} events: a backlog was replayed")
+        self.assertLess(final_at - final.info.finished_at, 1.5)
+        for _, event in received:
+            self.assertEqual(event.info.bake_id, info.bake_id)
 
     def test_cancel_and_scene_in_use(self):
         # A private copy of the scene (unique bytes) so deleting it touches no other test.

@@ -4,6 +4,8 @@
 // server counters and structured logs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -17,6 +19,19 @@ namespace {
 namespace fs = std::filesystem;
 
 const std::string kToken = "e2e-token";
+
+// The scene id rule of luxel.proto, computed here independently of the
+// daemon: the main file's sha256 without resources, else the sha256 of a
+// manifest of the main hash and each resource (sorted by uri).
+std::string expected_scene_id(const std::string& main_bytes, std::vector<Resource> resources) {
+  if (resources.empty()) return sha256_hex(main_bytes);
+  std::sort(resources.begin(), resources.end(),
+            [](const Resource& a, const Resource& b) { return a.uri < b.uri; });
+  std::string manifest = "luxel-scene-v1\n" + sha256_hex(main_bytes) + "\n";
+  for (const Resource& r : resources)
+    manifest += r.uri + "\t" + std::to_string(r.bytes.size()) + "\t" + sha256_hex(r.bytes) + "\n";
+  return sha256_hex(manifest);
+}
 
 class ServiceE2E : public ::testing::Test {
  protected:
@@ -46,7 +61,8 @@ Daemon* ServiceE2E::daemon_ = nullptr;
 TEST_F(ServiceE2E, UploadStoresContentAddressedSceneOnce) {
   v1::SceneInfo first, second;
   const std::string id = upload_cornell(&first);
-  EXPECT_EQ(id, sha256_hex(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf")));
+  EXPECT_EQ(id, expected_scene_id(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
+                                  {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}));
   EXPECT_GT(first.statistics().triangles(), 0u);
   EXPECT_GT(first.statistics().emissive_triangles(), 0u);
   EXPECT_EQ(first.size(), fs::file_size(LUXEL_SCENES_DIR "/cornell_box.gltf") +
@@ -77,6 +93,53 @@ TEST_F(ServiceE2E, UploadStoresContentAddressedSceneOnce) {
   bool listed = false;
   for (const auto& s : list.scenes()) listed |= s.scene_id() == id;
   EXPECT_TRUE(listed);
+}
+
+// The same .gltf with a different external buffer is different content: it
+// must get its own id and be stored, not answered already_stored with the
+// old buffer kept.
+TEST_F(ServiceE2E, ChangedExternalBufferIsANewScene) {
+  const std::string gltf = read_file(LUXEL_SCENES_DIR "/cornell_box.gltf");
+  const std::string bin = read_file(LUXEL_SCENES_DIR "/cornell_box.bin");
+  // Accessor 0 (POSITION of the first primitive) starts at byte 0 with a
+  // 40-byte stride: nudge vertex 0's y toward the middle of its [0, 5.488]
+  // range, so the buffer stays a valid scene within the accessor's min/max.
+  std::string changed = bin;
+  float y = 0;
+  std::memcpy(&y, changed.data() + 4, sizeof y);
+  y = 0.99f * y + 0.01f * 2.744f;
+  std::memcpy(changed.data() + 4, &y, sizeof y);
+  ASSERT_NE(changed, bin);
+
+  v1::SceneInfo original, modified;
+  const std::string original_id = upload_cornell(&original);
+  auto st = upload_scene(*daemon_, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, gltf,
+                         {{"cornell_box.bin", changed}}, &modified);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  EXPECT_NE(modified.scene_id(), original_id);
+  EXPECT_EQ(modified.scene_id(), expected_scene_id(gltf, {{"cornell_box.bin", changed}}));
+  EXPECT_FALSE(modified.already_stored());
+  EXPECT_EQ(modified.statistics().triangles(), original.statistics().triangles());
+
+  // Both are stored, each with its own buffer.
+  const std::string scenes = daemon_->data_dir() + "/scenes/";
+  EXPECT_EQ(read_file(scenes + original_id + "/cornell_box.bin"), bin);
+  EXPECT_EQ(read_file(scenes + modified.scene_id() + "/cornell_box.bin"), changed);
+  v1::ListScenesResponse list;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(daemon_->stub()->ListScenes(ctx.get(), {}, &list).ok());
+  int listed = 0;
+  for (const auto& s : list.scenes())
+    listed += s.scene_id() == original_id || s.scene_id() == modified.scene_id();
+  EXPECT_EQ(listed, 2);
+
+  // Uploading the changed content again is the known scene.
+  v1::SceneInfo again;
+  st = upload_scene(*daemon_, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, gltf,
+                    {{"cornell_box.bin", changed}}, &again);
+  ASSERT_TRUE(st.ok()) << st.error_message();
+  EXPECT_TRUE(again.already_stored());
+  EXPECT_EQ(again.scene_id(), modified.scene_id());
 }
 
 TEST_F(ServiceE2E, UploadsGlb) {

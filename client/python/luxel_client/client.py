@@ -10,6 +10,7 @@ import hashlib
 import os
 import pathlib
 import tempfile
+import threading
 
 import grpc
 
@@ -44,21 +45,65 @@ class BakeWatch:
     """The events of one WatchBake stream: iterate it for luxel_pb2.BakeEvent
     messages (the first is the bake's current state, the last has ``final``
     set). cancel() — or leaving a ``with`` block — closes the stream; the bake
-    itself goes on."""
+    itself goes on.
 
-    def __init__(self, call):
+    latest_only: a consumer slower than the bake's snapshot rate would
+    otherwise work through a backlog (gRPC's transport buffers events the
+    daemon already sent, so the daemon cannot coalesce them for a slow
+    reader). With latest_only a thread drains the stream and iteration
+    yields only the newest event (the final event is never dropped)."""
+
+    def __init__(self, call, latest_only=False):
         self._call = call
+        self._latest_only = latest_only
+        if latest_only:
+            self._cond = threading.Condition()
+            self._newest = None      # newest unread event
+            self._done = False       # stream ended (normally or with an error)
+            self._error = None
+            self._thread = threading.Thread(target=self._drain, daemon=True)
+            self._thread.start()
 
-    def __iter__(self):
-        return self
-
-    def __next__(self):
+    def _next_raw(self):
         try:
             return next(self._call)
         except grpc.RpcError as e:
             if e.code() == grpc.StatusCode.CANCELLED and self._call.cancelled():
                 raise StopIteration from None  # we closed it ourselves
             raise LuxelError.from_rpc_error(e) from None
+
+    def _drain(self):
+        try:
+            for event in iter(self._next_raw, None):
+                with self._cond:
+                    self._newest = event
+                    self._cond.notify()
+                if event.final:
+                    break
+        except StopIteration:
+            pass
+        except LuxelError as e:
+            with self._cond:
+                self._error = e
+        with self._cond:
+            self._done = True
+            self._cond.notify()
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if not self._latest_only:
+            return self._next_raw()
+        with self._cond:
+            while self._newest is None and not self._done:
+                self._cond.wait()
+            if self._newest is not None:
+                event, self._newest = self._newest, None
+                return event
+            if self._error is not None:
+                raise self._error
+            raise StopIteration
 
     def cancel(self):
         self._call.cancel()
@@ -130,8 +175,9 @@ class Client:
     def upload_scene(self, path, name=None):
         """Uploads a .gltf (with the buffers and images it references by
         relative uri) or a .glb; returns the daemon's SceneInfo. The scene id
-        is the sha256 of the main file; re-uploading stored content is cheap
-        on the daemon side (already_stored is set)."""
+        covers the main file and its resources (see scene_files.scene_id);
+        re-uploading stored content is cheap on the daemon side
+        (already_stored is set)."""
         fmt, files = collect_scene_files(path)
         main = files[0]
         header = luxel_pb2.SceneUploadHeader(
@@ -185,10 +231,12 @@ class Client:
     def cancel_bake(self, bake_id):
         return self._unary(self._stub.CancelBake, luxel_pb2.CancelBakeRequest(bake_id=bake_id))
 
-    def watch_bake(self, bake_id):
-        """A BakeWatch over the bake's events (iterate it; cancel() to stop)."""
+    def watch_bake(self, bake_id, latest_only=False):
+        """A BakeWatch over the bake's events (iterate it; cancel() to stop).
+        latest_only=True for slow consumers (e.g. an editor redrawing a
+        preview): stale events are skipped, the newest and the final one kept."""
         call = self._stub.WatchBake(luxel_pb2.WatchBakeRequest(bake_id=bake_id), metadata=self._metadata)
-        return BakeWatch(call)
+        return BakeWatch(call, latest_only=latest_only)
 
     def server_status(self):
         return self._unary(self._stub.GetServerStatus, luxel_pb2.GetServerStatusRequest())

@@ -96,6 +96,28 @@ def collect_scene_files(path):
     return fmt, files
 
 
+def scene_id_of_files(files):
+    """The scene id the daemon gives an upload of ``files`` (main file first,
+    as collect_scene_files returns them); the rule is in luxel.proto's header
+    comment. Without external resources it is the main file's sha256;
+    otherwise the sha256 of "luxel-scene-v1\\n" + "<main sha256>\\n" + one
+    line "<uri>\\t<size>\\t<sha256>\\n" per resource, sorted by uri as
+    written (byte order), so a changed .bin is a different scene."""
+    main, resources = files[0], files[1:]
+    if not resources:
+        return main.sha256
+    manifest = b"luxel-scene-v1\n" + main.sha256.encode("ascii") + b"\n"
+    for r in sorted(resources, key=lambda f: f.uri.encode("utf-8")):
+        manifest += r.uri.encode("utf-8") + f"\t{r.size}\t{r.sha256}\n".encode("ascii")
+    return hashlib.sha256(manifest).hexdigest()
+
+
+def scene_id(path):
+    """The scene id of the scene file at ``path`` (hashing it and the
+    resources it references), without asking the daemon."""
+    return scene_id_of_files(collect_scene_files(path)[1])
+
+
 def iter_chunks(files, chunk_size=CHUNK_SIZE):
     """Yields the bytes of every file in order, each file cut into pieces of at
     most ``chunk_size`` bytes (a chunk never spans two files)."""
