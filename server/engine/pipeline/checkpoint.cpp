@@ -22,6 +22,7 @@ class Writer {
     raw(v.data(), v.size() * sizeof(T));
   }
   void raw(const void* p, size_t n) {
+    if (n == 0) return;
     const auto* c = static_cast<const char*>(p);
     bytes_.insert(bytes_.end(), c, c + n);
   }
@@ -45,6 +46,7 @@ class Reader {
   }
   bool raw(void* p, size_t n) {
     if (n > end_ - pos_) return false;
+    if (n == 0) return true;  // an empty vector's data() may be null
     std::memcpy(p, b_.data() + pos_, n);
     pos_ += n;
     return true;
