@@ -8,7 +8,7 @@
 #include "luxel_version.h"
 #include "service/files.h"
 #include "service/log.h"
-#include "service/sha256.h"
+#include "common/sha256.h"
 
 namespace luxel::service {
 

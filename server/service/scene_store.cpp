@@ -9,7 +9,7 @@
 #include "scene/scene_stats.h"
 #include "service/files.h"
 #include "service/log.h"
-#include "service/sha256.h"
+#include "common/sha256.h"
 
 namespace luxel::service {
 

@@ -15,7 +15,7 @@
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
 #include "service/scene_store.h"
-#include "service/sha256.h"
+#include "common/sha256.h"
 
 namespace luxel::service {
 

@@ -1,5 +1,6 @@
 // Incremental SHA-256 (OpenSSL EVP) for content addressing and download
-// checksums. Hex digests are lowercase, 64 characters.
+// checksums, shared by the daemon and the CLI. Hex digests are lowercase,
+// 64 characters.
 #pragma once
 
 #include <cstddef>
@@ -7,7 +8,7 @@
 #include <string>
 #include <string_view>
 
-namespace luxel::service {
+namespace luxel {
 
 class Sha256 {
  public:
@@ -31,4 +32,4 @@ std::string sha256_hex(std::string_view bytes);
 // True for 64 lowercase hex digits (what every id and digest here looks like).
 bool is_sha256_hex(const std::string& s);
 
-}  // namespace luxel::service
+}  // namespace luxel

@@ -1,10 +1,10 @@
-#include "service/sha256.h"
+#include "common/sha256.h"
 
 #include <openssl/evp.h>
 
 #include "common/status.h"
 
-namespace luxel::service {
+namespace luxel {
 
 struct Sha256::Impl {
   EVP_MD_CTX* ctx = nullptr;
@@ -48,4 +48,4 @@ bool is_sha256_hex(const std::string& s) {
   return true;
 }
 
-}  // namespace luxel::service
+}  // namespace luxel
