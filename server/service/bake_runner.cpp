@@ -242,7 +242,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   remove_tree(final_dir);
   auto written = pipeline::write_bake_outputs(partial, scene.value(), settings.value(), r, info->scene_id());
   if (!written) return finish_failed(bake_id, written.status());
-  if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
+  if (Status st = output::fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
   if (Status st = rename_durable(partial, final_dir); !st.is_ok()) return finish_failed(bake_id, st);
 
   log_event("bake_finished", {{"bake", bake_id}, {"scene", info->scene_id()},

@@ -32,21 +32,11 @@ Result<std::string> read_whole_file(const std::string& path) {
   return ss.str();
 }
 
-Status fsync_directory(const std::string& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd < 0) return internal_error(strprintf("%s: open: %s", dir.c_str(), std::strerror(errno)));
-  const int rc = ::fsync(fd);
-  const int err = errno;
-  ::close(fd);
-  if (rc != 0) return internal_error(strprintf("%s: fsync: %s", dir.c_str(), std::strerror(err)));
-  return Status::ok();
-}
-
 Status rename_durable(const std::string& from, const std::string& to) {
   if (::rename(from.c_str(), to.c_str()) != 0)
     return internal_error(strprintf("rename %s -> %s: %s", from.c_str(), to.c_str(),
                                     std::strerror(errno)));
-  return fsync_directory(fs::path(to).parent_path().string());
+  return output::fsync_directory(fs::path(to).parent_path().string());
 }
 
 Status make_directories(const std::string& dir) {

@@ -6,14 +6,13 @@
 #include <string>
 
 #include "common/status.h"
+#include "output/atomic_file.h"
 
 namespace luxel::service {
 
 Status write_file_durable(const std::string& path, const std::string& bytes);
 Result<std::string> read_whole_file(const std::string& path);
 
-// fsyncs a directory so renames and creations inside it survive a crash.
-Status fsync_directory(const std::string& dir);
 // rename(2) then fsync of the destination's directory.
 Status rename_durable(const std::string& from, const std::string& to);
 // Creates `dir` and its parents; INTERNAL naming the path on failure.

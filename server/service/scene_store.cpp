@@ -149,7 +149,7 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   if (auto st = pbu::MessageToJsonString(info, &json, options); !st.ok())
     return internal_error("scene info to JSON: " + st.ToString());
   LUXEL_RETURN_IF_ERROR(write_file_durable(staging_dir + "/info.json", json));
-  LUXEL_RETURN_IF_ERROR(fsync_directory(staging_dir));
+  LUXEL_RETURN_IF_ERROR(output::fsync_directory(staging_dir));
 
   std::lock_guard<std::mutex> lock(mu_);
   if (auto it = scenes_.find(id); it != scenes_.end()) {  // a concurrent upload won

@@ -46,22 +46,26 @@ Status write_all(int fd, const void* data, size_t bytes, const std::string& tmp)
   return Status::ok();
 }
 
-// fsync of the directory entry makes the rename durable. File systems that
-// cannot sync directories answer EINVAL; nothing more can be done there.
 Status sync_directory_of(const std::string& path) {
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (dir.empty()) dir = ".";
+  return fsync_directory(dir.string());
+}
+
+}  // namespace
+
+// fsync of the directory entry makes a rename durable. File systems that
+// cannot sync directories answer EINVAL; nothing more can be done there.
+Status fsync_directory(const std::string& dir) {
   const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return errno_status(errno, "cannot open directory", dir.string());
+  if (fd < 0) return errno_status(errno, "cannot open directory", dir);
   const int rc = ::fsync(fd);
   const int err = errno;
   ::close(fd);
   if (rc != 0 && err != EINVAL && err != EROFS)
-    return errno_status(err, "cannot fsync directory", dir.string());
+    return errno_status(err, "cannot fsync directory", dir);
   return Status::ok();
 }
-
-}  // namespace
 
 std::string atomic_temp_path(const std::string& path) {
   return path + ".tmp";

@@ -27,6 +27,9 @@ namespace luxel::output {
 // On error no "<path>.tmp" is left behind and `path` is unchanged.
 Status write_file_atomic(const std::string& path, const void* data, size_t bytes);
 
+// Makes renames and creations inside `dir` durable (fsync of the directory).
+Status fsync_directory(const std::string& dir);
+
 // The temporary name write_file_atomic uses for `path` ("<path>.tmp").
 std::string atomic_temp_path(const std::string& path);
 
