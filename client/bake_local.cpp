@@ -91,9 +91,15 @@ int run_bake(const std::vector<std::string>& args) {
     std::printf("warning    %llu non-finite samples dropped\n",
                 static_cast<unsigned long long>(r.nonfinite_dropped));
   std::printf("memory     %.1f MiB on the device\n", r.peak_device_bytes / 1048576.0);
+  for (const auto& e : r.encodings)
+    std::printf("encoding   %-15s %2d coefficients x RGB, running residual %.4g\n", e.name.c_str(),
+                e.count, e.residual_rms);
+  if (!r.encodings.empty())
+    std::printf("           basis state %zu bytes per texel on the device\n", r.basis_bytes_per_texel);
   std::printf("\nkernel timings (OpenCL profiling events)\n%s", r.kernel_table.c_str());
   std::printf("\nwrote      %s\n           %s\n           %s\n", paths.value().irradiance_exr.c_str(),
               paths.value().preview_png.c_str(), paths.value().manifest_json.c_str());
+  for (const auto& f : paths.value().encodings) std::printf("           %s\n", f.c_str());
   return 0;
 }
 

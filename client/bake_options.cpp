@@ -20,6 +20,12 @@ const char* kUsage =
     "  --texel-density D     texels per world unit (instead of --resolution)\n"
     "  --seed S              random seed (same seed, same result)\n"
     "  --filter box|gaussian accumulation filter (default box)\n"
+    "  --encoding LIST       irradiance plus directional encodings, comma-separated:\n"
+    "                        sh1, sh2, sg6|sg9|sg12[-hemi], ambient-dice9|12 (default irradiance)\n"
+    "  --sg-sharpness L      spherical Gaussian lambda (default 3.4)\n"
+    "  --solver S            auto|projection|progressive|progressive-nn (default auto:\n"
+    "                        projection for SH, progressive-nn for SG and Ambient Dice)\n"
+    "  --acceleration A      progressive least-squares alpha, Eq. 7.14 (default 3)\n"
     "  --sky R,G,B           constant sky radiance  [--sky-intensity X]\n"
     "  --sun X,Y,Z           sun travelling along X,Y,Z  [--sun-illuminance E] [--sun-radius DEG]\n"
     "  --paths-per-iteration N   batch size (default 262144)\n"
@@ -148,6 +154,25 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
     else if (k == "--clamp") { ok = number(x); s.clamp_luminance = static_cast<float>(x); }
     else if (k == "--dilate") { ok = number(x); s.dilation_texels = static_cast<int>(x); }
     else if (k == "--progress-interval") { ok = number(x); s.progress_interval_s = x; }
+    else if (k == "--encoding") {
+      std::string v;
+      ok = text(v);
+      if (ok) {
+        auto names = pipeline::parse_encoding_list(v);
+        if (!names) { std::fprintf(stderr, "luxel bake: --encoding: %s\n", names.status().message().c_str()); ok = false; }
+        else s.encodings.names = names.value();
+      }
+    } else if (k == "--solver") {
+      std::string v;
+      ok = text(v);
+      if (ok) {
+        auto solver = pipeline::parse_solver(v);
+        if (!solver) { std::fprintf(stderr, "luxel bake: --solver: %s\n", solver.status().message().c_str()); ok = false; }
+        else s.encodings.solver = solver.value();
+      }
+    }
+    else if (k == "--sg-sharpness") { ok = number(x); s.encodings.sg_sharpness = static_cast<float>(x); }
+    else if (k == "--acceleration") { ok = number(x); s.encodings.acceleration = static_cast<float>(x); }
     else if (k == "--filter") {
       std::string v;
       ok = text(v);

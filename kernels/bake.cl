@@ -14,6 +14,10 @@
  *                        without it every slot runs and dead ones return
  *   LUX_FILTER_GAUSSIAN  1.5-texel Gaussian accumulation filter (§3.2.2)
  *   LUX_SEQUENCE_RANDOM  independent random numbers instead of Sobol (ablation)
+ *   LUX_BASIS            directional encodings (SH, SG, Ambient Dice): the
+ *                        first segment is sampled uniformly over the
+ *                        hemisphere and each path leaves a LuxBasisSample
+ *                        for the accumulator (bake/basis.h)
  *
  * Buffers a feature does not need are bound to a 16-byte placeholder, so the
  * kernel signatures stay fixed while the code paths compile out. */
@@ -33,6 +37,9 @@
 #include "primitives/offset_buffer.h"
 #include "bake/surface.h"
 #include "bake/scatter.h"
+#if LUX_BASIS
+#include "bake/basis.h"
+#endif
 
 #define LUX_TAG_SHIFT 29u
 #define LUX_SLOT_MASK 0x1FFFFFFFu
@@ -42,6 +49,19 @@
       __global const float *sky_texels, __global const float *sky_marginal,               \
       __global const float *sky_conditional
 #define LUX_TEXTURE_PARAMS __global const LuxTexture *textures, __global const uint *texels
+
+/* The texel point is a "sensor" with f = 1. Irradiance keeps cosine-weighted
+ * first segments (weight pi); directional encodings need radiance samples
+ * uniform over the hemisphere (§3.4, "Accumulation into Linear Bases"), so
+ * there the path carries radiance (weight 1) and the accumulator applies
+ * 2 pi cos for irradiance. Russian roulette is relative to that weight. */
+#if LUX_BASIS
+#define LUX_SENSOR_PDF(cos_theta) lux_uniform_hemisphere_pdf()
+#define LUX_SENSOR_WEIGHT 1.0f
+#else
+#define LUX_SENSOR_PDF(cos_theta) lux_cosine_hemisphere_pdf(cos_theta)
+#define LUX_SENSOR_WEIGHT M_PI_F
+#endif
 
 /* Kensler's hash-based permutation of [0, n) (Correlated Multi-Jittered
  * Sampling, 2013, Listing "permute"): a bijection per pattern p, by cycle
@@ -134,7 +154,7 @@ inline void lux_next_event(LUX_LIGHT_PARAMS, LUX_TEXTURE_PARAMS,
   const int mis = !ls.is_delta && ls.mis;
   float3 f_weighted;
   if (sensor) {
-    const float w = mis ? lux_power_heuristic(ls.pdf, lux_cosine_hemisphere_pdf(cos_i)) : 1.0f;
+    const float w = mis ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;
     f_weighted = (float3)(w);
   } else {
     f_weighted = (float3)(0.0f);
@@ -174,7 +194,8 @@ __kernel void raygen(LuxBakeParams params, __global const uint* sorted_texels,
                      __global const LuxSurfaceTri* tris, __global const LuxMaterial* materials,
                      LUX_TEXTURE_PARAMS, LUX_LIGHT_PARAMS, __global const uint* texel_spp,
                      __global LuxPath* paths, __global LuxRay* rays, __global LuxRay* shadow_rays,
-                     __global float4* shadow_contrib, __global uint* active) {
+                     __global float4* shadow_contrib, __global uint* active,
+                     __global LuxBasisSample* basis_samples) {
   const uint gid = (uint)get_global_id(0);
   if (gid >= (uint)*path_count) return;
   const uint texel = sorted_texels[gid];
@@ -230,13 +251,42 @@ __kernel void raygen(LuxBakeParams params, __global const uint* sorted_texels,
   shadow_rays[gid] = shadow;
   shadow_contrib[gid] = (float4)(contribution, 0.0f);
 
-  /* Cosine-weighted direction about the shading normal; weight = pi. A
+  /* First segment about the shading normal: cosine-weighted (weight pi) for
+   * irradiance, uniform (weight 1, radiance) for directional encodings. A
    * direction under the geometric surface (smoothed normals) carries nothing. */
   const float2 u_dir = lux_sample_2d(index, dim + LUX_DIM_DIRECTION, seed);
+#if LUX_BASIS
+  /* The texel's tangent frame, reproducible by an engine: x follows the
+   * lightmap's +u on the surface, z the shading normal. */
+  const float3 tn = lux_lightmap_tangent(tris[tri], uvt, s.ns, t);
+  t = tn;
+  b = cross(s.ns, tn);
+  const float3 dir_local = lux_uniform_hemisphere(u_dir);
+#else
   const float3 dir_local = lux_cosine_hemisphere(u_dir);
+#endif
   const float3 wi = lux_to_world(dir_local, t, b, s.ns);
   const int ok = dot(wi, s.ng) > 0.0f;
-  path.throughput = (float4)(M_PI_F, M_PI_F, M_PI_F, lux_cosine_hemisphere_pdf(dir_local.z));
+  path.throughput = (float4)(LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT,
+                             LUX_SENSOR_PDF(dir_local.z));
+#if LUX_BASIS
+  {
+    LuxBasisSample bs;
+    bs.dir_world = (float4)(wi, dir_local.z);
+    bs.dir_tangent = (float4)(dir_local, dir_local.z);
+    /* The light sample as radiance over density: the irradiance contribution
+     * without its cosine. Visibility (nee.w) comes from resolve_texel_shadows. */
+    const float3 ld = shadow.dir_tmax.xyz;
+    const float len = length(ld);
+    const float3 lw = len > 0.0f ? ld / len : (float3)(0.0f, 0.0f, 1.0f);
+    const float3 ll = lux_to_local(lw, t, b, s.ns);
+    const float cos_l = dot(lw, s.ns);
+    bs.nee_world = (float4)(lw, cos_l);
+    bs.nee_tangent = (float4)(ll, cos_l);
+    bs.nee = cos_l > 0.0f && len > 0.0f ? (float4)(contribution / cos_l, 0.0f) : (float4)(0.0f);
+    basis_samples[gid] = bs;
+  }
+#endif
   path.alive = ok ? 1u : 0u;
   paths[gid] = path;
   rays[gid] = ok ? lux_make_ray(lux_offset_origin(s.p, s.ng, wi, params.offset_scale), wi, INFINITY) : lux_no_ray();
@@ -363,7 +413,7 @@ __kernel void shade(LuxBakeParams params, __global const uint* active, __global 
   throughput *= weight;
   /* Russian roulette (§5.1) on the throughput relative to the sensor's pi. */
   if (ok && path.depth >= params.rr_depth) {
-    const float q = fmin(0.95f, lux_max3(throughput) * M_1_PI_F);
+    const float q = fmin(0.95f, lux_max3(throughput) / LUX_SENSOR_WEIGHT);
     const float u_rr = lux_independent_1d(path.sample_index, dim + LUX_DIM_ROULETTE, path.seed);
     if (u_rr >= q) ok = 0;
     else throughput /= q;
@@ -391,6 +441,18 @@ __kernel void resolve_shadows(__global const uint* active, __global const int* c
   const float4 c = shadow_contrib[slot];
   if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
   paths[slot].radiance += c;
+}
+
+/* The texel point's shadow rays in basis mode: visibility goes to the basis
+ * sample (the accumulator needs the light sample apart from the radiance
+ * along the first segment). */
+__kernel void resolve_texel_shadows(__global const uint* active, __global const int* count,
+                                    __global const int* occluded,
+                                    __global LuxBasisSample* basis_samples) {
+  const uint j = (uint)get_global_id(0);
+  if (j >= (uint)*count) return;
+  const uint slot = active[j] & LUX_SLOT_MASK;
+  basis_samples[slot].nee.w = occluded[slot] ? 0.0f : 1.0f;
 }
 
 /* ---- 5. Gather accumulation (§3.2.2, Listing 3.2) -----------------------------
@@ -421,11 +483,56 @@ inline void lux_welford(float4 x, float w, float4* mean, float4* m2, float2* wei
   *weight = (float2)(w_new, (*weight).y + w * w);
 }
 
+/* One path's sample for the accumulator: its irradiance estimate and, in
+ * basis mode, the radiance along its first segment (l) and the texel point's
+ * light sample (nee, visibility applied). 0 when non-finite (dropped). The
+ * firefly clamp scales all three alike. */
+inline int lux_path_sample(__global const LuxPath* paths,
+                           __global const LuxBasisSample* basis_samples, uint p,
+                           float clamp_luminance, float3* irradiance, float3* l, float3* nee) {
+  *l = paths[p].radiance.xyz;
+#if LUX_BASIS
+  const LuxBasisSample bs = basis_samples[p];
+  *nee = bs.nee.xyz * bs.nee.w;
+  *irradiance = *l * (LUX_TWO_PI_F * bs.dir_world.w) + *nee * fmax(bs.nee_world.w, 0.0f);
+  if (!lux_finite3(*irradiance) || !lux_finite3(*nee)) return 0;
+#else
+  *nee = (float3)(0.0f);
+  *irradiance = *l;
+  if (!lux_finite3(*irradiance)) return 0;
+#endif
+  if (clamp_luminance > 0.0f) {
+    const float y = lux_luminance(*irradiance);
+    if (y > clamp_luminance) {
+      const float f = clamp_luminance / y;
+      *irradiance *= f;
+      *l *= f;
+      *nee *= f;
+    }
+  }
+  return 1;
+}
+
+#if LUX_BASIS
+#define LUX_BASIS_ADD(p, w)                                                                    \
+  do {                                                                                         \
+    const LuxBasisSample bs_ = basis_samples[p];                                               \
+    lux_basis_accumulate(basis_state + (size_t)texel * basis_stride, encodings, encoding_count, \
+                         basis_dirs, &bs_, l, nee, (w), acceleration);                         \
+  } while (0)
+#else
+#define LUX_BASIS_ADD(p, w)
+#endif
+
 __kernel void accumulate(LuxBakeParams params, __global const uint* covered,
                          __global const uint* offsets, __global const LuxPath* paths,
                          __global const LuxSurfaceTri* tris, __global float4* mean_buf,
                          __global float4* m2_buf, __global float2* weight_buf,
-                         __global uint* texel_spp, __global uint* nonfinite) {
+                         __global uint* texel_spp, __global uint* nonfinite,
+                         __global const LuxBasisSample* basis_samples,
+                         __global const LuxEncoding* encodings, uint encoding_count,
+                         uint basis_stride, __global const float4* basis_dirs,
+                         __global float4* basis_state, float acceleration) {
   const uint c = (uint)get_global_id(0);
   if (c >= params.covered_count) return;
   const uint texel = covered[c];
@@ -469,13 +576,13 @@ __kernel void accumulate(LuxBakeParams params, __global const uint* covered,
         }
         const float w = lux_filter_weight(path.sample_pos - centre);
         if (!(w > 0.0f)) continue;
-        float3 l = path.radiance.xyz;
-        if (!lux_finite3(l)) { ++dropped; continue; }
-        if (params.clamp_luminance > 0.0f) {
-          const float y = lux_luminance(l);
-          if (y > params.clamp_luminance) l *= params.clamp_luminance / y;
+        float3 e, l, nee;
+        if (!lux_path_sample(paths, basis_samples, p, params.clamp_luminance, &e, &l, &nee)) {
+          ++dropped;
+          continue;
         }
-        lux_welford((float4)(l, lux_luminance(l)), w, &mean, &m2, &weight);
+        lux_welford((float4)(e, lux_luminance(e)), w, &mean, &m2, &weight);
+        LUX_BASIS_ADD(p, w);
         touched = 1;
       }
     }
@@ -483,13 +590,13 @@ __kernel void accumulate(LuxBakeParams params, __global const uint* covered,
   if (!touched && !own) return;
 #else
   for (uint p = first; p < end; ++p) {
-    float3 l = paths[p].radiance.xyz;
-    if (!lux_finite3(l)) { ++dropped; continue; }
-    if (params.clamp_luminance > 0.0f) {
-      const float y = lux_luminance(l);
-      if (y > params.clamp_luminance) l *= params.clamp_luminance / y;
+    float3 e, l, nee;
+    if (!lux_path_sample(paths, basis_samples, p, params.clamp_luminance, &e, &l, &nee)) {
+      ++dropped;
+      continue;
     }
-    lux_welford((float4)(l, lux_luminance(l)), 1.0f, &mean, &m2, &weight);
+    lux_welford((float4)(e, lux_luminance(e)), 1.0f, &mean, &m2, &weight);
+    LUX_BASIS_ADD(p, 1.0f);
   }
 #endif
   mean_buf[texel] = mean;

@@ -47,6 +47,14 @@ luxel::v1::BakeSettings to_proto(const BakeArgs& a) {
     sun->set_angular_radius_degrees(in.angular_radius_degrees);
   }
   p.set_seed(s.seed);
+  if (!s.encodings.names.empty()) {
+    std::string list = "irradiance";
+    for (const auto& n : s.encodings.names) list += "," + n;
+    p.set_encoding(list);
+    p.set_sg_sharpness(s.encodings.sg_sharpness);
+    p.set_solver(pipeline::solver_name(s.encodings.solver));
+    p.set_acceleration(s.encodings.acceleration);
+  }
   p.set_paths_per_iteration(s.paths_per_iteration);
   p.set_dilation_texels(static_cast<uint32_t>(std::max(s.dilation_texels, 0)));
   p.set_priority(a.priority);

@@ -94,6 +94,52 @@ typedef struct LuxAccumStats {
   float4 pad2;         /* keeps the struct 32 bytes */
 } LuxAccumStats;
 
+/* ---- Directional encodings (issue 5; thesis §3.4 "Accumulation into Linear
+ * Bases", Ch. 7-8). Compiled in only with LUX_BASIS. */
+
+/* Where the first segment of a path went and what direct light the texel
+ * point saw, one per path slot (80 bytes). Directions are given in both
+ * encoding frames: world space, and the texel's tangent frame (z = shading
+ * normal, x = direction of increasing lightmap u projected onto the tangent
+ * plane, y = z cross x). w of the direction fields: cosine to the normal.
+ *   nee.xyz: w_mis * L_e / p_light of the texel point's light sample (radiance
+ *            over density, i.e. what multiplies B_i(w_l) in the moment
+ *            estimate); nee.w: 1 when the shadow ray was unoccluded. */
+typedef struct LuxBasisSample {
+  float4 dir_world;
+  float4 dir_tangent;
+  float4 nee_world;
+  float4 nee_tangent;
+  float4 nee;
+} LuxBasisSample;
+
+#define LUX_ENC_SH 0
+#define LUX_ENC_SG 1
+#define LUX_ENC_AD 2
+
+#define LUX_SOLVER_PROJECTION 0
+#define LUX_SOLVER_PROGRESSIVE 1
+#define LUX_SOLVER_PROGRESSIVE_NN 2
+
+#define LUX_ENC_MAX_LOBES 12
+
+/* One requested encoding, 32 bytes. A texel's state is `basis_stride` float4:
+ * per encoding one header (x = total sample weight, y = running mean of the
+ * squared luminance residual, z/w unused) then `count` lobes (rgb = amplitude,
+ * w = running mean of B_i^2, the spherical-integral estimate of Eq. 7.15). */
+typedef struct LuxEncoding {
+  int kind;           /* LUX_ENC_* */
+  int count;          /* coefficients (lobes) */
+  int first_dir;      /* first lobe direction in the direction table (SG, AD) */
+  int state_offset;   /* float4 index of the header within a texel's state */
+  int tangent_frame;  /* 1: directions in the texel's tangent frame; 0: world */
+  int hemisphere_fit; /* 1: least squares over the hemisphere (§7.2.1); 0: over
+                         the sphere, with a zero-radiance mirrored sample after
+                         each real one (end of §7.3.1) */
+  int solver;         /* LUX_SOLVER_* */
+  float sharpness;    /* SG lambda */
+} LuxEncoding;
+
 #ifndef LUX_DEVICE
 }  // namespace luxel::cl
 #endif

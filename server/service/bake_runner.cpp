@@ -265,6 +265,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     p->set_fraction(1);
     b.clear_artifacts();
     for (const char* a : kArtifacts) b.add_artifacts(a);
+    for (const auto& e : r.encodings) b.add_artifacts(e.name + ".exr");
   }, true);
   // Only once the record says SUCCEEDED: a crash before this line re-runs
   // the bake from the checkpoint rather than from zero.

@@ -80,9 +80,18 @@ Result<pipeline::BakeSettings> to_engine_settings(const v1::BakeSettings& in,
   }
   s.seed = in.seed() == 0 ? 1 : in.seed();
   if (in.paths_per_iteration() != 0) s.paths_per_iteration = in.paths_per_iteration();
-  if (!in.encoding().empty() && in.encoding() != "irradiance")
-    return bad("encoding", strprintf("unknown encoding '%s' (this version bakes \"irradiance\")",
-                                     in.encoding().c_str()));
+  if (!in.encoding().empty()) {
+    auto names = pipeline::parse_encoding_list(in.encoding());
+    if (!names) return bad("encoding", names.status().message());
+    s.encodings.names = names.value();
+  }
+  if (in.sg_sharpness() != 0) s.encodings.sg_sharpness = in.sg_sharpness();
+  if (!in.solver().empty()) {
+    auto solver = pipeline::parse_solver(in.solver());
+    if (!solver) return bad("solver", solver.status().message());
+    s.encodings.solver = solver.value();
+  }
+  if (in.acceleration() != 0) s.encodings.acceleration = in.acceleration();
   if (in.dilation_texels() != 0) {
     if (in.dilation_texels() > 64)
       return bad("dilation_texels", strprintf("must be in [0, 64], got %u", in.dilation_texels()));

@@ -75,6 +75,10 @@ Json to_json(const Manifest& m) {
   j["features"] = m.features;
   j["device"] = m.device;
   j["stats"] = stats_to_json(m.stats);
+  if (!m.encodings_json.empty()) {
+    j["encodings"] = Json::array();
+    for (const auto& e : m.encodings_json) j["encodings"].push_back(Json::parse(e));
+  }
   return j;
 }
 
@@ -283,6 +287,17 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
     LUXEL_RETURN_IF_ERROR(setting_fields.string(item.key(), m.settings[item.key()]));
   LUXEL_RETURN_IF_ERROR(f.string("features", m.features));
   LUXEL_RETURN_IF_ERROR(f.string("device", m.device));
+  if (j.contains("encodings")) {
+    const Json& enc = j["encodings"];
+    if (!enc.is_array())
+      return invalid_argument(strprintf("%s: encodings: expected an array", what.c_str()));
+    for (size_t i = 0; i < enc.size(); ++i) {
+      if (!enc[i].is_object() || !enc[i].contains("name") || !enc[i]["name"].is_string())
+        return invalid_argument(strprintf("%s: encodings[%zu]: expected an object with a name",
+                                          what.c_str(), i));
+      m.encodings_json.push_back(enc[i].dump());
+    }
+  }
   const Json* stats = nullptr;
   LUXEL_RETURN_IF_ERROR(f.object("stats", stats));
   return read_stats(*stats, what, m.stats);

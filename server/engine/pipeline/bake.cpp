@@ -55,6 +55,8 @@ struct DeviceBuffers {
   device::Buffer active_a, active_b, alive, tagged;
   // Accumulation (sized by the lightmap)
   device::Buffer mean, m2, weight, spp, nonfinite, stats;
+  // Directional encodings (placeholders without them)
+  device::Buffer basis_samples, encodings, basis_dirs, basis_state;
 };
 
 class Baker {
@@ -116,6 +118,7 @@ class Baker {
   LightTable lights_;
   SceneData data_;
   device::FeatureSet features_;
+  EncodingPlan plan_;
   cl::LuxBakeParams params_{};
   size_t capacity_ = 0;
   size_t device_bytes_ = 0;
@@ -125,7 +128,8 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;
   std::unique_ptr<OffsetBuffer> offset_buffer_;
-  device::Kernel k_domain_, k_raygen_, k_shade_, k_resolve_, k_accumulate_, k_stats_;
+  device::Kernel k_domain_, k_raygen_, k_shade_, k_resolve_, k_resolve_texel_, k_accumulate_,
+      k_stats_;
 };
 
 Status Baker::setup() {
@@ -159,6 +163,10 @@ Status Baker::setup() {
   auto data = prepare_scene_data(scene_, soup_, atlas_, lights_.triangle_light);
   if (!data) return data.status();
   data_ = std::move(data.value());
+
+  auto plan = plan_encodings(settings_.encodings);
+  if (!plan) return plan.status();
+  plan_ = std::move(plan.value());
 
   derive_features();
   LUXEL_RETURN_IF_ERROR(upload_scene());
@@ -205,6 +213,7 @@ void Baker::derive_features() {
   if (settings_.compaction) f.set("COMPACTION");
   if (settings_.filter == Filter::kGaussian) f.set("FILTER_GAUSSIAN");
   if (settings_.random_sequence) f.set("SEQUENCE_RANDOM");
+  if (!plan_.empty()) f.set("BASIS");
 }
 
 Status Baker::upload_scene() {
@@ -275,7 +284,17 @@ Status Baker::allocate_work_buffers() {
   LUXEL_RETURN_IF_ERROR(alloc(b_.nonfinite, 4, "non-finite counter"));
   const size_t groups = (params_.covered_count + kStatsGroup - 1) / kStatsGroup;
   LUXEL_RETURN_IF_ERROR(alloc(b_.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
-  for (const device::Buffer* z : {&b_.mean, &b_.m2, &b_.weight, &b_.spp, &b_.nonfinite})
+  // Directional encodings: one sample record per path, the state per texel.
+  const bool basis = !plan_.empty();
+  LUXEL_RETURN_IF_ERROR(alloc(b_.basis_samples, basis ? p * sizeof(cl::LuxBasisSample) : 16, "basis samples"));
+  LUXEL_RETURN_IF_ERROR(alloc(b_.basis_state, t * plan_.bytes_per_texel(), "basis state"));
+  auto table = upload_or_placeholder(plan_.table, "encodings");
+  if (!table) return table.status();
+  b_.encodings = std::move(table.value());
+  auto dirs = upload_or_placeholder(plan_.directions, "basis directions");
+  if (!dirs) return dirs.status();
+  b_.basis_dirs = std::move(dirs.value());
+  for (const device::Buffer* z : {&b_.mean, &b_.m2, &b_.weight, &b_.spp, &b_.nonfinite, &b_.basis_state})
     LUXEL_RETURN_IF_ERROR(fill_zero(*z));
 
   auto sort = RadixSort::create(ctx_, p);
@@ -307,6 +326,7 @@ Status Baker::build_kernels() {
   LUXEL_RETURN_IF_ERROR(get(k_raygen_, "raygen"));
   LUXEL_RETURN_IF_ERROR(get(k_shade_, "shade"));
   LUXEL_RETURN_IF_ERROR(get(k_resolve_, "resolve_shadows"));
+  LUXEL_RETURN_IF_ERROR(get(k_resolve_texel_, "resolve_texel_shadows"));
   LUXEL_RETURN_IF_ERROR(get(k_accumulate_, "accumulate"));
   return get(k_stats_, "accum_stats");
 }
@@ -333,7 +353,7 @@ Status Baker::run_iteration(uint32_t batch) {
       p, b_.keys, b_.offsets, b_.path_count, b_.sample_offsets, b_.sample_words, b_.atlas_uvs,
       b_.instance_first, b_.surface, b_.materials, b_.textures, b_.texels, b_.lights, b_.light_cdf,
       lights_.sky, b_.sky_texels, b_.sky_marginal, b_.sky_conditional, b_.spp, b_.paths, b_.rays,
-      b_.shadow_rays, b_.shadow_contrib, b_.active_a));
+      b_.shadow_rays, b_.shadow_contrib, b_.active_a, b_.basis_samples));
   LUXEL_RETURN_IF_ERROR(ctx_.launch(k_raygen_, cap, 64));
 
   const device::Buffer* active = &b_.active_a;
@@ -348,7 +368,16 @@ Status Baker::run_iteration(uint32_t batch) {
     LUXEL_RETURN_IF_ERROR(k_resolve_.set_args(*active, *count, b_.occluded, b_.shadow_contrib, b_.paths));
     return ctx_.launch(k_resolve_, cap, 64);
   };
-  if (nee) LUXEL_RETURN_IF_ERROR(shadows());
+  if (nee && !plan_.empty()) {
+    // The texel point's light sample stays apart from the path's radiance
+    // for the basis accumulator: only its visibility is recorded.
+    LUXEL_RETURN_IF_ERROR(
+        tracer_->enqueue_any_indexed(b_.shadow_rays, *active, *count, kSlotMask, b_.occluded, cap));
+    LUXEL_RETURN_IF_ERROR(k_resolve_texel_.set_args(*active, *count, b_.occluded, b_.basis_samples));
+    LUXEL_RETURN_IF_ERROR(ctx_.launch(k_resolve_texel_, cap, 64));
+  } else if (nee) {
+    LUXEL_RETURN_IF_ERROR(shadows());
+  }
   if (settings_.sort_directions) LUXEL_RETURN_IF_ERROR(sort_directions());
 
   // 5. Bounce loop: closest hit -> shade -> shadow rays -> compaction.
@@ -379,8 +408,10 @@ Status Baker::run_iteration(uint32_t batch) {
   }
 
   // 6. Gather accumulation per covered texel (Listing 3.2).
-  LUXEL_RETURN_IF_ERROR(k_accumulate_.set_args(p, b_.covered, b_.offsets, b_.paths, b_.surface,
-                                               b_.mean, b_.m2, b_.weight, b_.spp, b_.nonfinite));
+  LUXEL_RETURN_IF_ERROR(k_accumulate_.set_args(
+      p, b_.covered, b_.offsets, b_.paths, b_.surface, b_.mean, b_.m2, b_.weight, b_.spp,
+      b_.nonfinite, b_.basis_samples, b_.encodings, static_cast<cl_uint>(plan_.table.size()),
+      plan_.stride, b_.basis_dirs, b_.basis_state, settings_.encodings.acceleration));
   LUXEL_RETURN_IF_ERROR(ctx_.launch(k_accumulate_, params_.covered_count, 64));
   paths_done_ += batch;
   return Status::ok();
@@ -439,6 +470,8 @@ Status Baker::read_state(BakeCheckpoint& c) {
   LUXEL_RETURN_IF_ERROR(ctx_.read(b_.m2, c.m2));
   LUXEL_RETURN_IF_ERROR(ctx_.read(b_.weight, c.weight));
   LUXEL_RETURN_IF_ERROR(ctx_.read(b_.spp, c.spp));
+  c.basis.resize(plan_.empty() ? 0 : t * plan_.stride);
+  if (!c.basis.empty()) LUXEL_RETURN_IF_ERROR(ctx_.read(b_.basis_state, c.basis));
   LUXEL_RETURN_IF_ERROR(ctx_.read(b_.nonfinite, &nonfinite, sizeof nonfinite));
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   c.nonfinite = nonfinite;
@@ -455,6 +488,12 @@ Status Baker::restore_state(const BakeCheckpoint& c) {
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.m2, c.m2.data(), c.m2.size() * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.weight, c.weight.data(), c.weight.size() * sizeof(cl::float2)));
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.spp, c.spp.data(), c.spp.size() * sizeof(uint32_t)));
+  const size_t basis_size = plan_.empty() ? 0 : size_t{params_.texel_count} * plan_.stride;
+  if (c.basis.size() != basis_size)
+    return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",
+                                      c.basis.size(), basis_size));
+  if (basis_size > 0)
+    LUXEL_RETURN_IF_ERROR(ctx_.write(b_.basis_state, c.basis.data(), basis_size * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.nonfinite, &nonfinite, sizeof nonfinite));
   paths_done_ = c.paths_done;
   return ctx_.finish();
@@ -479,6 +518,19 @@ Status Baker::read_result(BakeResult& r) {
     }
   }
   r.nonfinite_dropped = state.nonfinite;
+  r.basis_bytes_per_texel = plan_.bytes_per_texel();
+  for (size_t k = 0; k < plan_.encodings.size(); ++k) {
+    EncodedLightmap e;
+    e.name = plan_.encodings[k].name();
+    e.count = plan_.table[k].count;
+    e.coefficients = extract_coefficients(plan_, k, state.basis, t);
+    e.manifest_json = plan_.encodings[k].describe_json(e.name + ".exr", settings_.encodings.acceleration);
+    double residual = 0;
+    for (uint32_t texel : info_.covered_texels)
+      residual += std::sqrt(std::max(0.0f, state.basis[size_t{texel} * plan_.stride + plan_.table[k].state_offset].y));
+    e.residual_rms = residual / std::max<size_t>(1, info_.covered_texels.size());
+    r.encodings.push_back(std::move(e));
+  }
   return Status::ok();
 }
 

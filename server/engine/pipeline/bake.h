@@ -48,6 +48,15 @@ struct ErrorSample {
   double error;
 };
 
+// One directional encoding of a finished bake (issue 5).
+struct EncodedLightmap {
+  std::string name;                 // "sh2", "sg12", "ambient-dice9", ...
+  int count = 0;                    // coefficients per colour channel
+  std::vector<float> coefficients;  // texel-major, count * RGB (lobe-major), row 0 = top
+  std::string manifest_json;        // basis, frame, solver (without the file entry)
+  double residual_rms = 0;          // mean over covered texels of the running residual (luminance)
+};
+
 struct BakeResult {
   int width = 0, height = 0;
   std::vector<float> irradiance;   // RGBA, row 0 = top; A = fraction of the texel covered by geometry
@@ -64,6 +73,8 @@ struct BakeResult {
   double error = 1;
   uint64_t nonfinite_dropped = 0;
   std::vector<ErrorSample> series;
+  std::vector<EncodedLightmap> encodings;  // directional encodings, in the requested order
+  size_t basis_bytes_per_texel = 0;        // device state of all encodings per texel
 
   std::string features;            // compiled bake features ("light_emissive, nee, ...")
   std::string device;

@@ -71,6 +71,11 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.stats.termination = termination_name(result.termination);
   m.stats.covered_texels = result.covered_texels;
   m.dilation_texels = settings.dilation_texels;
+  for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
+  if (!result.encodings.empty()) {
+    m.encoding = "irradiance";
+    for (const auto& e : result.encodings) m.encoding += "+" + e.name;
+  }
   return m;
 }
 
@@ -106,6 +111,29 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   LUXEL_RETURN_IF_ERROR(output::write_exr(
       paths.error_exr, to_image(result.width, result.height, 1, result.rel_error), {"Y"},
       {{"luxel/content", "relative standard error of the texel mean"}}));
+  // Directional encodings: one EXR each, channels c00.R .. cNN.B, dilated
+  // with the irradiance map's coverage so every channel pads the same texels.
+  output::Image coverage = to_image(result.width, result.height, 1, {});
+  coverage.pixels.resize(size_t(result.width) * result.height);
+  for (size_t t = 0; t < coverage.pixels.size(); ++t) coverage.pixels[t] = result.irradiance[t * 4 + 3];
+  std::vector<output::Manifest::File> encoding_files;
+  for (const auto& e : result.encodings) {
+    output::Image img = to_image(result.width, result.height, e.count * 3, e.coefficients);
+    LUXEL_RETURN_IF_ERROR(output::dilate(img, coverage, settings.dilation_texels));
+    std::vector<std::string> names;
+    for (int i = 0; i < e.count; ++i)
+      for (const char* c : {"R", "G", "B"}) names.push_back(strprintf("c%02d.%s", i, c));
+    const std::string file = e.name + ".exr";
+    LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), img, names,
+                                            {{"luxel/encoding", e.name},
+                                             {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
+                                             {"luxel/scene", scene.source_name}}));
+    paths.encodings.push_back(at(file.c_str()));
+    encoding_files.push_back({e.name, file, "exr",
+                              strprintf("float32, %d coefficients x RGB of the %s basis (see "
+                                        "encodings in this manifest)", e.count, e.name.c_str())});
+  }
+
   const std::string csv = series_csv(result);
   LUXEL_RETURN_IF_ERROR(output::write_file_atomic(paths.series_csv, csv.data(), csv.size()));
 
@@ -116,6 +144,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       {"samples", "samples.exr", "exr", "float32 Y: samples per texel"},
       {"rel_error", "rel_error.exr", "exr", "float32 Y: relative standard error per texel"},
       {"error_series", "error_series.csv", "csv", "error estimate against time"}};
+  m.files.insert(m.files.end(), encoding_files.begin(), encoding_files.end());
   LUXEL_RETURN_IF_ERROR(output::write_manifest(paths.manifest_json, m));
   return paths;
 }

@@ -1,11 +1,13 @@
 // Writes a finished bake into a folder: the irradiance lightmap (linear float
 // EXR, alpha = coverage), a tone-mapped PNG preview, the samples-per-texel and
-// relative-error maps, the error-against-time series (CSV) and a JSON
+// relative-error maps, one EXR of coefficients per directional encoding,
+// the error-against-time series (CSV) and a JSON
 // manifest describing all of them. Uncovered texels are dilated first so
 // bilinear filtering in an engine does not bleed black into charts.
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 #include "output/manifest.h"
@@ -16,6 +18,7 @@ namespace luxel::pipeline {
 
 struct OutputPaths {
   std::string irradiance_exr, preview_png, samples_exr, error_exr, series_csv, manifest_json;
+  std::vector<std::string> encodings;  // one EXR per directional encoding ("sh2.exr", ...)
 };
 
 // Creates `dir` if needed. `scene_sha256` may be empty.

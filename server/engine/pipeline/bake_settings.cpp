@@ -23,6 +23,14 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";
   m["dilation_texels"] = std::to_string(dilation_texels);
+  if (!encodings.names.empty()) {
+    std::string list = "irradiance";
+    for (const auto& n : encodings.names) list += "," + n;
+    m["encodings"] = list;
+    m["sg_sharpness"] = strprintf("%g", encodings.sg_sharpness);
+    m["solver"] = solver_name(encodings.solver);
+    m["acceleration"] = strprintf("%g", encodings.acceleration);
+  }
   const auto& sky = lights.sky;
   switch (sky.kind) {
     case SkySettings::Kind::kNone: m["sky"] = "none"; break;
@@ -69,7 +77,7 @@ Status validate_settings(const BakeSettings& s) {
     return bad("progress_interval_s", strprintf("must be > 0, got %g", s.progress_interval_s));
   if (s.dilation_texels < 0 || s.dilation_texels > 64)
     return bad("dilation_texels", strprintf("must be in [0, 64], got %d", s.dilation_texels));
-  return Status::ok();
+  return validate_encodings(s.encodings);
 }
 
 }  // namespace luxel::pipeline

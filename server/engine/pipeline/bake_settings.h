@@ -9,6 +9,7 @@
 
 #include "atlas/atlas.h"
 #include "common/status.h"
+#include "pipeline/encodings.h"
 #include "pipeline/shading/light_settings.h"
 
 namespace luxel::pipeline {
@@ -31,6 +32,7 @@ struct BakeSettings {
   Filter filter = Filter::kBox;
   float clamp_luminance = 0;    // firefly clamp on a path's luminance; 0 = off (unbiased)
   LightSettings lights;         // sky, sun, directional angular radius
+  EncodingSettings encodings;   // directional encodings besides irradiance (issue 5)
 
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;

@@ -10,7 +10,8 @@
 namespace luxel::pipeline {
 namespace {
 
-constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
+constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
+constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
 
 class Writer {
  public:
@@ -76,6 +77,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   w.vec(c.m2);
   w.vec(c.weight);
   w.vec(c.spp);
+  w.vec(c.basis);
   const std::string sum = Hasher().add(w.bytes()).hex();
   w.raw(sum.data(), sum.size());
   return output::write_file_atomic(path, w.bytes().data(), w.bytes().size());
@@ -97,17 +99,19 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   BakeCheckpoint c;
   std::vector<char> fp;
   const uint64_t texels_max = uint64_t{1} << 28;
-  if (!r.raw(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
-    return corrupt("not a Luxel checkpoint");
+  if (!r.raw(magic, sizeof magic)) return corrupt("not a Luxel checkpoint");
+  const bool v1 = std::memcmp(magic, kMagicV1, sizeof kMagicV1) == 0;
+  if (!v1 && std::memcmp(magic, kMagic, sizeof kMagic) != 0) return corrupt("not a Luxel checkpoint");
   if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
-      !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max))
+      !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
+      (!v1 && !r.vec(c.basis, texels_max * 64)))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   const size_t texels = size_t{c.width} * c.height;
   if (c.mean.size() != texels || c.m2.size() != texels || c.weight.size() != texels ||
-      c.spp.size() != texels || c.series.size() % 5 != 0)
+      c.spp.size() != texels || c.series.size() % 5 != 0 || c.basis.size() % texels != 0)
     return corrupt("array sizes do not match the lightmap");
   return c;
 }

@@ -28,9 +28,12 @@ struct BakeCheckpoint {
   std::vector<cl::float4> mean, m2;
   std::vector<cl::float2> weight;
   std::vector<uint32_t> spp;
+  // Directional encodings: texels * stride float4 (empty without encodings).
+  std::vector<cl::float4> basis;
 };
 
-// Binary, little-endian, "LUXCKPT1" magic, 128-bit checksum at the end.
+// Binary, little-endian, "LUXCKPT2" magic (version 1, without the basis
+// state, is still read), 128-bit checksum at the end.
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
 // NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
 Result<BakeCheckpoint> read_checkpoint(const std::string& path);

@@ -12,4 +12,6 @@ static_assert(sizeof(LuxPath) == 80);
 static_assert(offsetof(LuxPath, texel) == 48 && offsetof(LuxPath, sample_pos) == 64);
 static_assert(sizeof(LuxBakeParams) == 48);
 static_assert(sizeof(LuxAccumStats) == 32);
+static_assert(sizeof(LuxBasisSample) == 80 && alignof(LuxBasisSample) == 16);
+static_assert(sizeof(LuxEncoding) == 32 && offsetof(LuxEncoding, sharpness) == 28);
 }  // namespace luxel::cl

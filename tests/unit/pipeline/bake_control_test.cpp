@@ -72,6 +72,43 @@ TEST_F(BakeControlTest, ResumeFromCheckpointIsBitIdentical) {
   EXPECT_FALSE(pipeline::bake(scene, settings(), *ctx_, resume));
 }
 
+TEST_F(BakeControlTest, ResumeKeepsDirectionalEncodingsBitIdentical) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  pipeline::BakeSettings st = settings();
+  st.encodings.names = {"sh2", "sg6", "ambient-dice9"};
+  auto full = pipeline::bake(scene, st, *ctx_);
+  ASSERT_TRUE(full) << full.status().to_string();
+  ASSERT_EQ(full.value().encodings.size(), 3u);
+
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "furnace-enc";
+  hooks.checkpoint_interval_s = 1e-9;
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  ASSERT_TRUE(pipeline::bake(scene, st, *ctx_, hooks));
+  ASSERT_GE(checkpoints.size(), 3u);
+  EXPECT_FALSE(checkpoints[1].basis.empty());
+  const std::string path = ::testing::TempDir() + "/luxel_test_enc.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, checkpoints[1]).is_ok());
+  auto loaded = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(loaded) << loaded.status().to_string();
+  EXPECT_EQ(loaded.value().basis.size(), checkpoints[1].basis.size());
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "furnace-enc";
+  resume.resume = &loaded.value();
+  auto resumed = pipeline::bake(scene, st, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  for (size_t k = 0; k < 3; ++k)
+    EXPECT_EQ(full.value().encodings[k].coefficients, resumed.value().encodings[k].coefficients)
+        << full.value().encodings[k].name << ": a resumed bake must give the same coefficients";
+
+  // A checkpoint without the basis state cannot resume a bake that has one.
+  pipeline::BakeCheckpoint stripped = loaded.value();
+  stripped.basis.clear();
+  resume.resume = &stripped;
+  EXPECT_FALSE(pipeline::bake(scene, st, *ctx_, resume));
+}
+
 TEST_F(BakeControlTest, CorruptCheckpointsAreRefused) {
   const std::string path = ::testing::TempDir() + "/luxel_corrupt.ckpt";
   pipeline::BakeCheckpoint c;
