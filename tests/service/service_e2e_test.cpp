@@ -285,6 +285,39 @@ TEST_F(ServiceE2E, StalledWatcherNeitherBlocksTheBakeNorGetsABacklog) {
   EXPECT_GE(events, 1);
 }
 
+TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  v1::SubmitBakeRequest submit;
+  submit.set_scene_id(scene_id);
+  *submit.mutable_settings() = small_settings(16, 32);
+  submit.mutable_settings()->set_encoding("irradiance,sh2,ambient-dice9");
+  v1::BakeInfo bake;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
+  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+  EXPECT_NE(done.features().find("basis"), std::string::npos) << done.features();
+  const std::vector<std::string> names(done.artifacts().begin(), done.artifacts().end());
+  for (const char* want : {"sh2.exr", "ambient-dice9.exr"})
+    EXPECT_NE(std::find(names.begin(), names.end(), want), names.end()) << want;
+  std::string bytes, sha;
+  uint64_t total = 0;
+  ASSERT_TRUE(download(*daemon_, bake.bake_id(), "sh2.exr", &bytes, &sha, &total).ok());
+  EXPECT_EQ(sha, sha256_hex(bytes));
+  const std::string path = dir_->path() + "/sh2.exr";
+  std::ofstream(path, std::ios::binary) << bytes;
+  output::ExrInfo exr;
+  auto image = output::read_exr(path, &exr);
+  ASSERT_TRUE(image.is_ok()) << image.status().to_string();
+  EXPECT_EQ(image->channels, 27);  // 9 coefficients x RGB
+  EXPECT_EQ(exr.metadata["luxel/encoding"], "sh2");
+  ASSERT_TRUE(download(*daemon_, bake.bake_id(), "manifest.json", &bytes, &sha, &total).ok());
+  EXPECT_NE(bytes.find("\"encodings\""), std::string::npos);
+  EXPECT_NE(bytes.find("ambient-dice9"), std::string::npos);
+}
+
 TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {
   v1::SceneInfo scene;
   const std::string scene_id = upload_cornell(&scene);

@@ -185,6 +185,9 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
       {"settings.max_bounces", [](v1::BakeSettings& s) { s.set_max_bounces(99); }},
       {"settings.resolution", [](v1::BakeSettings& s) { s.set_resolution(1024); }},  // > --max-resolution
       {"settings.encoding", [](v1::BakeSettings& s) { s.set_encoding("sh9"); }},
+      {"settings.solver", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_solver("magic"); }},
+      {"settings.sg_sharpness", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_sg_sharpness(-2); }},
+      {"settings.acceleration", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_acceleration(100); }},
       {"settings.sky.color", [](v1::BakeSettings& s) {
          s.mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
          s.mutable_sky()->add_color(1);
