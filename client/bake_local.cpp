@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "commands.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
+#include "output/exr.h"
 #include "pipeline/bake_outputs.h"
 #include "progress_bar.h"
 #include "scene/gltf_import.h"
@@ -28,6 +30,8 @@ void draw_progress(const pipeline::BakeProgress& p, bool tty) {
   v.error = p.error;
   v.elapsed_s = p.elapsed_s;
   v.eta_s = p.eta_s;
+  v.rmse = p.rmse;
+  v.rel_mse = p.rel_mse;
   draw_progress_bar(v, tty);
 }
 
@@ -45,6 +49,25 @@ int run_bake(const std::vector<std::string>& args) {
     std::fprintf(stderr, "luxel bake: %s applies to a bake on luxeld, not to --local\n",
                  a.remote_only.front().c_str());
     return 2;
+  }
+  if (!a.reference_file.empty()) {
+    // Benchmark mode: RGBA (or RGB) float EXR of the lightmap's size.
+    auto image = output::read_exr(a.reference_file);
+    if (!image) {
+      std::fprintf(stderr, "luxel bake: --reference: %s\n", image.status().to_string().c_str());
+      return 1;
+    }
+    if (image->channels != 4 && image->channels != 3) {
+      std::fprintf(stderr, "luxel bake: --reference: %s has %d channels, expected RGB or RGBA\n",
+                   a.reference_file.c_str(), image->channels);
+      return 1;
+    }
+    std::vector<float> rgba(image->texel_count() * 4, 1.0f);
+    for (size_t t = 0; t < image->texel_count(); ++t)
+      for (int c = 0; c < image->channels; ++c)
+        rgba[t * 4 + size_t(c)] = image->pixels[t * size_t(image->channels) + size_t(c)];
+    a.settings.reference = std::make_shared<const std::vector<float>>(std::move(rgba));
+    a.settings.reference_name = a.reference_file;
   }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {
     std::fprintf(stderr, "luxel bake: %s\n", st.message().c_str());
@@ -87,6 +110,9 @@ int run_bake(const std::vector<std::string>& args) {
               r.seconds, r.setup_s, static_cast<unsigned long long>(r.paths),
               r.seconds > 0 ? r.paths / r.seconds / 1e6 : 0.0, r.mean_spp, r.min_spp, r.error,
               pipeline::termination_name(r.termination));
+  if (r.rmse >= 0)
+    std::printf("reference  rmse %.5g, relMSE %.5g against %s\n", r.rmse, r.rel_mse,
+                a.settings.reference_name.c_str());
   if (r.nonfinite_dropped > 0)
     std::printf("warning    %llu non-finite samples dropped\n",
                 static_cast<unsigned long long>(r.nonfinite_dropped));

@@ -26,6 +26,8 @@ const char* kUsage =
     "  --solver S            auto|projection|progressive|progressive-nn (default auto:\n"
     "                        projection for SH, progressive-nn for SG and Ambient Dice)\n"
     "  --acceleration A      progressive least-squares alpha, Eq. 7.14 (default 3)\n"
+    "  --target-metric M     what --target-error bounds: estimate (default), rmse, relmse\n"
+    "                        (rmse/relmse need a reference: --reference or --reference-bake)\n"
     "  --sky R,G,B           constant sky radiance  [--sky-intensity X]\n"
     "  --sun X,Y,Z           sun travelling along X,Y,Z  [--sun-illuminance E] [--sun-radius DEG]\n"
     "  --paths-per-iteration N   batch size (default 262144)\n"
@@ -37,12 +39,15 @@ const char* kUsage =
     "  --snapshot-format png|exr|none   --snapshot-size N (PNG longest side)\n"
     "  --snapshots DIR       write each snapshot to DIR/snapshot_NNNN.png while watching\n"
     "  --idempotency-key K   a retry with the same key returns the same bake\n"
+    "  --reference-bake ID   benchmark mode: that finished bake's lightmap is the reference\n"
     "  --name NAME           scene display name when it is uploaded\n"
     "  --detach              print the bake id after submitting and return\n"
     "  (and the connection options of `luxel upload --help`)\n"
     "exit codes: 0 done, 1 error (daemon, network, files), 2 usage, 3 bake failed/cancelled\n"
     "--local only:\n"
     "  --sky-image FILE      equirectangular HDR/EXR sky  [--sky-rotation DEG]\n"
+    "  --reference FILE.exr  benchmark mode: RMSE and relMSE against this lightmap (RGBA,\n"
+    "                        same size, e.g. a converged bake's irradiance.exr) in every report\n"
     "  --directional-radius DEG  angular radius of the scene's directional lights\n"
     "  --rr-depth D          Russian roulette from this depth (default 3)\n"
     "  --clamp L             clamp path luminance (biased; default off)\n"
@@ -55,7 +60,7 @@ bool parse_vec3(const std::string& s, Vec3& v) {
 }
 
 bool is_local_only(const std::string& k) {
-  for (const char* o : {"--sky-image", "--sky-rotation", "--directional-radius", "--rr-depth",
+  for (const char* o : {"--sky-image", "--sky-rotation", "--directional-radius", "--rr-depth", "--reference",
                         "--clamp", "--no-compaction", "--sort-directions", "--random-sequence",
                         "--progress-interval", "--device"})
     if (k == o) return true;
@@ -64,7 +69,7 @@ bool is_local_only(const std::string& k) {
 
 bool is_remote_only(const std::string& k) {
   for (const char* o : {"--priority", "--snapshot-interval", "--snapshot-format", "--snapshot-size",
-                        "--snapshots", "--idempotency-key", "--name", "--detach", "--server",
+                        "--snapshots", "--idempotency-key", "--name", "--detach", "--server", "--reference-bake",
                         "--token", "--tls-ca", "--tls", "--timeout", "--json"})
     if (k == o) return true;
   return false;
@@ -123,6 +128,17 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
     else if (k == "--name") ok = text(a.name);
     else if (k == "--snapshots") ok = text(a.snapshots_dir);
     else if (k == "--idempotency-key") ok = text(a.idempotency_key);
+    else if (k == "--reference") ok = text(a.reference_file);
+    else if (k == "--reference-bake") ok = text(a.reference_bake);
+    else if (k == "--target-metric") {
+      std::string v;
+      ok = text(v);
+      if (ok) {
+        auto metric = pipeline::parse_error_metric(v);
+        if (!metric) { std::fprintf(stderr, "luxel bake: --target-metric: %s\n", metric.status().message().c_str()); ok = false; }
+        else s.target_metric = metric.value();
+      }
+    }
     else if (k == "--snapshot-format") {
       ok = text(a.snapshot_format);
       if (ok && a.snapshot_format != "png" && a.snapshot_format != "exr" && a.snapshot_format != "none") {

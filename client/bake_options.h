@@ -19,6 +19,7 @@ struct BakeArgs {
   pipeline::BakeSettings settings;
 
   std::string device;  // --local only: OpenCL device
+  std::string reference_file;  // --local only: reference lightmap EXR (RGBA)
 
   // Remote only.
   remote::ConnectionOptions connection;
@@ -29,6 +30,7 @@ struct BakeArgs {
   uint32_t snapshot_max_side = 0;  // PNG snapshot longest side; 0: the daemon's default
   std::string snapshots_dir;       // write snapshots while watching
   std::string idempotency_key;
+  std::string reference_bake;      // a finished bake on the daemon whose lightmap is the reference
   bool detach = false;             // print the bake id and return after SubmitBake
 
   // Options given on the command line that only one path understands; the

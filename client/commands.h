@@ -21,5 +21,7 @@ int run_list(const std::vector<std::string>& args);
 int run_watch(const std::vector<std::string>& args);
 int run_cancel(const std::vector<std::string>& args);
 int run_fetch(const std::vector<std::string>& args);
+// `luxel report DIR|BAKE`: error against time (report.cpp; a folder or luxeld).
+int run_report(const std::vector<std::string>& args);
 
 }  // namespace luxel::cli

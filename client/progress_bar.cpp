@@ -20,9 +20,11 @@ void draw_progress_bar(const ProgressView& p, bool tty, const std::string& label
   const int filled = static_cast<int>(fraction * width + 0.5);
   std::string bar(static_cast<size_t>(filled), '#');
   bar.resize(width, '.');
-  std::fprintf(stdout, "%s%s%s[%s] %5.1f%%  spp %.1f (min %u)  error %.4f  %s elapsed  ETA %s%s",
+  const std::string vs_reference =
+      p.rmse >= 0 ? strprintf("  rmse %.4g relmse %.3g", p.rmse, p.rel_mse) : std::string();
+  std::fprintf(stdout, "%s%s%s[%s] %5.1f%%  spp %.1f (min %u)  error %.4f%s  %s elapsed  ETA %s%s",
                tty ? "\r" : "", label.c_str(), label.empty() ? "" : " ", bar.c_str(),
-               100.0 * fraction, p.mean_spp, p.min_spp, p.error,
+               100.0 * fraction, p.mean_spp, p.min_spp, p.error, vs_reference.c_str(),
                format_duration(p.elapsed_s).c_str(), format_duration(p.eta_s).c_str(),
                tty ? "   " : "\n");
   std::fflush(stdout);

@@ -14,6 +14,8 @@ struct ProgressView {
   double error = 0;      // mean relative standard error
   double elapsed_s = 0;  // seconds of tracing
   double eta_s = -1;     // seconds left, -1 unknown
+  double rmse = -1;      // against a reference lightmap, -1 without one
+  double rel_mse = -1;
 };
 
 // "42s", "3m05s", "1h02m"; "--" for a negative (unknown) duration.

@@ -18,6 +18,8 @@ PACKAGES=(
   # tests
   googletest libgtest-dev libgmock-dev
   python3 python3-numpy
+  # `luxel report --plot` and the benchmark suite's plots
+  python3-matplotlib
 )
 
 missing=()

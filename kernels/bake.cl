@@ -617,13 +617,23 @@ __kernel void accum_stats(LuxBakeParams params, __global const uint* covered,
                           __global const float4* mean_buf, __global const float4* m2_buf,
                           __global const float2* weight_buf, __global const uint* texel_spp,
                           __global LuxAccumStats* partials, __local float* l_err,
-                          __local uint* l_min) {
+                          __local uint* l_min, __global const float4* reference,
+                          uint has_reference, __local float2* l_ref) {
   const uint gid = (uint)get_global_id(0), lid = (uint)get_local_id(0);
   const uint lsize = (uint)get_local_size(0);
   float err = 0.0f;
+  float2 ref_err = (float2)(0.0f);
   uint spp = 0xFFFFFFFFu;
   if (gid < params.covered_count) {
     const uint texel = covered[gid];
+    if (has_reference) {
+      const float3 d = mean_buf[texel].xyz - reference[texel].xyz;
+      const float3 r = reference[texel].xyz;
+      const float3 d2 = d * d;
+      ref_err = (float2)((d2.x + d2.y + d2.z) / 3.0f,
+                         (d2.x / (r.x * r.x + 1e-2f) + d2.y / (r.y * r.y + 1e-2f) +
+                          d2.z / (r.z * r.z + 1e-2f)) / 3.0f);
+    }
     spp = texel_spp[texel];
     const float2 w = weight_buf[texel];
     if (spp < 2u || !(w.x > 0.0f)) {
@@ -638,11 +648,13 @@ __kernel void accum_stats(LuxBakeParams params, __global const uint* covered,
   }
   l_err[lid] = err;
   l_min[lid] = spp;
+  l_ref[lid] = ref_err;
   barrier(CLK_LOCAL_MEM_FENCE);
   for (uint stride = lsize / 2; stride > 0; stride >>= 1) {
     if (lid < stride) {
       l_err[lid] += l_err[lid + stride];
       l_min[lid] = min(l_min[lid], l_min[lid + stride]);
+      l_ref[lid] += l_ref[lid + stride];
     }
     barrier(CLK_LOCAL_MEM_FENCE);
   }
@@ -652,7 +664,7 @@ __kernel void accum_stats(LuxBakeParams params, __global const uint* covered,
     s.error_texels = 0;
     s.min_spp = l_min[0];
     s.pad = 0;
-    s.pad2 = (float4)(0.0f);
+    s.reference = (float4)(l_ref[0], 0.0f, 0.0f);
     partials[get_group_id(0)] = s;
   }
 }

@@ -55,6 +55,9 @@ luxel::v1::BakeSettings to_proto(const BakeArgs& a) {
     p.set_solver(pipeline::solver_name(s.encodings.solver));
     p.set_acceleration(s.encodings.acceleration);
   }
+  if (!a.reference_bake.empty()) p.set_reference_bake_id(a.reference_bake);
+  if (s.target_metric != pipeline::ErrorMetric::kEstimate)
+    p.set_target_metric(pipeline::error_metric_name(s.target_metric));
   p.set_paths_per_iteration(s.paths_per_iteration);
   p.set_dilation_texels(static_cast<uint32_t>(std::max(s.dilation_texels, 0)));
   p.set_priority(a.priority);

@@ -78,6 +78,8 @@ ProgressView progress_view(const luxel::v1::BakeProgress& p) {
   v.error = p.error();
   v.elapsed_s = p.elapsed_s();
   v.eta_s = p.eta_s();
+  v.rmse = p.rmse();
+  v.rel_mse = p.rel_mse();
   return v;
 }
 

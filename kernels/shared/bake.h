@@ -91,7 +91,10 @@ typedef struct LuxAccumStats {
   uint error_texels;   /* texels that contributed to rel_error_sum */
   uint min_spp;
   uint pad;
-  float4 pad2;         /* keeps the struct 32 bytes */
+  /* With a reference lightmap (benchmark mode, DESIGN.md "Accuracy"):
+   * x = sum over covered texels of the mean over RGB of (x - ref)^2,
+   * y = the same of (x - ref)^2 / (ref^2 + 1e-2) (relMSE); z, w unused. */
+  float4 reference;
 } LuxAccumStats;
 
 /* ---- Directional encodings (issue 5; thesis §3.4 "Accumulation into Linear

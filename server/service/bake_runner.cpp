@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "pipeline/bake.h"
+#include "output/exr.h"
 #include "pipeline/bake_outputs.h"
 #include "scene/gltf_import.h"
 #include "service/files.h"
@@ -135,6 +136,19 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   ServiceBakeOptions opts;
   auto settings = to_engine_settings(info->settings(), options_.limits, &opts);
   if (!settings) return finish_failed(bake_id, settings.status());
+  if (const std::string& ref = info->settings().reference_bake_id(); !ref.empty()) {
+    // Benchmark mode: the reference bake's irradiance.exr (RGBA).
+    auto image = output::read_exr(bakes_.results_dir(ref) + "/irradiance.exr");
+    if (!image)
+      return finish_failed(bake_id, invalid_argument(strprintf(
+          "settings.reference_bake_id: cannot read the result of bake %s: %s", ref.c_str(),
+          image.status().message().c_str())));
+    if (image->channels != 4)
+      return finish_failed(bake_id, invalid_argument(strprintf(
+          "settings.reference_bake_id: bake %s's lightmap has %d channels, expected RGBA", ref.c_str(),
+          image->channels)));
+    settings->reference = std::make_shared<const std::vector<float>>(std::move(image->pixels));
+  }
   auto scene_info = scenes_.get(info->scene_id());
   if (!scene_info) return finish_failed(bake_id, scene_info.status());
   auto scene = scene::import_gltf_file(scenes_.main_file_path(scene_info.value()));

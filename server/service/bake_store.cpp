@@ -126,6 +126,8 @@ Result<BakeStore::Created> BakeStore::create(const std::string& scene_id,
   *info.mutable_settings() = settings;
   info.set_state(v1::BAKE_STATE_QUEUED);
   info.mutable_progress()->set_eta_s(-1);
+  info.mutable_progress()->set_rmse(-1);
+  info.mutable_progress()->set_rel_mse(-1);
   info.set_submitted_at(unix_now());
   info.set_idempotency_key(idempotency_key);
   {

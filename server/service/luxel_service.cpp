@@ -163,6 +163,15 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
   if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
   if (!scenes_.contains(req->scene_id()))
     return {grpc::StatusCode::NOT_FOUND, strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
+  if (const std::string& ref = req->settings().reference_bake_id(); !ref.empty()) {
+    if (auto st = check_id(ref, "settings.reference_bake_id", 32); !st.ok()) return st;
+    auto ref_info = bakes_.get(ref);
+    if (!ref_info)
+      return invalid(strprintf("settings.reference_bake_id: no bake '%s'", ref.c_str()));
+    if (ref_info->state() != v1::BAKE_STATE_SUCCEEDED)
+      return invalid(strprintf("settings.reference_bake_id: bake %s is %s; a reference must have SUCCEEDED",
+                               ref.c_str(), v1::BakeState_Name(ref_info->state()).c_str()));
+  }
   if (Status st = queue_.check_room(); !st.is_ok()) return to_grpc(st);
   auto created = bakes_.create(req->scene_id(), req->settings(), req->idempotency_key());
   if (!created) return to_grpc(created.status());

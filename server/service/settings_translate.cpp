@@ -92,6 +92,17 @@ Result<pipeline::BakeSettings> to_engine_settings(const v1::BakeSettings& in,
     s.encodings.solver = solver.value();
   }
   if (in.acceleration() != 0) s.encodings.acceleration = in.acceleration();
+  if (!in.reference_bake_id().empty()) {
+    // The pixels are loaded by the runner (it has the bake store); an empty
+    // placeholder keeps validation of target_metric meaningful here.
+    s.reference = std::make_shared<const std::vector<float>>();
+    s.reference_name = "bake " + in.reference_bake_id();
+  }
+  if (!in.target_metric().empty()) {
+    auto metric = pipeline::parse_error_metric(in.target_metric());
+    if (!metric) return bad("target_metric", metric.status().message());
+    s.target_metric = metric.value();
+  }
   if (in.dilation_texels() != 0) {
     if (in.dilation_texels() > 64)
       return bad("dilation_texels", strprintf("must be in [0, 64], got %u", in.dilation_texels()));
@@ -131,6 +142,8 @@ v1::BakeProgress to_proto(const pipeline::BakeProgress& p) {
   out.set_error(p.error);
   out.set_eta_s(p.eta_s);
   out.set_fraction(p.fraction);
+  out.set_rmse(p.rmse);
+  out.set_rel_mse(p.rel_mse);
   return out;
 }
 

@@ -39,7 +39,7 @@ Json instance_to_json(const Manifest::Instance& in) {
 
 Json stats_to_json(const Manifest::Stats& s) {
   // nlohmann writes non-finite doubles as null.
-  return Json{{"seconds", s.seconds},
+  Json j{{"seconds", s.seconds},
               {"paths", s.paths},
               {"mean_spp", s.mean_spp},
               {"min_spp", s.min_spp},
@@ -47,6 +47,11 @@ Json stats_to_json(const Manifest::Stats& s) {
               {"nonfinite_dropped", s.nonfinite_dropped},
               {"termination", s.termination},
               {"covered_texels", static_cast<uint64_t>(s.covered_texels)}};
+  if (s.rmse >= 0) {
+    j["rmse"] = s.rmse;
+    j["rel_mse"] = s.rel_mse;
+  }
+  return j;
 }
 
 Json to_json(const Manifest& m) {
@@ -236,6 +241,10 @@ Status read_stats(const Json& j, const std::string& what, Manifest::Stats& s) {
   LUXEL_RETURN_IF_ERROR(f.string("termination", s.termination));
   LUXEL_RETURN_IF_ERROR(f.unsigned64("covered_texels", covered));
   s.covered_texels = static_cast<size_t>(covered);
+  if (j.contains("rmse")) {
+    LUXEL_RETURN_IF_ERROR(f.real("rmse", s.rmse));
+    LUXEL_RETURN_IF_ERROR(f.real("rel_mse", s.rel_mse));
+  }
   return Status::ok();
 }
 

@@ -57,6 +57,7 @@ struct DeviceBuffers {
   device::Buffer mean, m2, weight, spp, nonfinite, stats;
   // Directional encodings (placeholders without them)
   device::Buffer basis_samples, encodings, basis_dirs, basis_state;
+  device::Buffer reference;  // benchmark mode (placeholder without a reference)
 };
 
 class Baker {
@@ -73,6 +74,15 @@ class Baker {
   Status build_kernels();
   Status run_iteration(uint32_t batch);
   Status compute_stats(BakeProgress& p);
+  // The measure target_error applies to.
+  double tracked_error(const BakeProgress& p) const {
+    switch (settings_.target_metric) {
+      case ErrorMetric::kRmse: return p.rmse;
+      case ErrorMetric::kRelMse: return p.rel_mse;
+      case ErrorMetric::kEstimate: break;
+    }
+    return p.error;
+  }
   Status read_result(BakeResult& r);
   Status read_state(BakeCheckpoint& c);
   Status restore_state(const BakeCheckpoint& c);
@@ -294,6 +304,18 @@ Status Baker::allocate_work_buffers() {
   auto dirs = upload_or_placeholder(plan_.directions, "basis directions");
   if (!dirs) return dirs.status();
   b_.basis_dirs = std::move(dirs.value());
+  if (settings_.reference) {
+    if (settings_.reference->size() != t * 4)
+      return invalid_argument(strprintf(
+          "settings.reference: %zu values do not match the %ux%u lightmap (expected RGBA, %zu)",
+          settings_.reference->size(), params_.width, params_.height, t * 4));
+    auto ref = ctx_.upload(*settings_.reference, "reference lightmap");
+    if (!ref) return ref.status();
+    b_.reference = std::move(ref.value());
+    device_bytes_ += b_.reference.bytes();
+  } else {
+    LUXEL_RETURN_IF_ERROR(alloc(b_.reference, 16, "reference (unused)"));
+  }
   for (const device::Buffer* z : {&b_.mean, &b_.m2, &b_.weight, &b_.spp, &b_.nonfinite, &b_.basis_state})
     LUXEL_RETURN_IF_ERROR(fill_zero(*z));
 
@@ -425,17 +447,31 @@ Status Baker::compute_stats(BakeProgress& progress) {
                                   "accum_stats local error"));
   LUXEL_RETURN_IF_ERROR(device::cl_status(clSetKernelArg(k_stats_.get(), 8, kStatsGroup * sizeof(cl_uint), nullptr),
                                   "accum_stats local min"));
+  const cl_mem ref = b_.reference.get();
+  const cl_uint has_reference = settings_.reference ? 1u : 0u;
+  LUXEL_RETURN_IF_ERROR(device::cl_status(clSetKernelArg(k_stats_.get(), 9, sizeof ref, &ref),
+                                  "accum_stats reference"));
+  LUXEL_RETURN_IF_ERROR(device::cl_status(clSetKernelArg(k_stats_.get(), 10, sizeof has_reference, &has_reference),
+                                  "accum_stats reference flag"));
+  LUXEL_RETURN_IF_ERROR(device::cl_status(clSetKernelArg(k_stats_.get(), 11, kStatsGroup * sizeof(cl::float2), nullptr),
+                                  "accum_stats local reference"));
   LUXEL_RETURN_IF_ERROR(ctx_.launch(k_stats_, groups * kStatsGroup, kStatsGroup));
   std::vector<cl::LuxAccumStats> partials(groups);
   LUXEL_RETURN_IF_ERROR(ctx_.read(b_.stats, partials));
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
-  double err = 0;
+  double err = 0, sq = 0, rel = 0;
   uint32_t min_spp = 0xFFFFFFFFu;
   for (const auto& s : partials) {
     err += s.rel_error_sum;
+    sq += s.reference.x;
+    rel += s.reference.y;
     min_spp = std::min(min_spp, s.min_spp);
   }
   progress.error = err / static_cast<double>(params_.covered_count);
+  if (settings_.reference) {
+    progress.rmse = std::sqrt(sq / params_.covered_count);
+    progress.rel_mse = rel / params_.covered_count;
+  }
   progress.min_spp = min_spp;
   progress.paths = paths_done_;
   progress.mean_spp = static_cast<double>(paths_done_) / params_.covered_count;
@@ -549,9 +585,11 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
     const auto& s = hooks.resume->series;
-    for (size_t i = 0; i + 4 < s.size(); i += 5)
+    const size_t stride = hooks.resume->series_stride;
+    for (size_t i = 0; i + stride <= s.size(); i += stride)
       result.series.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2],
-                               static_cast<uint32_t>(s[i + 3]), s[i + 4]});
+                               static_cast<uint32_t>(s[i + 3]), s[i + 4],
+                               stride >= 7 ? s[i + 5] : -1.0, stride >= 7 ? s[i + 6] : -1.0});
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   result.setup_s = seconds_since(t_setup);
@@ -583,16 +621,21 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     if (settings_.time_budget_s > 0)
       consider(progress.elapsed_s / settings_.time_budget_s,
                std::max(0.0, settings_.time_budget_s - progress.elapsed_s));
-    if (settings_.target_error > 0 && progress.error > 0 && paths_done_ > 0) {
-      // Error falls as 1/sqrt(samples): samples needed = now * (err/target)^2.
-      const double needed = double(paths_done_) * std::pow(progress.error / settings_.target_error, 2);
+    const double tracked = tracked_error(progress);
+    if (settings_.target_error > 0 && tracked > 0 && paths_done_ > 0) {
+      // The estimate and RMSE fall as 1/sqrt(samples), relMSE as 1/samples:
+      // samples needed = now * (err/target)^p.
+      const double power = settings_.target_metric == ErrorMetric::kRelMse ? 1.0 : 2.0;
+      const double needed = double(paths_done_) * std::pow(tracked / settings_.target_error, power);
       consider(std::min(1.0, double(paths_done_) / needed),
                rate > 0 ? std::max(0.0, needed - paths_done_) / rate : -1);
     }
     progress.fraction = std::min(1.0, final_report ? 1.0 : fraction);
     progress.eta_s = final_report ? 0 : eta;
+    // The final report after a stopping rule repeats the last point: replace it.
+    if (!result.series.empty() && result.series.back().paths == progress.paths) result.series.pop_back();
     result.series.push_back({progress.elapsed_s, progress.paths, progress.mean_spp,
-                             progress.min_spp, progress.error});
+                             progress.min_spp, progress.error, progress.rmse, progress.rel_mse});
     last_report = Clock::now();
     if (on_progress && !on_progress(progress)) return false;
     return true;
@@ -619,7 +662,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       // The error rule needs the statistics; they cost one small kernel.
       auto keep_going = report(false);
       if (!keep_going) return keep_going.status();
-      if (settings_.target_error > 0 && progress.error <= settings_.target_error) {
+      if (settings_.target_error > 0 && tracked_error(progress) <= settings_.target_error) {
         why = Termination::kError;
         break;
       }
@@ -653,7 +696,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       state.elapsed_s = elapsed();
       for (const auto& e : result.series)
         state.series.insert(state.series.end(), {e.elapsed_s, double(e.paths), e.mean_spp,
-                                                 double(e.min_spp), e.error});
+                                                 double(e.min_spp), e.error, e.rmse, e.rel_mse});
       hooks.on_checkpoint(state);
       last_checkpoint = Clock::now();
       // A host that checkpoints to stop (daemon shutdown) cancels in the
@@ -673,6 +716,8 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   result.mean_spp = progress.mean_spp;
   result.min_spp = progress.min_spp;
   result.error = progress.error;
+  result.rmse = progress.rmse;
+  result.rel_mse = progress.rel_mse;
   device::FeatureSet reported = features_;
   for (const auto& [name, value] : tracer_->features().values()) reported.set(name, value);
   result.features = reported.describe();

@@ -31,6 +31,8 @@ struct BakeProgress {
   double mean_spp = 0;         // mean samples per covered texel
   uint32_t min_spp = 0;        // minimum over covered texels
   double error = 1;            // mean relative standard error over covered texels
+  double rmse = -1;            // with a reference: RMSE over covered texels and RGB (-1: none)
+  double rel_mse = -1;         // with a reference: mean (x - ref)^2 / (ref^2 + 1e-2) (-1: none)
   double eta_s = -1;           // estimated seconds left (-1: unknown)
   double fraction = 0;         // progress towards the nearest stopping rule, [0, 1]
   uint32_t iteration = 0;
@@ -46,6 +48,7 @@ struct ErrorSample {
   double mean_spp;
   uint32_t min_spp;
   double error;
+  double rmse = -1, rel_mse = -1;  // -1 without a reference
 };
 
 // One directional encoding of a finished bake (issue 5).
@@ -71,6 +74,7 @@ struct BakeResult {
   double mean_spp = 0;
   uint32_t min_spp = 0;
   double error = 1;
+  double rmse = -1, rel_mse = -1;  // against the reference, -1 without one
   uint64_t nonfinite_dropped = 0;
   std::vector<ErrorSample> series;
   std::vector<EncodedLightmap> encodings;  // directional encodings, in the requested order

@@ -22,10 +22,13 @@ output::Image to_image(int w, int h, int channels, const std::vector<float>& px)
 }
 
 std::string series_csv(const BakeResult& r) {
-  std::string s = "elapsed_s,paths,mean_spp,min_spp,rel_error\n";
-  for (const auto& e : r.series)
-    s += strprintf("%.6f,%llu,%.4f,%u,%.6g\n", e.elapsed_s,
+  // rmse / rel_mse: against the reference lightmap, empty without one.
+  std::string s = "elapsed_s,paths,mean_spp,min_spp,rel_error,rmse,rel_mse\n";
+  for (const auto& e : r.series) {
+    s += strprintf("%.6f,%llu,%.4f,%u,%.6g,", e.elapsed_s,
                    static_cast<unsigned long long>(e.paths), e.mean_spp, e.min_spp, e.error);
+    s += e.rmse >= 0 ? strprintf("%.6g,%.6g\n", e.rmse, e.rel_mse) : std::string(",\n");
+  }
   return s;
 }
 
@@ -67,6 +70,8 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.stats.mean_spp = result.mean_spp;
   m.stats.min_spp = result.min_spp;
   m.stats.error_estimate = result.error;
+  m.stats.rmse = result.rmse;
+  m.stats.rel_mse = result.rel_mse;
   m.stats.nonfinite_dropped = result.nonfinite_dropped;
   m.stats.termination = termination_name(result.termination);
   m.stats.covered_texels = result.covered_texels;

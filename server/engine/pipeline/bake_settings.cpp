@@ -6,6 +6,22 @@ namespace luxel::pipeline {
 
 const char* filter_name(Filter f) { return f == Filter::kGaussian ? "gaussian" : "box"; }
 
+const char* error_metric_name(ErrorMetric m) {
+  switch (m) {
+    case ErrorMetric::kEstimate: return "estimate";
+    case ErrorMetric::kRmse: return "rmse";
+    case ErrorMetric::kRelMse: return "relmse";
+  }
+  return "?";
+}
+
+Result<ErrorMetric> parse_error_metric(const std::string& name) {
+  for (auto m : {ErrorMetric::kEstimate, ErrorMetric::kRmse, ErrorMetric::kRelMse})
+    if (name == error_metric_name(m)) return m;
+  return invalid_argument(strprintf("unknown error metric '%s': expected estimate, rmse or relmse",
+                                    name.c_str()));
+}
+
 std::map<std::string, std::string> BakeSettings::describe() const {
   std::map<std::string, std::string> m;
   m["resolution"] = std::to_string(atlas.resolution);
@@ -13,6 +29,8 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["samples_per_texel"] = std::to_string(samples_per_texel);
   m["time_budget_s"] = strprintf("%g", time_budget_s);
   m["target_error"] = strprintf("%g", target_error);
+  if (target_metric != ErrorMetric::kEstimate) m["target_metric"] = error_metric_name(target_metric);
+  if (reference) m["reference"] = reference_name.empty() ? "given" : reference_name;
   m["max_bounces"] = std::to_string(max_bounces);
   m["rr_depth"] = std::to_string(rr_depth);
   m["paths_per_iteration"] = std::to_string(paths_per_iteration);
@@ -65,6 +83,12 @@ Status validate_settings(const BakeSettings& s) {
     return bad("time_budget_s", strprintf("must be >= 0, got %g", s.time_budget_s));
   if (!(s.target_error >= 0) || !std::isfinite(s.target_error))
     return bad("target_error", strprintf("must be >= 0, got %g", s.target_error));
+  if (s.target_metric != ErrorMetric::kEstimate && !s.reference)
+    return bad("target_metric", strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
+  if (s.reference) {
+    for (float v : *s.reference)
+      if (!std::isfinite(v)) return bad("reference", "contains a non-finite value");
+  }
   if (s.max_bounces < 0 || s.max_bounces > 64)
     return bad("max_bounces", strprintf("must be in [0, 64], got %d", s.max_bounces));
   if (s.rr_depth < 1 || s.rr_depth > 64)

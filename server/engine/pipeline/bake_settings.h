@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
+#include <vector>
 #include <string>
 
 #include "atlas/atlas.h"
@@ -16,6 +18,13 @@ namespace luxel::pipeline {
 
 enum class Filter { kBox, kGaussian };
 
+// What target_error is compared with: the reference-free estimate (mean
+// relative standard error), or, with a reference lightmap, RMSE or relMSE.
+enum class ErrorMetric { kEstimate, kRmse, kRelMse };
+const char* error_metric_name(ErrorMetric m);
+// "estimate", "rmse", "relmse"; INVALID_ARGUMENT otherwise.
+Result<ErrorMetric> parse_error_metric(const std::string& name);
+
 struct BakeSettings {
   atlas::AtlasSettings atlas;   // resolution or texel density
 
@@ -23,7 +32,14 @@ struct BakeSettings {
   // one must be set.
   uint32_t samples_per_texel = 256;  // every covered texel has at least this many
   double time_budget_s = 0;          // wall-clock seconds of path tracing
-  double target_error = 0;           // mean relative standard error over covered texels
+  double target_error = 0;           // stop when target_metric falls to this
+  ErrorMetric target_metric = ErrorMetric::kEstimate;
+  // Benchmark mode: a reference lightmap of the bake's size, RGBA float per
+  // texel, row 0 = top (as BakeResult::irradiance, e.g. a converged bake's
+  // irradiance.exr). Every progress report then carries RMSE and relMSE
+  // against it (DESIGN.md "Accuracy and error reporting").
+  std::shared_ptr<const std::vector<float>> reference;
+  std::string reference_name;  // where it came from (manifest, logs)
 
   int max_bounces = 4;          // indirect bounces after the texel point (0 = direct light only)
   int rr_depth = 3;             // Russian roulette from this vertex depth on

@@ -109,9 +109,10 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
       (!v1 && !r.vec(c.basis, texels_max * 64)))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
+  c.series_stride = v1 ? 5 : 7;
   const size_t texels = size_t{c.width} * c.height;
   if (c.mean.size() != texels || c.m2.size() != texels || c.weight.size() != texels ||
-      c.spp.size() != texels || c.series.size() % 5 != 0 || c.basis.size() % texels != 0)
+      c.spp.size() != texels || c.series.size() % c.series_stride != 0 || c.basis.size() % texels != 0)
     return corrupt("array sizes do not match the lightmap");
   return c;
 }

@@ -24,7 +24,8 @@ struct BakeCheckpoint {
   uint32_t iteration = 0;
   double elapsed_s = 0;           // tracing time before the checkpoint
   uint64_t nonfinite = 0;
-  std::vector<double> series;     // ErrorSample fields flattened, 5 per point
+  std::vector<double> series;     // ErrorSample fields flattened, series_stride per point
+  size_t series_stride = 7;       // 7 (with rmse, rel_mse); 5 in version-1 files
   std::vector<cl::float4> mean, m2;
   std::vector<cl::float2> weight;
   std::vector<uint32_t> spp;
