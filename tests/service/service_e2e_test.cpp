@@ -318,6 +318,46 @@ TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
   EXPECT_NE(bytes.find("ambient-dice9"), std::string::npos);
 }
 
+TEST_F(ServiceE2E, ReferenceBakeGivesTrueErrorInProgress) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  auto submit = [&](const v1::BakeSettings& settings, v1::BakeInfo* out) {
+    v1::SubmitBakeRequest req;
+    req.set_scene_id(scene_id);
+    *req.mutable_settings() = settings;
+    auto ctx = daemon_->context();
+    return stub->SubmitBake(ctx.get(), req, out);
+  };
+  v1::BakeInfo ref;
+  ASSERT_TRUE(submit(small_settings(64, 32), &ref).ok());
+  const v1::BakeInfo ref_done = wait_for_bake(*daemon_, ref.bake_id(), is_finished, std::chrono::seconds(60));
+  ASSERT_EQ(ref_done.state(), v1::BAKE_STATE_SUCCEEDED) << ref_done.error_message();
+
+  v1::BakeSettings settings = small_settings(16, 32);
+  settings.set_seed(9);
+  settings.set_reference_bake_id(ref.bake_id());
+  v1::BakeInfo bake;
+  ASSERT_TRUE(submit(settings, &bake).ok());
+  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+  EXPECT_GT(done.progress().rmse(), 0.0);
+  EXPECT_GT(done.progress().rel_mse(), 0.0);
+  std::string bytes, sha;
+  uint64_t total = 0;
+  ASSERT_TRUE(download(*daemon_, bake.bake_id(), "error_series.csv", &bytes, &sha, &total).ok());
+  EXPECT_EQ(bytes.rfind("elapsed_s,paths,mean_spp,min_spp,rel_error,rmse,rel_mse\n", 0), 0u) << bytes;
+  EXPECT_EQ(bytes.find(",,"), std::string::npos) << "every point carries rmse and rel_mse: " << bytes;
+
+  // A reference of another size fails the bake with a message naming it.
+  v1::BakeSettings other = small_settings(16, 64);
+  other.set_reference_bake_id(ref.bake_id());
+  ASSERT_TRUE(submit(other, &bake).ok());
+  const v1::BakeInfo failed = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  EXPECT_EQ(failed.state(), v1::BAKE_STATE_FAILED);
+  EXPECT_NE(failed.error_message().find("settings.reference"), std::string::npos) << failed.error_message();
+}
+
 TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {
   v1::SceneInfo scene;
   const std::string scene_id = upload_cornell(&scene);

@@ -185,6 +185,8 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
       {"settings.max_bounces", [](v1::BakeSettings& s) { s.set_max_bounces(99); }},
       {"settings.resolution", [](v1::BakeSettings& s) { s.set_resolution(1024); }},  // > --max-resolution
       {"settings.encoding", [](v1::BakeSettings& s) { s.set_encoding("sh9"); }},
+      {"settings.reference_bake_id", [](v1::BakeSettings& s) { s.set_reference_bake_id(std::string(32, 'a')); }},
+      {"settings.target_metric", [](v1::BakeSettings& s) { s.set_target_metric("rmse"); }},
       {"settings.solver", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_solver("magic"); }},
       {"settings.sg_sharpness", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_sg_sharpness(-2); }},
       {"settings.acceleration", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_acceleration(100); }},
