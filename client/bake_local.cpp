@@ -118,8 +118,9 @@ int run_bake(const std::vector<std::string>& args) {
                 static_cast<unsigned long long>(r.nonfinite_dropped));
   std::printf("memory     %.1f MiB on the device\n", r.peak_device_bytes / 1048576.0);
   for (const auto& e : r.encodings)
-    std::printf("encoding   %-15s %2d coefficients x RGB, running residual %.4g\n", e.name.c_str(),
-                e.count, e.residual_rms);
+    std::printf("encoding   %-15s %2d coefficients x RGB, %s\n", e.name.c_str(), e.count,
+                e.residual_rms >= 0 ? strprintf("running residual %.4g", e.residual_rms).c_str()
+                                    : "projection");
   if (!r.encodings.empty())
     std::printf("           basis state %zu bytes per texel on the device\n", r.basis_bytes_per_texel);
   std::printf("\nkernel timings (OpenCL profiling events)\n%s", r.kernel_table.c_str());

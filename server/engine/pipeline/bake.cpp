@@ -560,11 +560,13 @@ Status Baker::read_result(BakeResult& r) {
     e.name = plan_.encodings[k].name();
     e.count = plan_.table[k].count;
     e.coefficients = extract_coefficients(plan_, k, state.basis, t);
-    e.manifest_json = plan_.encodings[k].describe_json(e.name + ".exr", settings_.encodings.acceleration);
     double residual = 0;
     for (uint32_t texel : info_.covered_texels)
       residual += std::sqrt(std::max(0.0f, state.basis[size_t{texel} * plan_.stride + plan_.table[k].state_offset].y));
-    e.residual_rms = residual / std::max<size_t>(1, info_.covered_texels.size());
+    const bool progressive = plan_.table[k].solver != LUX_SOLVER_PROJECTION;
+    e.residual_rms = progressive ? residual / std::max<size_t>(1, info_.covered_texels.size()) : -1.0;
+    e.manifest_json = plan_.encodings[k].describe_json(e.name + ".exr", settings_.encodings.acceleration,
+                                                       progressive ? e.residual_rms : -1.0);
     r.encodings.push_back(std::move(e));
   }
   return Status::ok();

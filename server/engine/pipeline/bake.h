@@ -57,7 +57,8 @@ struct EncodedLightmap {
   int count = 0;                    // coefficients per colour channel
   std::vector<float> coefficients;  // texel-major, count * RGB (lobe-major), row 0 = top
   std::string manifest_json;        // basis, frame, solver (without the file entry)
-  double residual_rms = 0;          // mean over covered texels of the running residual (luminance)
+  double residual_rms = -1;         // progressive solvers: mean over covered texels of the running
+                                    // residual RMS (luminance); -1 for projection
 };
 
 struct BakeResult {

@@ -61,7 +61,8 @@ Status validate_encodings(const EncodingSettings& e) {
   return Status::ok();
 }
 
-std::string Encoding::describe_json(const std::string& file, float acceleration) const {
+std::string Encoding::describe_json(const std::string& file, float acceleration,
+                                    double residual_rms) const {
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(basis.describe().to_json());
   j["frame"] = tangent_frame
                    ? "tangent: z = interpolated shading normal, x = surface direction of "
@@ -71,6 +72,8 @@ std::string Encoding::describe_json(const std::string& file, float acceleration)
   if (solver != EncodingSolver::kProjection) j["acceleration"] = acceleration;
   j["quantity"] = "incident radiance L(w) in W/(m^2 sr); reconstructed irradiance is in W/m^2 "
                   "like irradiance.exr";
+  if (residual_rms >= 0)
+    j["residual_rms"] = residual_rms;  // mean over covered texels of the running RMS of delta (luminance)
   j["file"] = file;
   j["channels"] = strprintf("c00.R .. c%02d.B: coefficient i of each colour channel",
                             basis.size() - 1);

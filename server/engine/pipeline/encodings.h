@@ -57,7 +57,8 @@ struct Encoding {
   bool tangent_frame;
   std::string name() const { return basis.describe().name; }
   // The manifest entry: basis description plus frame, solver and file.
-  std::string describe_json(const std::string& file, float acceleration) const;
+  // residual_rms < 0: not recorded (projection solver).
+  std::string describe_json(const std::string& file, float acceleration, double residual_rms) const;
 };
 
 struct EncodingPlan {
