@@ -1,0 +1,436 @@
+#!/usr/bin/env python3
+"""Compare Luxel and Blender Cycles lightmaps written by run_peer_bench.sh.
+
+  /usr/bin/python3 tests/bench/peers/compare.py OUT
+
+Reads OUT/<scene>/{settings.json, luxel_ref/, luxel/s<N>/, blender/, hires/}
+for every scene directory, prints Markdown tables (agreement, error ladders,
+time to equal error, speed ratios) and writes OUT/summary.json,
+OUT/<scene>/errors.csv and, with matplotlib, OUT/<scene>/error_vs_time.png.
+
+Conventions (README.md next to this file):
+  * both images hold irradiance E in W/m^2 (Blender's pass already x pi),
+    row 0 = top = TEXCOORD_1 v = 0;
+  * compared texels ("interior"): Luxel coverage alpha == 1 whose 8
+    neighbours also have alpha == 1 (no chart borders, no texel shared by two
+    charts), baked by Blender (alpha > 0);
+  * "matched" texels: interior texels minus those where the two converged
+    maps differ by more than 5 sigma and 1 % (sigma from both renderers'
+    noise). Those are texels crossed by a contact-shadow edge, where Cycles'
+    sub-texel jitter does not average the texel's area like Luxel's box
+    filter does (shown by the 256^2 bakes in hires/, box-filtered to the
+    comparison resolution);
+  * errors are over RGB (every channel of every compared texel):
+        RMSE   = sqrt(mean((x - ref)^2))                    (W/m^2)
+        relMSE = mean((x - ref)^2 / (ref^2 + 1e-2))
+    against the shared reference = Luxel at settings["ref_spp"], seed 1
+    (independent of the ladders: Luxel ladder seed 2, Cycles seeds 3, 1, 2).
+    The reference's own noise (Luxel's rel_error.exr times the reference
+    value, per texel) is subtracted from both measures; raw values are in
+    errors.csv.
+"""
+import csv
+import json
+import math
+import os
+import sys
+
+import numpy as np
+
+try:
+    import OpenImageIO as oiio
+except ImportError:  # pragma: no cover
+    sys.exit("compare.py: needs python3-openimageio (tests/bench/peers/install-blender.sh)")
+
+EPS = 1e-2
+LUM = np.array([0.2126, 0.7152, 0.0722])
+
+
+def read_exr(path):
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise SystemExit(f"cannot read {path}: {oiio.geterror()}")
+    a = np.asarray(inp.read_image("float"), np.float64)
+    inp.close()
+    return a if a.ndim == 3 else a[..., None]
+
+
+def box3(a):
+    """3x3 box sum (zero outside)"""
+    pad = np.pad(a, 1)
+    h, w = a.shape
+    return sum(pad[dy:dy + h, dx:dx + w] for dy in range(3) for dx in range(3))
+
+
+def interior_mask(alpha):
+    full = (alpha >= 1.0 - 1e-6).astype(np.float64)
+    return box3(full) > 8.5
+
+
+def components(mask):
+    """4-connected components of mask: label image (0 = background), count."""
+    lab = np.zeros(mask.shape, np.int32)
+    n = 0
+    h, w = mask.shape
+    for y0, x0 in zip(*np.nonzero(mask)):
+        if lab[y0, x0]:
+            continue
+        n += 1
+        stack = [(y0, x0)]
+        lab[y0, x0] = n
+        while stack:
+            y, x = stack.pop()
+            for yy, xx in ((y - 1, x), (y + 1, x), (y, x - 1), (y, x + 1)):
+                if 0 <= yy < h and 0 <= xx < w and mask[yy, xx] and not lab[yy, xx]:
+                    lab[yy, xx] = n
+                    stack.append((yy, xx))
+    return lab, n
+
+
+class Ref:
+    def __init__(self, d):
+        self.img = read_exr(os.path.join(d, "irradiance.exr"))
+        self.rgb = self.img[..., :3]
+        rel = read_exr(os.path.join(d, "rel_error.exr"))[..., 0]
+        self.var = (rel[..., None] * self.rgb) ** 2   # noise variance of the reference mean
+        self.manifest = json.load(open(os.path.join(d, "manifest.json")))
+
+
+def errors(x, ref_rgb, ref_var, mask):
+    r = ref_rgb[mask]
+    d2 = (x[mask][:, :3] - r) ** 2
+    w = 1.0 / (r * r + EPS)
+    vr = ref_var[mask]
+    mse, rel = d2.mean(), (d2 * w).mean()
+    return {"rmse_raw": math.sqrt(mse), "relmse_raw": rel,
+            "rmse": math.sqrt(max(mse - vr.mean(), 0.0)),
+            "relmse": max(rel - (vr * w).mean(), 0.0)}
+
+
+def time_at(points, level):
+    """log-log interpolation of the time at an error level on a ladder
+    [(time, error)]; errors made monotone (running minimum in time order).
+    None outside the ladder's range."""
+    pts = sorted(points)
+    t = np.log([p[0] for p in pts])
+    e = np.minimum.accumulate(np.log([max(p[1], 1e-30) for p in pts]))
+    le = math.log(level)
+    if le > e[0] or le < e[-1]:
+        return None
+    keep = np.concatenate([[True], np.diff(e) < 0])
+    return float(math.exp(np.interp(le, e[keep][::-1], t[keep][::-1])))
+
+
+def speed_table(luxel, blender, nlev=5):
+    """common error levels over the overlap of both ladders -> t_Cycles / t_Luxel"""
+    if not luxel or not blender:
+        return {"levels": [], "note": "no ladder"}
+    el, eb = [p[1] for p in luxel], [p[1] for p in blender]
+    lo, hi = max(min(el), min(eb)), min(max(el), max(eb))
+    if not lo < hi:
+        return {"levels": [], "note": "error ranges do not overlap"}
+    rows = []
+    for lev in np.exp(np.linspace(math.log(hi), math.log(lo), nlev)):
+        tl, tb = time_at(luxel, lev), time_at(blender, lev)
+        if tl and tb:
+            rows.append({"error": float(lev), "luxel_s": tl, "blender_s": tb, "ratio": tb / tl})
+    gm = math.exp(np.mean([math.log(r["ratio"]) for r in rows])) if rows else None
+    return {"levels": rows, "geomean_ratio": gm}
+
+
+def fmt(x, nd=3):
+    if x is None:
+        return "-"
+    if isinstance(x, str):
+        return x
+    if isinstance(x, (int, np.integer)):
+        return str(x)
+    if x == 0:
+        return "0"
+    a = abs(x)
+    if a >= 1000 or a < 1e-3:
+        return f"{x:.{nd - 1}e}"
+    if a < 1:
+        return f"{x:.{nd}g}"
+    return f"{x:.{max(nd - 1 - int(math.log10(a)), 0)}f}"
+
+
+def md_table(head, rows):
+    out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    out += ["| " + " | ".join(fmt(c) for c in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def agreement(R, B, vR, vB, lab_mask, lab):
+    """R, B: (n, 3) converged maps over the texels; vR, vB their noise variances"""
+    d = B - R
+    noise = (vR + vB).mean()
+    charts = []
+    for k in np.unique(lab_mask):
+        m = lab_mask == k
+        if m.sum() < 4:
+            continue
+        rl, bl = R[m] @ LUM, B[m] @ LUM
+        se = math.sqrt((vR[m] @ LUM ** 2).sum() + (vB[m] @ LUM ** 2).sum()) / max(rl.sum(), 1e-30)
+        ys, xs = np.nonzero(lab == k)
+        charts.append({"chart": int(k), "texels": int(m.sum()), "rows": f"{ys.min()}-{ys.max()}",
+                       "cols": f"{xs.min()}-{xs.max()}", "luxel_E": float(rl.mean()),
+                       "blender_E": float(bl.mean()), "ratio": float(bl.sum() / max(rl.sum(), 1e-30)),
+                       "ratio_se": se})
+    return {"texels": int(len(R)), "mean_E_luxel": R.mean(0).tolist(), "mean_E_blender": B.mean(0).tolist(),
+            "ratio_rgb": (B.sum(0) / R.sum(0)).tolist(),
+            "ratio_se_rgb": (np.sqrt(vR.sum(0) + vB.sum(0)) / R.sum(0)).tolist(),
+            "mse_over_noise": float((d * d).mean() / noise) if noise > 0 else None,
+            "diff_rms_rel": math.sqrt(max((d * d).mean() - noise, 0.0)) / float(R.mean()),
+            "charts": charts}
+
+
+def hires_check(sdir, res, ref_rgb, bhi, flagged):
+    """Luxel and Cycles at 4x the resolution, box-filtered down, on the flagged texels"""
+    hd = os.path.join(sdir, "hires")
+    if not os.path.isdir(hd) or not flagged.any():
+        return None
+    st = json.load(open(os.path.join(hd, "settings.json")))
+    k = st["resolution"] // res
+
+    def down(a):
+        return a[..., :3].reshape(res, k, res, k, 3).mean(axis=(1, 3))
+
+    lh = down(read_exr(os.path.join(hd, "luxel", "irradiance.exr")))
+    bh = down(read_exr(os.path.join(hd, "blender", f"blender_s{st['blender_spp']}_seed1.exr")))
+    f = flagged
+    vals = {"luxel": ref_rgb[f] @ LUM, "cycles": bhi[f] @ LUM,
+            "luxel_hires": lh[f] @ LUM, "cycles_hires": bh[f] @ LUM}
+    base = vals["luxel_hires"]
+
+    def rel_rms(v):
+        return float(np.sqrt(np.mean((v - base) ** 2)) / np.mean(base))
+
+    return {"resolution": st["resolution"], "factor": k, "spp": st, "texels": int(f.sum()),
+            "mean": {key: float(v.mean()) for key, v in vals.items()},
+            "rms_vs_luxel_hires": {key: rel_rms(v) for key, v in vals.items()}}
+
+
+def analyse(sdir):
+    st = json.load(open(os.path.join(sdir, "settings.json")))
+    name = st["name"]
+    ref = Ref(os.path.join(sdir, "luxel_ref"))
+    bj = json.load(open(os.path.join(sdir, "blender", "blender.json")))
+    bdir = os.path.join(sdir, "blender")
+    hi_spp = st["blender_hi"]
+    b1 = read_exr(os.path.join(bdir, f"blender_s{hi_spp}_seed1.exr"))
+    b2 = read_exr(os.path.join(bdir, f"blender_s{hi_spp}_seed2.exr"))
+    mask = interior_mask(ref.img[..., 3]) & (b1[..., 3] > 0) & (b2[..., 3] > 0)
+    covered = int((ref.img[..., 3] > 0).sum())
+
+    # ---- converged maps: agreement ---------------------------------------
+    bhi = 0.5 * (b1[..., :3] + b2[..., :3])
+    bvar = (b1[..., :3] - b2[..., :3]) ** 2 / 4.0        # var of bhi, 1-dof estimate per texel
+    # flag texels whose difference exceeds the noise: sigma^2 from a 3x3
+    # neighbourhood average of Cycles' variance (9 dof) plus Luxel's estimate
+    m_f = mask.astype(np.float64)
+    bvar_l = bvar @ LUM ** 2
+    bvar_s = box3(bvar_l * m_f) / np.maximum(box3(m_f), 1)
+    sig = np.sqrt(bvar_s + ref.var @ LUM ** 2)
+    dl = np.abs((bhi - ref.rgb) @ LUM)
+    flagged = mask & (dl > 5 * sig) & (dl > 0.01 * (ref.rgb @ LUM))
+    matched = mask & ~flagged
+    lab, _ = components(mask)
+    agree = {"texels_covered": covered, "ref_spp": st["ref_spp"], "blender_spp": f"2 x {hi_spp}",
+             "flagged": int(flagged.sum())}
+    for key, m in (("interior", mask), ("matched", matched)):
+        agree[key] = agreement(ref.rgb[m], bhi[m], ref.var[m], bvar[m], lab[m], lab)
+    agree["hires"] = hires_check(sdir, st["resolution"], ref.rgb, bhi, flagged)
+
+    # ---- ladders ----------------------------------------------------------
+    lux = []
+    for spp in st["luxel_ladder"]:
+        dd = os.path.join(sdir, "luxel", f"s{spp}")
+        man = json.load(open(os.path.join(dd, "manifest.json")))
+        img = read_exr(os.path.join(dd, "irradiance.exr"))
+        row = {"spp": spp, "trace_s": man["stats"]["seconds"],
+               "wall_s": float(open(os.path.join(dd, "wall_s.txt")).read()),
+               "paths": man["stats"]["paths"]}
+        for key, m in (("interior", mask), ("matched", matched)):
+            row[key] = errors(img, ref.rgb, ref.var, m)
+        lux.append(row)
+    bl = []
+    cold = (bj["startup_s"] or 0.0) + bj["import_s"] + bj["setup_s"]
+    for b in bj["bakes"]:
+        img = read_exr(os.path.join(bdir, b["file"]))
+        row = {"spp": b["samples"], "seed": b["seed"], "bake_s": b["seconds"],
+               "cold_s": cold + b["seconds"], "texels": int((img[..., 3] > 0).sum())}
+        for key, m in (("interior", mask), ("matched", matched)):
+            row[key] = errors(img, ref.rgb, ref.var, m)
+        if b["seed"] not in (1, 2):   # independent of Cycles' converged map (seeds 1, 2)
+            row["own"] = errors(img, bhi, bvar, mask)
+        bl.append(row)
+
+    speed = {}
+    if lux and bl:
+        for sel in ("interior", "matched"):
+            for meas in ("relmse", "rmse"):
+                speed[f"engine_{sel}_{meas}"] = speed_table(
+                    [(r["trace_s"], r[sel][meas]) for r in lux], [(r["bake_s"], r[sel][meas]) for r in bl])
+            speed[f"end_to_end_{sel}_relmse"] = speed_table(
+                [(r["wall_s"], r[sel]["relmse"]) for r in lux], [(r["cold_s"], r[sel]["relmse"]) for r in bl])
+        speed["own_relmse"] = speed_table(
+            [(r["trace_s"], r["interior"]["relmse"]) for r in lux],
+            [(r["bake_s"], r["own"]["relmse"]) for r in bl if "own" in r])
+        write_csv(sdir, lux, bl)
+        plot(sdir, name, st, lux, bl)
+    return {"name": name, "settings": st, "agreement": agree, "luxel": lux, "blender": bl,
+            "blender_overheads": {"startup_s": bj["startup_s"], "import_s": bj["import_s"],
+                                  "setup_s": bj["setup_s"], "warmup_s": bj.get("warmup_s")},
+            "luxel_ref_seconds": ref.manifest["stats"]["seconds"], "speed": speed}
+
+
+def write_csv(sdir, lux, bl):
+    with open(os.path.join(sdir, "errors.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["renderer", "spp", "seed", "seconds_engine", "seconds_end_to_end", "texels",
+                    "rmse", "relmse", "rmse_raw", "relmse_raw", "matched_rmse", "matched_relmse",
+                    "relmse_vs_own_converged"])
+        for r in lux:
+            i, m = r["interior"], r["matched"]
+            w.writerow(["luxel", r["spp"], 2, r["trace_s"], r["wall_s"], "", i["rmse"], i["relmse"],
+                        i["rmse_raw"], i["relmse_raw"], m["rmse"], m["relmse"], i["relmse"]])
+        for r in bl:
+            i, m = r["interior"], r["matched"]
+            w.writerow(["cycles", r["spp"], r["seed"], r["bake_s"], r["cold_s"], r["texels"],
+                        i["rmse"], i["relmse"], i["rmse_raw"], i["relmse_raw"], m["rmse"], m["relmse"],
+                        r["own"]["relmse"] if "own" in r else ""])
+
+
+def plot(sdir, name, st, lux, bl):
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    for sel, ls in (("matched", "-"), ("interior", "--")):
+        ax.loglog([r["trace_s"] for r in lux], [r[sel]["relmse"] for r in lux], "o" + ls, color="C0",
+                  label=f"Luxel, trace time ({sel})")
+        ax.loglog([r["bake_s"] for r in bl], [r[sel]["relmse"] for r in bl], "s" + ls, color="C1",
+                  label=f"Cycles, bake call ({sel})")
+    ax.loglog([r["wall_s"] for r in lux], [r["matched"]["relmse"] for r in lux], "o:", color="C2",
+              label="Luxel, process wall (matched)")
+    ax.loglog([r["cold_s"] for r in bl], [r["matched"]["relmse"] for r in bl], "s:", color="C3",
+              label="Cycles, + start and import (matched)")
+    ax.set_xlabel("seconds")
+    ax.set_ylabel("relMSE vs Luxel reference")
+    ax.set_title(f"{name}: {st['resolution']}², {st['bounces']} bounces")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(sdir, "error_vs_time.png"), dpi=100)
+    plt.close(fig)
+
+
+def report(res):
+    out = []
+    for r in res:
+        st, a = r["settings"], r["agreement"]
+        out.append(f"\n### {r['name']}: {st['resolution']}², {st['bounces']} bounces, "
+                   f"sky {st['sky'] or 'none'}\n")
+        out.append(f"Reference: Luxel {a['ref_spp']} spp, seed 1 ({fmt(r['luxel_ref_seconds'])} s "
+                   f"trace). Cycles converged: {a['blender_spp']} spp (seeds 1 and 2, averaged). "
+                   f"Texels: {a['texels_covered']} covered, {a['interior']['texels']} interior, "
+                   f"{a['flagged']} of them flagged (> 5σ and > 1 % apart), "
+                   f"{a['matched']['texels']} matched.\n")
+        rows = []
+        for sel in ("interior", "matched"):
+            g = a[sel]
+            for i, c in enumerate("RGB"):
+                rows.append([sel if i == 0 else "", c, g["mean_E_luxel"][i], g["mean_E_blender"][i],
+                             f"{g['ratio_rgb'][i]:.4f} ± {g['ratio_se_rgb'][i]:.4f}",
+                             f"{g['mse_over_noise']:.2f}" if i == 0 else "",
+                             f"{100 * g['diff_rms_rel']:.2f} %" if i == 0 else ""])
+        out.append(md_table(["texels", "ch.", "mean E Luxel (W/m²)", "mean E Cycles",
+                             "Cycles / Luxel ± 1σ", "MSD / noise var.", "RMS diff. beyond noise"],
+                            rows))
+        charts = a["interior"]["charts"]
+        if len(charts) > 1:
+            out.append("\nPer chart (interior texels, luminance):\n")
+            out.append(md_table(["chart", "texels", "rows", "cols", "E Luxel", "E Cycles",
+                                 "Cycles / Luxel ± 1σ"],
+                                [[c["chart"], c["texels"], c["rows"], c["cols"], c["luxel_E"],
+                                  c["blender_E"], f"{c['ratio']:.4f} ± {c['ratio_se']:.4f}"]
+                                 for c in charts]))
+        h = a.get("hires")
+        if h:
+            out.append(f"\nFlagged texels ({h['texels']}) against both renderers baked at "
+                       f"{h['resolution']}² and box-filtered {h['factor']}x{h['factor']} down "
+                       "(luminance; RMS relative to the mean of Luxel's filtered high-res map):\n")
+            out.append(md_table(["map", "mean E", "RMS diff. vs Luxel high-res"],
+                                [["Luxel " + str(st["resolution"]) + "²", h["mean"]["luxel"],
+                                  f"{100 * h['rms_vs_luxel_hires']['luxel']:.1f} %"],
+                                 ["Cycles " + str(st["resolution"]) + "²", h["mean"]["cycles"],
+                                  f"{100 * h['rms_vs_luxel_hires']['cycles']:.1f} %"],
+                                 [f"Luxel {h['resolution']}² filtered", h["mean"]["luxel_hires"], "0"],
+                                 [f"Cycles {h['resolution']}² filtered", h["mean"]["cycles_hires"],
+                                  f"{100 * h['rms_vs_luxel_hires']['cycles_hires']:.1f} %"]]))
+        if not r["luxel"]:
+            continue
+        o = r["blender_overheads"]
+        out.append(f"\nCycles costs outside the 'bake' column: Blender start {fmt(o['startup_s'])} s, "
+                   f"glTF import {fmt(o['import_s'])} s, material and bake setup "
+                   f"{fmt(o['setup_s'])} s, a first 1-spp warm-up bake {fmt(o['warmup_s'])} s "
+                   "(each later bake call repeats Cycles' scene sync and BVH build: it is in "
+                   "'bake s').\n")
+        out.append(md_table(["Luxel spp", "trace s", "process wall s", "Mpaths/s", "RMSE", "relMSE",
+                             "relMSE matched"],
+                            [[x["spp"], x["trace_s"], x["wall_s"], x["paths"] / x["trace_s"] / 1e6,
+                              x["interior"]["rmse"], x["interior"]["relmse"], x["matched"]["relmse"]]
+                             for x in r["luxel"]]))
+        out.append("")
+        out.append(md_table(["Cycles spp (seed)", "bake s", "+ start, import s", "Msamples/s", "RMSE",
+                             "relMSE", "relMSE matched", "relMSE vs own"],
+                            [[f"{x['spp']} ({x['seed']})", x["bake_s"], x["cold_s"],
+                              x["texels"] * x["spp"] / x["bake_s"] / 1e6, x["interior"]["rmse"],
+                              x["interior"]["relmse"], x["matched"]["relmse"],
+                              x["own"]["relmse"] if "own" in x else "-"]
+                             for x in r["blender"]]))
+        out.append("")
+        sp = r["speed"]
+        rows = []
+        for key, label in (
+                ("engine_matched_relmse", "**relMSE, matched texels, engine time** (Luxel trace vs Cycles bake call)"),
+                ("engine_matched_rmse", "RMSE, matched texels, engine time"),
+                ("engine_interior_relmse", "relMSE, all interior texels, engine time"),
+                ("end_to_end_matched_relmse", "relMSE, matched, end to end (Luxel process vs Blender start + import + bake)"),
+                ("own_relmse", "relMSE vs each renderer's own converged map, engine time")):
+            s = sp[key]
+            if not s["levels"]:
+                rows.append([label, "-", "-", s.get("note", "")])
+                continue
+            rs = [lv["ratio"] for lv in s["levels"]]
+            rows.append([label, f"{fmt(s['levels'][0]['error'])} .. {fmt(s['levels'][-1]['error'])}",
+                         f"{min(rs):.2f} .. {max(rs):.2f}", f"{s['geomean_ratio']:.2f}"])
+        out.append(md_table(["time to equal error: Cycles time / Luxel time (> 1: Luxel faster)",
+                             "error levels", "ratio range", "geo. mean"], rows))
+        s = sp["engine_matched_relmse"]
+        if s["levels"]:
+            out.append("")
+            out.append(md_table(["relMSE (matched)", "Luxel trace s", "Cycles bake s", "Cycles / Luxel"],
+                                [[lv["error"], lv["luxel_s"], lv["blender_s"], f"{lv['ratio']:.2f}"]
+                                 for lv in s["levels"]]))
+    return "\n".join(out)
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    root = sys.argv[1]
+    scenes = [d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, "settings.json"))]
+    scenes.sort(key=lambda s: (s != "sky_plane", s))
+    res = [analyse(os.path.join(root, s)) for s in scenes]
+    with open(os.path.join(root, "summary.json"), "w") as f:
+        json.dump(res, f, indent=1)
+    print(report(res))
+
+
+if __name__ == "__main__":
+    main()
