@@ -13,7 +13,12 @@
 #ifndef LUXEL_BAKE_SCATTER_H
 #define LUXEL_BAKE_SCATTER_H
 
+#include "bake/path.h"
 #include "bake/surface.h"
+#include "shading/bsdf.h"
+#include "shading/lights.h"
+#include "shading/texture.h"
+#include "shared/bake_args.h"
 
 #define LUX_DIM_TEXEL_SAMPLE 0u
 #define LUX_DIM_VERTEX(k) (1u + 5u * (k))
@@ -57,5 +62,72 @@ inline float3 lux_emission_at(const __global LuxMaterial* materials, int materia
   return e;
 }
 #endif
+
+/* Next-event estimation from surface s. `sensor`: vertex 0 (f = 1, cosine
+ * pdf). Otherwise the material's BSDF in the local frame (t, b, n), wo local.
+ * Writes the shadow ray and its unoccluded contribution (throughput applied). */
+inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
+                               LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
+                           const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t,
+                           float3 b, float3 n, float3 wo_local, float3 throughput, uint index,
+                           uint dim, uint seed, LuxRay* shadow_ray, float3* contribution) {
+  *shadow_ray = lux_no_ray();
+  *contribution = (float3)(0.0f);
+#if LUX_NEE
+  const float u_sel = lux_sample_1d(index, dim + LUX_DIM_LIGHT_SELECT, seed);
+  const float2 u_pt = lux_sample_2d(index, dim + LUX_DIM_LIGHT_POINT, seed);
+  LuxLightSample ls;
+  if (!lux_sample_light(lights, light_cdf, params.light_count, sky, sky_texels, sky_marginal,
+                        sky_conditional, s->p, u_sel, u_pt, &ls))
+    return;
+  if (!(ls.pdf > 0.0f) || dot(ls.wi, s->ng) <= 0.0f) return;
+  float3 radiance = ls.radiance;
+#if LUX_EMISSIVE_TEXTURE
+  if (ls.triangle >= 0) {
+    const LuxSurface e = lux_surface_at(tris, ls.triangle, ls.bary.x, ls.bary.y);
+    const LuxMaterial em = materials[e.material];
+    if (em.emissive_tex >= 0)
+      radiance *= lux_texture_sample(texels, textures[em.emissive_tex], e.uv).xyz;
+  }
+#endif
+  const float3 wi_local = lux_to_local(ls.wi, t, b, n);
+  const float cos_i = wi_local.z;
+  if (cos_i <= 0.0f) return;
+  /* MIS only for lights a BSDF ray can also reach (emissive triangles, the
+   * sky); the sun disc and punctual lights are NEE-only with weight 1. */
+  const int mis = !ls.is_delta && ls.mis;
+  float3 f_weighted;
+  if (sensor) {
+    const float w = mis ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;
+    f_weighted = (float3)(w);
+  } else {
+    f_weighted = (float3)(0.0f);
+    for (int layer = 0; layer < 2; ++layer) {
+      const float3 f = lux_bsdf_eval_layer(bsdf, layer, wo_local, wi_local);
+      if (lux_max3(f) <= 0.0f) continue;
+      const float w =
+          mis ? lux_power_heuristic(ls.pdf, lux_bsdf_pdf_layer(bsdf, layer, wo_local, wi_local))
+              : 1.0f;
+      f_weighted += f * w;
+    }
+  }
+  *contribution = throughput * f_weighted * radiance * (cos_i / ls.pdf);
+  const float3 org = lux_offset_origin(s->p, s->ng, ls.wi, params.offset_scale);
+  if (!isfinite(ls.dist)) {
+    *shadow_ray = lux_make_ray(org, ls.wi, INFINITY);
+    return;
+  }
+  /* Finite lights: aim at the light point pulled back off its own surface by
+   * the same robust offset (kernels/shared/ray_offset.h), so the shadow ray
+   * neither reaches the emitter itself nor depends on the scene's scale (a
+   * relative tmax margin fails at 1e-3 units, where the origin offset is
+   * larger than the margin). Direction unnormalised, tmax = 1. */
+  const float3 q = lux_offset_origin(s->p + ls.wi * ls.dist, -ls.wi, -ls.wi, params.offset_scale);
+  const float3 d = q - org;
+  /* Receiver and light point closer than the offsets (touching surfaces):
+   * nothing can lie between them. */
+  *shadow_ray = dot(d, ls.wi) > 0.0f ? lux_make_ray(org, d, 1.0f) : lux_no_ray();
+#endif
+}
 
 #endif /* LUXEL_BAKE_SCATTER_H */

@@ -69,7 +69,8 @@ typedef struct LuxPath {
   uint pad;
 } LuxPath;
 
-/* Per-bake constants passed by value to the bake kernels. 48 bytes. */
+/* Per-bake constants and the iteration's counts, passed by value to every
+ * bake kernel (kernels/shared/bake_args.h). 80 bytes. */
 typedef struct LuxBakeParams {
   uint width;
   uint height;
@@ -83,6 +84,13 @@ typedef struct LuxBakeParams {
   float clamp_luminance; /* 0 = off */
   uint paths;          /* paths in this iteration */
   float offset_scale;  /* ray-offset scale: min(1, scene extent) (bake/surface.h) */
+  ulong first_path;    /* paths traced before this iteration (texel domain, §3.4) */
+  uint capacity;       /* path slots of the batch buffers */
+  uint encoding_count; /* directional encodings (entries of the encodings table) */
+  uint basis_stride;   /* float4 of encoding state per texel */
+  float acceleration;  /* alpha of Eq. 7.14 (progressive solvers) */
+  uint has_reference;  /* 1: the reference buffer holds a lightmap (benchmark mode) */
+  uint pad;
 } LuxBakeParams;
 
 /* Per-work-group partial statistics of the accumulation buffer. */
@@ -97,7 +105,7 @@ typedef struct LuxAccumStats {
   float4 reference;
 } LuxAccumStats;
 
-/* ---- Directional encodings (issue 5; thesis §3.4 "Accumulation into Linear
+/* ---- Directional encodings (thesis §3.4 "Accumulation into Linear
  * Bases", Ch. 7-8). Compiled in only with LUX_BASIS. */
 
 /* Where the first segment of a path went and what direct light the texel

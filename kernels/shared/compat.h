@@ -39,6 +39,7 @@ struct alignas(16) uint4 {
   uint32_t x, y, z, w;
 };
 typedef uint32_t uint;
+typedef uint64_t ulong;
 inline float as_float(int32_t v) { float f; std::memcpy(&f, &v, 4); return f; }
 inline float as_float(uint32_t v) { float f; std::memcpy(&f, &v, 4); return f; }
 inline int32_t as_int(float v) { int32_t i; std::memcpy(&i, &v, 4); return i; }

@@ -157,6 +157,13 @@ Kernel::~Kernel() {
   if (k_) clReleaseKernel(k_);
 }
 
+Result<cl_uint> Kernel::num_args() const {
+  cl_uint n = 0;
+  LUXEL_RETURN_IF_ERROR(cl_status(clGetKernelInfo(k_, CL_KERNEL_NUM_ARGS, sizeof n, &n, nullptr),
+                                  "kernel '" + name_ + "' argument count"));
+  return n;
+}
+
 std::string Kernel::arg_what(cl_uint index) const {
   return strprintf("kernel '%s' argument %u", name_.c_str(), index);
 }

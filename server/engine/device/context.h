@@ -89,7 +89,8 @@ class Kernel {
     return st;
   }
 
- private:
+  // One argument: a Buffer passes its cl_mem, a trivially copyable value by
+  // value.
   Status set_arg(cl_uint index, const Buffer& b) {
     cl_mem m = b.get();
     return cl_status(clSetKernelArg(k_, index, sizeof m, &m), arg_what(index));
@@ -99,6 +100,10 @@ class Kernel {
   Status set_arg(cl_uint index, const T& v) {
     return cl_status(clSetKernelArg(k_, index, sizeof v, &v), arg_what(index));
   }
+  // The kernel's parameter count (CL_KERNEL_NUM_ARGS).
+  Result<cl_uint> num_args() const;
+
+ private:
   std::string arg_what(cl_uint index) const;
 
   cl_kernel k_ = nullptr;

@@ -1,0 +1,158 @@
+/* Stage 6, gather accumulation (thesis §3.2.2, Listing 3.2): one
+ * work-item per covered texel gathers its paths through the offset buffer.
+ * Device only. */
+#ifndef LUXEL_BAKE_ACCUMULATE_H
+#define LUXEL_BAKE_ACCUMULATE_H
+
+#include "bake/scatter.h"
+#include "primitives/offset_buffer.h"
+#include "shared/bake_args.h"
+#if LUX_BASIS
+#include "bake/basis.h"
+#endif
+
+/* One work-item per covered texel: exclusive access, so the running mean and
+ * variance use Welford's algorithm (weighted form, West 1979) without atomics.
+ * mean.w / m2.w track luminance, whose variance gives the error estimate.
+ * weight = (sum w, sum w^2); spp counts the texel's own paths (box sense),
+ * which also advances its sample sequence. A non-finite sample is dropped and
+ * counted, never accumulated. */
+inline float lux_filter_weight(float2 d) {
+#if LUX_FILTER_GAUSSIAN
+  /* PBRT's truncated Gaussian, radius 1.5 texels, alpha 2, separable. */
+  const float r = 1.5f, alpha = 2.0f;
+  const float edge = exp(-alpha * r * r);
+  const float wx = fmax(0.0f, exp(-alpha * d.x * d.x) - edge);
+  const float wy = fmax(0.0f, exp(-alpha * d.y * d.y) - edge);
+  return wx * wy;
+#else
+  return 1.0f;
+#endif
+}
+
+inline void lux_welford(float4 x, float w, float4* mean, float4* m2, float2* weight) {
+  const float w_new = (*weight).x + w;
+  const float4 delta = x - *mean;
+  *mean += delta * (w / w_new);
+  *m2 += w * delta * (x - *mean);
+  *weight = (float2)(w_new, (*weight).y + w * w);
+}
+
+/* One path's sample for the accumulator: its irradiance estimate and, in
+ * basis mode, the radiance along its first segment (l) and the texel point's
+ * light sample (nee, visibility applied). 0 when non-finite (dropped). The
+ * firefly clamp scales all three alike. */
+inline int lux_path_sample(__global const LuxPath* paths,
+                           __global const LuxBasisSample* basis_samples, uint p,
+                           float clamp_luminance, float3* irradiance, float3* l, float3* nee) {
+  *l = paths[p].radiance.xyz;
+#if LUX_BASIS
+  const LuxBasisSample bs = basis_samples[p];
+  *nee = bs.nee.xyz * bs.nee.w;
+  *irradiance = *l * (LUX_TWO_PI_F * bs.dir_world.w) + *nee * fmax(bs.nee_world.w, 0.0f);
+  if (!lux_finite3(*irradiance) || !lux_finite3(*nee)) return 0;
+#else
+  *nee = (float3)(0.0f);
+  *irradiance = *l;
+  if (!lux_finite3(*irradiance)) return 0;
+#endif
+  if (clamp_luminance > 0.0f) {
+    const float y = lux_luminance(*irradiance);
+    if (y > clamp_luminance) {
+      const float f = clamp_luminance / y;
+      *irradiance *= f;
+      *l *= f;
+      *nee *= f;
+    }
+  }
+  return 1;
+}
+
+#if LUX_BASIS
+#define LUX_BASIS_ADD(p, w)                                                                    \
+  do {                                                                                         \
+    const LuxBasisSample bs_ = basis_samples[p];                                               \
+    lux_basis_accumulate(basis_state + (size_t)texel * params.basis_stride, encodings,         \
+                         params.encoding_count, basis_dirs, &bs_, l, nee, (w),                 \
+                         params.acceleration);                                                 \
+  } while (0)
+#else
+#define LUX_BASIS_ADD(p, w)
+#endif
+
+inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
+  if (c >= params.covered_count) return;
+  const uint texel = covered[c];
+  uint first = 0, end = 0;
+  const int own = lux_offset_range(offsets, texel, params.texel_count, &first, &end);
+#if !LUX_FILTER_GAUSSIAN
+  if (!own) return;
+#endif
+  /* This texel's running state (the buffers are mean, m2, weight). */
+  float4 t_mean = mean[texel], t_m2 = m2[texel];
+  float2 t_weight = weight[texel];
+  uint dropped = 0;
+  const int tx = (int)(texel % params.width), ty = (int)(texel / params.width);
+#if LUX_FILTER_GAUSSIAN
+  /* Neighbours' paths within the radius, but only from the same instance
+   * and a similarly oriented surface: a filter must not carry light across
+   * a chart seam into a different surface. */
+  const float2 centre = (float2)((float)tx + 0.5f, (float)ty + 0.5f);
+  float3 my_normal = (float3)(0.0f);
+  int my_instance = -1;
+  if (own) {
+    const LuxSurfaceTri st = tris[paths[first].pad];
+    my_instance = as_int(st.p2.w);
+    my_normal = normalize(cross(st.p1.xyz - st.p0.xyz, st.p2.xyz - st.p0.xyz));
+  }
+  int touched = 0;
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int nx = tx + dx, ny = ty + dy;
+      if (nx < 0 || ny < 0 || nx >= (int)params.width || ny >= (int)params.height) continue;
+      uint nf, ne;
+      if (!lux_offset_range(offsets, (uint)(ny * (int)params.width + nx), params.texel_count,
+                            &nf, &ne))
+        continue;
+      for (uint p = nf; p < ne; ++p) {
+        const LuxPath path = paths[p];
+        if (dx != 0 || dy != 0) {
+          if (my_instance < 0) continue; /* no own path to compare against this time */
+          const LuxSurfaceTri st = tris[path.pad];
+          if (as_int(st.p2.w) != my_instance) continue;
+          const float3 nn = normalize(cross(st.p1.xyz - st.p0.xyz, st.p2.xyz - st.p0.xyz));
+          if (dot(nn, my_normal) < 0.9f) continue;
+        }
+        const float w = lux_filter_weight(path.sample_pos - centre);
+        if (!(w > 0.0f)) continue;
+        float3 e, l, nee;
+        if (!lux_path_sample(paths, basis_samples, p, params.clamp_luminance, &e, &l, &nee)) {
+          ++dropped;
+          continue;
+        }
+        lux_welford((float4)(e, lux_luminance(e)), w, &t_mean, &t_m2, &t_weight);
+        LUX_BASIS_ADD(p, w);
+        touched = 1;
+      }
+    }
+  }
+  if (!touched && !own) return;
+#else
+  for (uint p = first; p < end; ++p) {
+    float3 e, l, nee;
+    if (!lux_path_sample(paths, basis_samples, p, params.clamp_luminance, &e, &l, &nee)) {
+      ++dropped;
+      continue;
+    }
+    lux_welford((float4)(e, lux_luminance(e)), 1.0f, &t_mean, &t_m2, &t_weight);
+    LUX_BASIS_ADD(p, 1.0f);
+  }
+#endif
+  mean[texel] = t_mean;
+  m2[texel] = t_m2;
+  weight[texel] = t_weight;
+  spp[texel] += own ? end - first : 0u;
+  if (dropped) atomic_add(nonfinite, dropped);
+}
+
+#endif /* LUXEL_BAKE_ACCUMULATE_H */

@@ -1,0 +1,116 @@
+/* Stage 2, primary rays from texels (thesis §3.4, Listing 4.2): one path
+ * per slot of the sorted texel keys, starting at a valid sample position of
+ * its texel, with next-event estimation at the texel point and the first
+ * segment about the shading normal. Device only. */
+#ifndef LUXEL_BAKE_RAYGEN_H
+#define LUXEL_BAKE_RAYGEN_H
+
+#include "bake/path.h"
+#include "bake/scatter.h"
+#include "bake/surface.h"
+#include "primitives/offset_buffer.h"
+#include "shared/bake_args.h"
+#include "shared/sample_info.h"
+#if LUX_BASIS
+#include "bake/basis.h"
+#endif
+
+inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
+  if (gid >= (uint)*count) return;
+  const uint texel = keys[gid];
+  /* Rank of this path among the texel's paths of this iteration: the
+   * texel's sample index continues its progressive sequence (§6.2) without
+   * atomics, so results do not depend on scheduling. */
+  uint first = 0, end = 0;
+  lux_offset_range(offsets, texel, params.texel_count, &first, &end);
+  const uint index = spp[texel] + (gid - first);
+  const uint seed = lux_texel_seed(texel, params.bake_seed);
+
+  /* Listing 4.2: choose one of the texel's valid Hammersley positions. */
+  const uint word_offset = sample_offsets[texel];
+  const uint valid = popcount(sample_words[word_offset]) + popcount(sample_words[word_offset + 1]);
+  const float u_sample = lux_sample_1d(index, LUX_DIM_TEXEL_SAMPLE, seed);
+  const uint rank = min((uint)(u_sample * (float)valid), valid - 1u);
+  uint instance, mesh_tri, hammersley;
+  lux_sample_info_lookup(sample_words, word_offset, rank, &instance, &mesh_tri, &hammersley);
+  const int tri = (int)(instance_first[instance] + mesh_tri);
+  const uint tx = texel % params.width, ty = texel / params.width;
+  const float2 offset = lux_hammersley64(hammersley);
+  const LuxTriangleUV uvt = atlas_uvs[tri];
+  /* Barycentrics in the lightmap, in the sample point's frame so the
+   * arithmetic stays in small magnitudes (§3.4: "high-precision
+   * calculations ... to avoid invalid values"; kernels/shared/sample_info.h). */
+  float w0, w1, w2;
+  lux_texel_barycentrics((float2)(uvt.uv0.x, uvt.uv0.y), (float2)(uvt.uv1.x, uvt.uv1.y),
+                         (float2)(uvt.uv2.x, uvt.uv2.y), (float)params.width,
+                         (float)params.height, tx, ty, offset, &w0, &w1, &w2);
+  const float2 bary = (float2)(w1, w2);
+  const LuxSurface s = lux_surface_at(tris, tri, bary.x, bary.y);
+
+  LuxPath path;
+  path.texel = texel;
+  path.sample_index = index;
+  path.seed = seed;
+  path.depth = 0;
+  path.sample_pos = (float2)((float)tx + offset.x, (float)ty + offset.y);
+  path.pad = (uint)tri;
+  path.radiance = (float4)(0.0f);
+  path.prev_pos = (float4)(s.p, 0.0f);
+
+  float3 t, b;
+  lux_onb(s.ns, &t, &b);
+  const uint dim = LUX_DIM_VERTEX(0);
+  LuxRay shadow;
+  float3 contribution;
+  LuxBsdf unused_bsdf;
+  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
+                 &s, 1, &unused_bsdf, t, b, s.ns,
+                 (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index, dim, seed, &shadow,
+                 &contribution);
+  shadow_rays[gid] = shadow;
+  shadow_contrib[gid] = (float4)(contribution, 0.0f);
+
+  /* First segment about the shading normal: cosine-weighted (weight pi) for
+   * irradiance, uniform (weight 1, radiance) for directional encodings. A
+   * direction under the geometric surface (smoothed normals) carries nothing. */
+  const float2 u_dir = lux_sample_2d(index, dim + LUX_DIM_DIRECTION, seed);
+#if LUX_BASIS
+  /* The texel's tangent frame, reproducible by an engine: x follows the
+   * lightmap's +u on the surface, z the shading normal. */
+  const float3 tn = lux_lightmap_tangent(tris[tri], uvt, s.ns, t);
+  t = tn;
+  b = cross(s.ns, tn);
+  const float3 dir_local = lux_uniform_hemisphere(u_dir);
+#else
+  const float3 dir_local = lux_cosine_hemisphere(u_dir);
+#endif
+  const float3 wi = lux_to_world(dir_local, t, b, s.ns);
+  const int ok = dot(wi, s.ng) > 0.0f;
+  path.throughput = (float4)(LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT,
+                             LUX_SENSOR_PDF(dir_local.z));
+#if LUX_BASIS
+  {
+    LuxBasisSample bs;
+    bs.dir_world = (float4)(wi, dir_local.z);
+    bs.dir_tangent = (float4)(dir_local, dir_local.z);
+    /* The light sample as radiance over density: the irradiance contribution
+     * without its cosine. Visibility (nee.w) comes from resolve_texel_shadows. */
+    const float3 ld = shadow.dir_tmax.xyz;
+    const float len = length(ld);
+    const float3 lw = len > 0.0f ? ld / len : (float3)(0.0f, 0.0f, 1.0f);
+    const float3 ll = lux_to_local(lw, t, b, s.ns);
+    const float cos_l = dot(lw, s.ns);
+    bs.nee_world = (float4)(lw, cos_l);
+    bs.nee_tangent = (float4)(ll, cos_l);
+    bs.nee = cos_l > 0.0f && len > 0.0f ? (float4)(contribution / cos_l, 0.0f) : (float4)(0.0f);
+    basis_samples[gid] = bs;
+  }
+#endif
+  path.alive = ok ? 1u : 0u;
+  paths[gid] = path;
+  rays[gid] = ok ? lux_make_ray(lux_offset_origin(s.p, s.ng, wi, params.offset_scale), wi, INFINITY)
+                 : lux_no_ray();
+  active[gid] = lux_tag_slot(gid, wi);
+}
+
+#endif /* LUXEL_BAKE_RAYGEN_H */

@@ -1,0 +1,136 @@
+/* Stage 3, shading of closest hits (thesis §5.1 steps 3b/3d): one
+ * work-item per live path of the active list. Adds emission (MIS-weighted
+ * against the NEE that the previous vertex did), then at vertices within the
+ * bounce limit: NEE, BSDF sampling of the extension ray (Eq. 6.2), Russian
+ * roulette. Writes alive[j] (and tagged[j]) for compaction. Device only. */
+#ifndef LUXEL_BAKE_SHADE_H
+#define LUXEL_BAKE_SHADE_H
+
+#include "bake/path.h"
+#include "bake/scatter.h"
+#include "bake/surface.h"
+#include "shared/bake_args.h"
+
+inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
+  if (j >= (uint)*count) return;
+  const uint slot = active[j] & LUX_SLOT_MASK;
+  LuxPath path = paths[slot];
+  alive[j] = 0u;
+  tagged[j] = slot;
+  shadow_rays[slot] = lux_no_ray();
+  shadow_contrib[slot] = (float4)(0.0f);
+  if (!path.alive) return;
+
+  const LuxRay ray = rays[slot];
+  const LuxHit hit = hits[slot];
+  const float3 dir = ray.dir_tmax.xyz;
+  float3 throughput = path.throughput.xyz;
+  const float prev_pdf = path.throughput.w;
+
+  if (hit.prim < 0) {
+#if LUX_SKY || LUX_SKY_IMAGE
+    const float3 l = lux_sky_radiance(sky, sky_texels, dir);
+    float w = 1.0f;
+    if (prev_pdf > 0.0f && params.sky_light >= 0)
+      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_cdf, params.sky_light,
+                                                    sky_marginal, sky_conditional, dir));
+    path.radiance.xyz += throughput * l * w;
+#endif
+    path.alive = 0u;
+    paths[slot] = path;
+    rays[slot] = lux_no_ray();
+    return;
+  }
+
+  const LuxSurface s = lux_surface_at(tris, hit.prim, hit.u, hit.v);
+  const LuxMaterial m = materials[s.material];
+  const float3 wo = -normalize(dir);
+
+#if LUX_LIGHT_EMISSIVE
+  if ((m.flags & LUX_MATERIAL_EMISSIVE) &&
+      (dot(wo, s.ng_winding) > 0.0f || (m.flags & LUX_MATERIAL_DOUBLE_SIDED))) {
+    float3 le = m.emission.xyz;
+#if LUX_EMISSIVE_TEXTURE
+    if (m.emissive_tex >= 0) le *= lux_texture_sample(texels, textures[m.emissive_tex], s.uv).xyz;
+#endif
+    float w = 1.0f;
+    if (prev_pdf > 0.0f && s.light >= 0)
+      w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_cdf, s.light,
+                                                               path.prev_pos.xyz, s.p,
+                                                               s.ng_winding));
+    path.radiance.xyz += throughput * le * w;
+  }
+#endif
+
+  path.depth += 1u;
+  if (path.depth > params.max_bounces) {
+    path.alive = 0u;
+    paths[slot] = path;
+    rays[slot] = lux_no_ray();
+    return;
+  }
+
+  /* Material at the hit. Shading frame on the side the ray arrives from. */
+  float3 base = m.base_color.xyz;
+  float metallic = m.metallic, roughness = m.roughness;
+#if LUX_TEXTURES
+  if (m.base_color_tex >= 0)
+    base *= lux_texture_sample(texels, textures[m.base_color_tex], s.uv).xyz;
+  if (m.metallic_roughness_tex >= 0) {
+    const float4 mr = lux_texture_sample(texels, textures[m.metallic_roughness_tex], s.uv);
+    roughness *= mr.y;
+    metallic *= mr.z;
+  }
+#endif
+  const LuxBsdf bsdf = lux_make_bsdf(base, metallic, roughness);
+  LuxSurface sf = s;
+  if (dot(wo, sf.ng) < 0.0f) {
+    sf.ng = -sf.ng;
+    sf.ns = -sf.ns;
+  }
+  float3 t, b;
+  lux_onb(sf.ns, &t, &b);
+  float3 wo_local = lux_to_local(wo, t, b, sf.ns);
+  /* Shading normal facing away from the viewer (bent normals): clamp so the
+   * BSDF stays defined. */
+  if (wo_local.z <= 1e-4f) wo_local = normalize((float3)(wo_local.x, wo_local.y, 1e-4f));
+
+  const uint dim = LUX_DIM_VERTEX(path.depth);
+  LuxRay shadow;
+  float3 contribution;
+  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
+                 &sf, 0, &bsdf, t, b, sf.ns, wo_local,
+                 throughput, path.sample_index, dim, path.seed, &shadow, &contribution);
+  shadow_rays[slot] = shadow;
+  shadow_contrib[slot] = (float4)(contribution, 0.0f);
+
+  /* Extension ray (Eq. 6.2: one layer chosen stochastically). */
+  const float u_layer = lux_sample_1d(path.sample_index, dim + LUX_DIM_LAYER, path.seed);
+  const float2 u_dir = lux_sample_2d(path.sample_index, dim + LUX_DIM_DIRECTION, path.seed);
+  float3 wi_local, weight;
+  float pdf;
+  const int layer = lux_bsdf_sample(&bsdf, wo_local, u_layer, u_dir, &wi_local, &weight, &pdf);
+  const float3 wi = lux_to_world(wi_local, t, b, sf.ns);
+  int ok = layer >= 0 && pdf > 0.0f && dot(wi, sf.ng) > 0.0f && lux_finite3(weight);
+  throughput *= weight;
+  /* Russian roulette (§5.1) on the throughput relative to the sensor's pi. */
+  if (ok && path.depth >= params.rr_depth) {
+    const float q = fmin(0.95f, lux_max3(throughput) / LUX_SENSOR_WEIGHT);
+    const float u_rr = lux_independent_1d(path.sample_index, dim + LUX_DIM_ROULETTE, path.seed);
+    if (u_rr >= q) ok = 0;
+    else throughput /= q;
+  }
+  path.throughput = (float4)(throughput, pdf);
+  path.prev_pos = (float4)(sf.p, 0.0f);
+  path.alive = ok ? 1u : 0u;
+  paths[slot] = path;
+  rays[slot] = ok ? lux_make_ray(lux_offset_origin(sf.p, sf.ng, wi, params.offset_scale), wi,
+                                INFINITY)
+                  : lux_no_ray();
+  alive[j] = path.alive;
+#if LUX_SORT_DIRECTIONS
+  tagged[j] = lux_tag_slot(slot, wi);
+#endif
+}
+
+#endif /* LUXEL_BAKE_SHADE_H */

@@ -1,0 +1,68 @@
+/* Stage 7, progress statistics: per work-group partial sums of the
+ * relative standard error of each covered texel's mean (DESIGN.md "Accuracy
+ * and error reporting") and the minimum samples per texel; the host adds the
+ * few partials. Relative std. error =
+ * sqrt(var / n_eff) / mean with var = m2 / W and n_eff = W^2 / sum w^2. A
+ * texel with fewer than 2 samples counts as 100 % error; a black texel with
+ * zero variance as 0. With a reference lightmap, also the squared error and
+ * the relMSE term per texel. Device only. */
+#ifndef LUXEL_BAKE_STATS_H
+#define LUXEL_BAKE_STATS_H
+
+#include "shared/bake_args.h"
+
+/* gid, lid, lsize, group: the work-item's ids; l_err, l_min, l_ref: the
+ * work-group's reduction arrays (local memory, LUX_STATS_GROUP entries,
+ * declared by the kernel). */
+inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local float* l_err,
+                            __local uint* l_min, __local float2* l_ref,
+                            LUX_STAGE_PARAMS(accum_stats)) {
+  float err = 0.0f;
+  float2 ref_err = (float2)(0.0f);
+  uint t_spp = 0xFFFFFFFFu;
+  if (gid < params.covered_count) {
+    const uint texel = covered[gid];
+    if (params.has_reference) {
+      const float3 d = mean[texel].xyz - reference[texel].xyz;
+      const float3 r = reference[texel].xyz;
+      const float3 d2 = d * d;
+      ref_err = (float2)((d2.x + d2.y + d2.z) / 3.0f,
+                         (d2.x / (r.x * r.x + 1e-2f) + d2.y / (r.y * r.y + 1e-2f) +
+                          d2.z / (r.z * r.z + 1e-2f)) / 3.0f);
+    }
+    t_spp = spp[texel];
+    const float2 w = weight[texel];
+    if (t_spp < 2u || !(w.x > 0.0f)) {
+      err = 1.0f;
+    } else {
+      const float var = fmax(0.0f, m2[texel].w / w.x);
+      const float n_eff = w.x * w.x / fmax(w.y, 1e-30f);
+      const float y = mean[texel].w;
+      const float se = sqrt(var / n_eff);
+      err = se <= 0.0f ? 0.0f : (y > 0.0f ? fmin(se / y, 1.0f) : 1.0f);
+    }
+  }
+  l_err[lid] = err;
+  l_min[lid] = t_spp;
+  l_ref[lid] = ref_err;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint stride = lsize / 2; stride > 0; stride >>= 1) {
+    if (lid < stride) {
+      l_err[lid] += l_err[lid + stride];
+      l_min[lid] = min(l_min[lid], l_min[lid + stride]);
+      l_ref[lid] += l_ref[lid + stride];
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  if (lid == 0) {
+    LuxAccumStats s;
+    s.rel_error_sum = l_err[0];
+    s.error_texels = 0;
+    s.min_spp = l_min[0];
+    s.pad = 0;
+    s.reference = (float4)(l_ref[0], 0.0f, 0.0f);
+    stats[group] = s;
+  }
+}
+
+#endif /* LUXEL_BAKE_STATS_H */

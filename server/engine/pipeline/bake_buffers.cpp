@@ -1,0 +1,193 @@
+#include "pipeline/bake_buffers.h"
+
+#include <algorithm>
+
+#include "pipeline/shading/texture_pack.h"
+
+namespace luxel::pipeline {
+namespace {
+
+// Allocation and upload that count what they hold.
+class Allocator {
+ public:
+  Allocator(device::Context& ctx, size_t& bytes) : ctx_(ctx), bytes_(bytes) {}
+
+  Status alloc(device::Buffer& b, size_t size, const char* name) {
+    return keep(b, ctx_.alloc(std::max<size_t>(size, 16), name));
+  }
+  // The vector's contents, or a placeholder when it is empty or unused.
+  template <typename T>
+  Status upload(device::Buffer& b, const std::vector<T>& v, const char* name, bool used = true) {
+    if (!used) return keep(b, ctx_.alloc(16, std::string(name) + " (unused)"));
+    if (v.empty()) return keep(b, ctx_.alloc(16, name));
+    return keep(b, ctx_.upload(v, name));
+  }
+  Status zero(const device::Buffer& b) {
+    static constexpr uint32_t kZero = 0;
+    return device::cl_status(clEnqueueFillBuffer(ctx_.queue(), b.get(), &kZero, sizeof kZero, 0,
+                                                 b.bytes(), 0, nullptr, nullptr),
+                             "clear buffer");
+  }
+
+ private:
+  Status keep(device::Buffer& b, Result<device::Buffer> r) {
+    if (!r) return r.status();
+    b = std::move(r.value());
+    bytes_ += b.bytes();
+    return Status::ok();
+  }
+  device::Context& ctx_;
+  size_t& bytes_;
+};
+
+Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s, BakeArgs& args) {
+  SceneArgs& g = args.scene;
+  LUXEL_RETURN_IF_ERROR(a.upload(g.tris, s.data.surface, "surface triangles"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.materials, s.data.materials, "materials"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.atlas_uvs, s.data.atlas_uvs, "atlas uvs"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.instance_first, s.data.instance_first, "instance table"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.covered, s.info.covered_texels, "covered texels"));
+  // The sample-info buffer (§4.2): per-texel offsets plus the packed words.
+  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_offsets, s.info.offsets, "sample-info offsets"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_words, s.info.words, "sample-info words"));
+
+  // Lights, sky and textures only when the features use them.
+  LightArgs& l = args.lights;
+  const bool nee = s.features.has("NEE");
+  const bool image_sky = s.features.has("SKY_IMAGE");
+  l.sky = s.lights.sky;
+  LUXEL_RETURN_IF_ERROR(a.upload(l.lights, s.lights.lights, "lights", nee));
+  LUXEL_RETURN_IF_ERROR(a.upload(l.light_cdf, s.lights.select_cdf, "light cdf", nee));
+  LUXEL_RETURN_IF_ERROR(a.upload(l.sky_texels, s.lights.sky_texels, "sky texels", image_sky));
+  LUXEL_RETURN_IF_ERROR(
+      a.upload(l.sky_marginal, s.lights.sky_marginal_cdf, "sky marginal cdf", image_sky));
+  LUXEL_RETURN_IF_ERROR(
+      a.upload(l.sky_conditional, s.lights.sky_conditional_cdf, "sky conditional cdf", image_sky));
+
+  TextureArgs& t = args.textures;
+  if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE")) {
+    LUXEL_RETURN_IF_ERROR(a.upload(t.textures, std::vector<cl::LuxTexture>{}, "textures", false));
+    return a.upload(t.texels, std::vector<uint32_t>{}, "texels", false);
+  }
+  auto pack = pack_textures(scene);
+  if (!pack) return pack.status();
+  LUXEL_RETURN_IF_ERROR(a.upload(t.textures, pack.value().textures, "textures"));
+  return a.upload(t.texels, pack.value().texels, "texture texels");
+}
+
+Status allocate_paths(Allocator& a, size_t p, size_t texels, PathArgs& g) {
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.keys, p * 4, "path texel keys"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.offsets, (texels + 1) * 4, "offset buffer"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.paths, p * sizeof(cl::LuxPath), "paths"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.rays, p * sizeof(cl::LuxRay), "rays"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.hits, p * sizeof(cl::LuxHit), "hits"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.shadow_rays, p * sizeof(cl::LuxRay), "shadow rays"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.shadow_contrib, p * 16, "shadow contributions"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.occluded, p * 4, "occlusion flags"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.alive, p * 4, "alive flags"));
+  return a.alloc(g.tagged, p * 4, "tagged slots");
+}
+
+Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& settings,
+                      AccumArgs& g) {
+  const size_t t = s.params.texel_count;
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.mean, t * 16, "accumulated mean"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.m2, t * 16, "accumulated M2"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.weight, t * 8, "accumulated weight"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.spp, t * 4, "samples per texel"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.nonfinite, 4, "non-finite counter"));
+  const size_t groups = (s.params.covered_count + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
+  if (!settings.reference) return a.alloc(g.reference, 16, "reference (unused)");
+  if (settings.reference->size() != t * 4)
+    return invalid_argument(strprintf(
+        "settings.reference: %zu values do not match the %ux%u lightmap (expected RGBA, %zu)",
+        settings.reference->size(), s.params.width, s.params.height, t * 4));
+  return a.upload(g.reference, *settings.reference, "reference lightmap");
+}
+
+// Directional encodings: one sample record per path, the state per texel.
+Status allocate_encodings(Allocator& a, const BakeSetup& s, EncodingArgs& g) {
+  const size_t p = s.capacity;
+  const size_t t = s.params.texel_count;
+  const bool basis = !s.plan.empty();
+  LUXEL_RETURN_IF_ERROR(
+      a.alloc(g.basis_samples, basis ? p * sizeof(cl::LuxBasisSample) : 16, "basis samples"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.basis_state, t * s.plan.bytes_per_texel(), "basis state"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.encodings, s.plan.table, "encodings"));
+  return a.upload(g.basis_dirs, s.plan.directions, "basis directions");
+}
+
+}  // namespace
+
+Result<BakeBuffers> BakeBuffers::create(device::Context& ctx, const scene::Scene& scene,
+                                        const BakeSetup& setup, const BakeSettings& settings) {
+  BakeBuffers b;
+  Allocator a(ctx, b.device_bytes_);
+  b.args_.params = setup.params;
+  LUXEL_RETURN_IF_ERROR(upload_scene(a, scene, setup, b.args_));
+  const size_t p = setup.capacity;
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.batch_count, 4, "batch count"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.path_count, 4, "path count"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.count_a, 4, "live count a"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.count_b, 4, "live count b"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.active_a, p * 4, "active paths a"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(b.active_b, p * 4, "active paths b"));
+  LUXEL_RETURN_IF_ERROR(allocate_paths(a, p, setup.params.texel_count, b.args_.paths));
+  LUXEL_RETURN_IF_ERROR(allocate_accum(a, setup, settings, b.args_.accum));
+  LUXEL_RETURN_IF_ERROR(allocate_encodings(a, setup, b.args_.encodings));
+  const AccumArgs& acc = b.args_.accum;
+  for (const device::Buffer* z :
+       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite,
+        static_cast<const device::Buffer*>(&b.args_.encodings.basis_state)})
+    LUXEL_RETURN_IF_ERROR(a.zero(*z));
+  return b;
+}
+
+Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c) const {
+  const cl::LuxBakeParams& p = args_.params;
+  const size_t t = p.texel_count;
+  const AccumArgs& acc = args_.accum;
+  c.width = p.width;
+  c.height = p.height;
+  c.mean.resize(t);
+  c.m2.resize(t);
+  c.weight.resize(t);
+  c.spp.resize(t);
+  uint32_t nonfinite = 0;
+  LUXEL_RETURN_IF_ERROR(ctx.read(acc.mean, c.mean));
+  LUXEL_RETURN_IF_ERROR(ctx.read(acc.m2, c.m2));
+  LUXEL_RETURN_IF_ERROR(ctx.read(acc.weight, c.weight));
+  LUXEL_RETURN_IF_ERROR(ctx.read(acc.spp, c.spp));
+  c.basis.resize(p.encoding_count == 0 ? 0 : t * p.basis_stride);
+  if (!c.basis.empty()) LUXEL_RETURN_IF_ERROR(ctx.read(args_.encodings.basis_state, c.basis));
+  LUXEL_RETURN_IF_ERROR(ctx.read(acc.nonfinite, &nonfinite, sizeof nonfinite));
+  LUXEL_RETURN_IF_ERROR(ctx.finish());
+  c.nonfinite = nonfinite;
+  return Status::ok();
+}
+
+Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c) {
+  const cl::LuxBakeParams& p = args_.params;
+  if (c.width != p.width || c.height != p.height)
+    return invalid_argument(strprintf("checkpoint is for a %ux%u lightmap, this bake is %ux%u",
+                                      c.width, c.height, p.width, p.height));
+  const AccumArgs& acc = args_.accum;
+  const uint32_t nonfinite = static_cast<uint32_t>(c.nonfinite);
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.mean, c.mean.data(), c.mean.size() * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.m2, c.m2.data(), c.m2.size() * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(
+      ctx.write(acc.weight, c.weight.data(), c.weight.size() * sizeof(cl::float2)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.spp, c.spp.data(), c.spp.size() * sizeof(uint32_t)));
+  const size_t basis_size = p.encoding_count == 0 ? 0 : size_t{p.texel_count} * p.basis_stride;
+  if (c.basis.size() != basis_size)
+    return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",
+                                      c.basis.size(), basis_size));
+  if (basis_size > 0)
+    LUXEL_RETURN_IF_ERROR(ctx.write(args_.encodings.basis_state, c.basis.data(),
+                                    basis_size * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.nonfinite, &nonfinite, sizeof nonfinite));
+  return ctx.finish();
+}
+
+}  // namespace luxel::pipeline

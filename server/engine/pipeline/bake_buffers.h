@@ -1,0 +1,48 @@
+// The device memory of one bake: every buffer of the argument groups of
+// kernels/shared/bake_args.h (scene, lights, textures, path state,
+// accumulation, encodings) plus the ping-pong active lists and counts of
+// the bounce loop. Scene buffers are uploaded once, path state is sized by
+// the batch and accumulation by the lightmap, never by the sample count.
+// Buffers of features the bake does not compile in are 16-byte
+// placeholders (lights, sky, textures, encodings, reference).
+#pragma once
+
+#include "device/context.h"
+#include "pipeline/bake_kernels.h"
+#include "pipeline/bake_settings.h"
+#include "pipeline/bake_setup.h"
+#include "pipeline/checkpoint.h"
+#include "scene/scene.h"
+
+namespace luxel::pipeline {
+
+class BakeBuffers {
+ public:
+  // Uploads the scene groups, allocates the rest and clears the
+  // accumulation. INVALID_ARGUMENT for a reference of the wrong size.
+  static Result<BakeBuffers> create(device::Context& ctx, const scene::Scene& scene,
+                                    const BakeSetup& setup, const BakeSettings& settings);
+
+  // The kernels' arguments (args().params is the bake's LuxBakeParams).
+  BakeArgs& args() { return args_; }
+  const BakeArgs& args() const { return args_; }
+
+  // Bounce-loop bookkeeping (not kernel groups of their own): the batch's
+  // path count for the sort, the count of paths with a texel, and the two
+  // active lists with their live counts, swapped by compaction (§5.1).
+  device::Buffer batch_count, path_count;
+  device::Buffer active_a, active_b, count_a, count_b;
+
+  size_t device_bytes() const { return device_bytes_; }
+
+  // The accumulation state (mean, M2, weights, samples, encodings, dropped
+  // count) to and from a checkpoint; width/height are checked on restore.
+  Status read_state(device::Context& ctx, BakeCheckpoint& c) const;
+  Status restore_state(device::Context& ctx, const BakeCheckpoint& c);
+
+ private:
+  BakeArgs args_;
+  size_t device_bytes_ = 0;
+};
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,19 @@
+// What one bake compiles in: the FeatureSet derived from the scene's lights
+// and materials, the settings' switches and the requested encodings. It
+// becomes the -D options of kernels/bake.cl (its module comment lists them),
+// decides which buffers are uploaded and which stages run, and is reported
+// with the bake. The one place where a feature is derived.
+#pragma once
+
+#include "device/feature_set.h"
+#include "pipeline/bake_settings.h"
+#include "pipeline/encodings.h"
+#include "pipeline/scene_data.h"
+#include "pipeline/shading/light_table.h"
+
+namespace luxel::pipeline {
+
+device::FeatureSet derive_bake_features(const BakeSettings& settings, const LightTable& lights,
+                                        const SceneData& data, const EncodingPlan& plan);
+
+}  // namespace luxel::pipeline

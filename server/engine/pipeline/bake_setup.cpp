@@ -1,0 +1,78 @@
+#include "pipeline/bake_setup.h"
+
+#include <algorithm>
+
+#include "accel/bvh_builder.h"
+#include "pipeline/bake_features.h"
+
+namespace luxel::pipeline {
+
+Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& settings,
+                               device::Context& ctx) {
+  BakeSetup s;
+  auto atlas = atlas::build_atlas(scene, settings.atlas);
+  if (!atlas) return atlas.status();
+  s.atlas = std::move(atlas.value());
+  auto info = atlas::build_sample_info(scene, s.atlas);
+  if (!info) return info.status();
+  s.info = std::move(info.value());
+  if (s.info.covered_texels.empty())
+    return invalid_argument(strprintf(
+        "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
+        "small for this resolution?)",
+        s.atlas.width, s.atlas.height));
+  if (s.info.covered_texels.size() >= kSlotMask)
+    return resource_exhausted("lightmap has too many covered texels for 32-bit path keys");
+
+  auto soup = accel::build_triangle_soup(scene);
+  if (!soup) return soup.status();
+  s.soup = std::move(soup.value());
+  auto bvh = accel::build_bvh(s.soup);
+  if (!bvh) return bvh.status();
+  auto tracer = accel::ClTracer::create(ctx, bvh.value());
+  if (!tracer) return tracer.status();
+  s.tracer = std::move(tracer.value());
+
+  auto lights = build_light_table(scene, s.soup, settings.lights, s.soup.bounds);
+  if (!lights) return lights.status();
+  s.lights = std::move(lights.value());
+  auto data = prepare_scene_data(scene, s.soup, s.atlas, s.lights.triangle_light);
+  if (!data) return data.status();
+  s.data = std::move(data.value());
+  auto plan = plan_encodings(settings.encodings);
+  if (!plan) return plan.status();
+  s.plan = std::move(plan.value());
+  s.features = derive_bake_features(settings, s.lights, s.data, s.plan);
+
+  // Batch size: the paths-per-iteration budget, never more than the samples
+  // the whole bake needs, and at most 2^29 (slot ids share a word with the
+  // octant tag).
+  const uint64_t covered = s.info.covered_texels.size();
+  uint64_t cap = settings.paths_per_iteration;
+  if (settings.samples_per_texel > 0)
+    cap = std::min<uint64_t>(cap, uint64_t{settings.samples_per_texel} * covered);
+  s.capacity = static_cast<size_t>(std::clamp<uint64_t>(cap, 1, kSlotMask));
+
+  cl::LuxBakeParams& p = s.params;
+  p.width = static_cast<uint32_t>(s.atlas.width);
+  p.height = static_cast<uint32_t>(s.atlas.height);
+  p.texel_count = p.width * p.height;
+  p.covered_count = static_cast<uint32_t>(covered);
+  p.bake_seed = settings.seed;
+  p.max_bounces = static_cast<uint32_t>(settings.max_bounces);
+  p.rr_depth = static_cast<uint32_t>(settings.rr_depth);
+  p.light_count = static_cast<uint32_t>(s.lights.lights.size());
+  p.sky_light = s.lights.sky.light;
+  p.clamp_luminance = settings.clamp_luminance;
+  const Vec3 extent = s.soup.bounds.empty() ? Vec3{1, 1, 1} : s.soup.bounds.extent();
+  const float largest = std::max({extent.x, extent.y, extent.z});
+  p.offset_scale = std::clamp(largest, 1e-6f, 1.0f);
+  p.capacity = static_cast<uint32_t>(s.capacity);
+  p.encoding_count = static_cast<uint32_t>(s.plan.table.size());
+  p.basis_stride = s.plan.stride;
+  p.acceleration = settings.encodings.acceleration;
+  p.has_reference = settings.reference ? 1u : 0u;
+  return s;
+}
+
+}  // namespace luxel::pipeline

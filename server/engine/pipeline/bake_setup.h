@@ -1,0 +1,47 @@
+// Everything a bake derives from its scene and settings before the first
+// path: the atlas and its sample-info buffer (§4.2), the triangle soup, BVH
+// and tracer, the light table, the device surface records, the encoding
+// plan, the compiled features, the kernel constants and the batch size.
+#pragma once
+
+#include <memory>
+
+#include "accel/cl_tracer.h"
+#include "accel/triangle_soup.h"
+#include "atlas/atlas.h"
+#include "atlas/sample_info.h"
+#include "device/context.h"
+#include "device/feature_set.h"
+#include "pipeline/bake_settings.h"
+#include "pipeline/encodings.h"
+#include "pipeline/scene_data.h"
+#include "pipeline/shading/light_table.h"
+#include "scene/scene.h"
+#include "shared/bake.h"
+
+namespace luxel::pipeline {
+
+struct BakeSetup {
+  atlas::Atlas atlas;
+  atlas::SampleInfo info;
+  accel::TriangleSoup soup;
+  std::unique_ptr<accel::ClTracer> tracer;
+  LightTable lights;
+  SceneData data;
+  EncodingPlan plan;
+  device::FeatureSet features;  // bake.cl's (the tracer's are its own)
+  cl::LuxBakeParams params{};   // per-bake constants; paths/first_path set per iteration
+  size_t capacity = 0;          // path slots per iteration
+};
+
+// Slot ids share a word with the 3-bit octant tag of direction sorting (§5.4).
+inline constexpr uint32_t kSlotMask = 0x1FFFFFFFu;  // LUX_SLOT_MASK in kernels/bake/path.h
+inline constexpr int kTagShift = 29;
+
+// INVALID_ARGUMENT when no texel of the lightmap holds a sample;
+// RESOURCE_EXHAUSTED past 2^29 covered texels; errors of the atlas, BVH,
+// light table, encodings and tracer as they come.
+Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& settings,
+                               device::Context& ctx);
+
+}  // namespace luxel::pipeline
