@@ -31,7 +31,7 @@ Status record_from_json(const std::string& text, const std::string& what, v1::Ba
                         uint64_t* seq) {
   const json record = json::parse(text, nullptr, /*allow_exceptions=*/false);
   if (record.is_discarded() || !record.is_object() || record.value("format", "") != kRecordFormat ||
-      !record.contains("info") || !record["seq"].is_number_unsigned())
+      !record.contains("info") || !record.contains("seq") || !record["seq"].is_number_unsigned())
     return data_loss(strprintf("%s: not a %s record", what.c_str(), kRecordFormat));
   *seq = record["seq"].get<uint64_t>();
   pbu::JsonParseOptions options;
@@ -73,6 +73,13 @@ Result<std::unique_ptr<BakeStore>> BakeStore::open(const std::string& data_dir) 
     for (const auto& f : fs::directory_iterator(dir.path(), ec))
       if (f.path().filename().string().rfind("snapshot-", 0) == 0) remove_tree(f.path().string());
     const std::string id = entry->info.bake_id();
+    if (id != dir.path().filename().string()) {
+      // Every later write goes to bake_dir(id): an id that is not the folder's
+      // name would write elsewhere, outside the store for one like "../x".
+      log_event("bake_record_unreadable",
+                {{"path", path}, {"error", "bake_id '" + id + "' is not the folder's name"}});
+      continue;
+    }
     if (!entry->info.idempotency_key().empty()) store->by_key_[entry->info.idempotency_key()] = id;
     store->next_seq_ = std::max(store->next_seq_, entry->seq + 1);
     store->bakes_[id] = std::move(entry);

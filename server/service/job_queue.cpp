@@ -2,18 +2,25 @@
 
 namespace luxel::service {
 
-Status JobQueue::check_room() const {
-  std::lock_guard<std::mutex> lock(mu_);
+Status JobQueue::room_locked() const {
   if (jobs_.size() >= max_queued_)
-    return resource_exhausted(strprintf("queue full: %zu bakes queued, the daemon's limit is --max-queued=%zu",
-                                        jobs_.size(), max_queued_));
+    return resource_exhausted(
+        strprintf("queue full: %zu bakes queued, the daemon's limit is --max-queued=%zu",
+                  jobs_.size(), max_queued_));
   return Status::ok();
 }
 
+Status JobQueue::check_room() const {
+  std::lock_guard<std::mutex> lock(mu_);
+  return room_locked();
+}
+
 Status JobQueue::push(const std::string& bake_id, int priority, uint64_t seq, bool force) {
-  if (!force) LUXEL_RETURN_IF_ERROR(check_room());
   {
+    // Checked under the lock of the insert: with the check in a separate
+    // critical section, racing submits could each see one free place.
     std::lock_guard<std::mutex> lock(mu_);
+    if (!force) LUXEL_RETURN_IF_ERROR(room_locked());
     jobs_.insert(Job{priority, seq, bake_id});
   }
   cv_.notify_one();

@@ -42,6 +42,8 @@ class JobQueue {
       return seq < o.seq;                                        // then FIFO
     }
   };
+  Status room_locked() const;  // mu_ held
+
   const size_t max_queued_;
   mutable std::mutex mu_;
   std::condition_variable cv_;

@@ -4,9 +4,10 @@
   python3 tests/bench/peers/make_scenes.py OUTDIR
 
 writes OUTDIR/sky_plane.gltf (calibration) and OUTDIR/sky_courtyard.gltf.
-Reuses the writer and chart packer of scenes/generate_scenes.py (imported,
-not modified); charts are packed for a 64x64 atlas with 2 texels of gutter,
-so that a 64^2 bake has interior texels on every chart.
+Reuses the glTF writer and chart packer of the scene generator
+(scenes/gen/gltf_writer.py, scenes/gen/geometry.py; imported, not modified);
+charts are packed for a 64x64 atlas with 2 texels of gutter, so that a 64^2
+bake has interior texels on every chart.
 
   sky_plane      two 2 m quads lit only by a constant sky: one facing up at
                  the origin, one vertical (facing +z) 200 m away. Each sees
@@ -29,11 +30,13 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.dont_write_bytecode = True  # do not leave __pycache__ in scenes/
 sys.path.insert(0, os.path.join(HERE, "..", "..", "..", "scenes"))
-import generate_scenes as gs  # noqa: E402
+from gen import geometry  # noqa: E402
+from gen.gltf_writer import GltfWriter  # noqa: E402
 
 RES = 64
-gs.ATLAS_RES = RES
-gs.pack_charts = functools.partial(gs.pack_charts, res=RES, gutter=2, margin=2)
+# MeshBuilder.build() looks both up in the geometry module when it runs.
+geometry.ATLAS_RES = RES
+geometry.pack_charts = functools.partial(geometry.pack_charts, res=RES, gutter=2, margin=2)
 
 
 def lambert(w, name, rgb):
@@ -41,9 +44,9 @@ def lambert(w, name, rgb):
 
 
 def sky_plane(path):
-    w = gs.GltfWriter("SkyPlane")
+    w = GltfWriter("SkyPlane")
     grey = lambert(w, "Grey", [0.5, 0.5, 0.5])
-    mb = gs.MeshBuilder()
+    mb = geometry.MeshBuilder()
     mb.quad(grey, [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]], [0, 1, 0])
     mb.quad(grey, [[199, -1, 0], [201, -1, 0], [201, 1, 0], [199, 1, 0]], [0, 0, 1])
     w.node("SkyPlane", mesh=w.mesh("SkyPlane", mb.build()))
@@ -51,12 +54,12 @@ def sky_plane(path):
 
 
 def sky_courtyard(path):
-    w = gs.GltfWriter("SkyCourtyard")
+    w = GltfWriter("SkyCourtyard")
     ground = lambert(w, "Ground", [0.5, 0.5, 0.5])
     white = lambert(w, "White", [0.8, 0.8, 0.8])
     red = lambert(w, "Red", [0.75, 0.25, 0.2])
     green = lambert(w, "Green", [0.2, 0.6, 0.25])
-    mb = gs.MeshBuilder()
+    mb = geometry.MeshBuilder()
     mb.quad(ground, [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]], [0, 1, 0])
     mb.box(red, [0.0, 1.0, -2.5], [5.0, 2.0, 0.3], skip=("-y",))      # back wall
     mb.box(green, [-2.5, 1.0, 0.0], [0.3, 2.0, 4.7], skip=("-y",))    # left wall
