@@ -129,7 +129,7 @@ inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_l
 #if LUX_LIGHT_POINT || LUX_LIGHT_SPOT
 /* Direction and inverse-square falloff towards a point source. */
 inline int lux_lights_towards_point(const LuxLight* light, float3 p, LuxLightSample* s, float* inv_d2) {
-  const float3 to = light->a.xyz - p;
+  const float3 to = light->origin.xyz - p;
   const float d2 = dot(to, to);
   if (!(d2 > 0.0f)) return 0;
   s->dist = sqrt(d2);
@@ -145,7 +145,7 @@ inline int lux_lights_towards_point(const LuxLight* light, float3 p, LuxLightSam
 inline int lux_lights_sample_point(const LuxLight* light, float3 p, LuxLightSample* s) {
   float inv_d2;
   if (!lux_lights_towards_point(light, p, s, &inv_d2)) return 0;
-  s->radiance = light->d.xyz * inv_d2;
+  s->radiance = light->emission.xyz * inv_d2;
   return 1;
 }
 #endif
@@ -156,22 +156,22 @@ inline int lux_lights_sample_point(const LuxLight* light, float3 p, LuxLightSamp
 inline int lux_lights_sample_spot(const LuxLight* light, float3 p, LuxLightSample* s) {
   float inv_d2;
   if (!lux_lights_towards_point(light, p, s, &inv_d2)) return 0;
-  const float cos_inner = light->e.x, cos_outer = light->e.y;
-  const float cd = dot(light->b.xyz, -s->wi);
+  const float cos_inner = LUX_LIGHT_COS_INNER(*light), cos_outer = LUX_LIGHT_COS_OUTER(*light);
+  const float cd = dot(light->axis.xyz, -s->wi);
   float att = clamp((cd - cos_outer) / max(cos_inner - cos_outer, 1e-4f), 0.0f, 1.0f);
   att *= att;
   if (!(att > 0.0f)) return 0;
-  s->radiance = light->d.xyz * (att * inv_d2);
+  s->radiance = light->emission.xyz * (att * inv_d2);
   return 1;
 }
 #endif
 
 #if LUX_LIGHT_DIRECTIONAL
 inline int lux_lights_sample_directional(const LuxLight* light, float2 u, LuxLightSample* s) {
-  const float3 to_light = -light->b.xyz;
-  const float one_minus_cos = light->e.z;
+  const float3 to_light = -light->axis.xyz;
+  const float one_minus_cos = LUX_LIGHT_ONE_MINUS_COS(*light);
   s->dist = INFINITY;
-  s->radiance = light->d.xyz;
+  s->radiance = light->emission.xyz;
   if (one_minus_cos > 0.0f) {
     s->wi = lux_lights_uniform_cone(u, one_minus_cos, to_light);
     s->pdf = 1.0f / (2.0f * M_PI_F * one_minus_cos);
@@ -188,19 +188,19 @@ inline int lux_lights_sample_directional(const LuxLight* light, float2 u, LuxLig
 /* Uniform by area, converted to solid angle: pdf = d^2 / (A |cos theta_l|). */
 inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u, LuxLightSample* s) {
   const float2 bary = lux_uniform_triangle(u); /* area-uniform (b1, b2) */
-  const float3 x = light->a.xyz + bary.x * light->b.xyz + bary.y * light->c.xyz;
+  const float3 x = light->origin.xyz + bary.x * light->axis.xyz + bary.y * light->edge2.xyz;
   const float3 to = x - p;
   const float d2 = dot(to, to);
   if (!(d2 > 0.0f)) return 0;
   s->dist = sqrt(d2);
   s->wi = to / s->dist;
-  float cos_l = -dot(light->e.xyz, s->wi);
-  if (lux_as_int(light->b.w) & LUX_LIGHT_FLAG_DOUBLE_SIDED) cos_l = fabs(cos_l);
+  float cos_l = -dot(light->shape.xyz, s->wi);
+  if (LUX_LIGHT_FLAGS(*light) & LUX_LIGHT_FLAG_DOUBLE_SIDED) cos_l = fabs(cos_l);
   if (!(cos_l > 0.0f)) return 0; /* p sees the back of a one-sided emitter */
-  s->pdf = d2 / (light->d.w * cos_l);
-  s->radiance = light->d.xyz;
+  s->pdf = d2 / (LUX_LIGHT_AREA(*light) * cos_l);
+  s->radiance = light->emission.xyz;
   s->mis = 1;
-  s->triangle = lux_as_int(light->c.w);
+  s->triangle = LUX_LIGHT_TRIANGLE(*light);
   s->bary = bary;
   return 1;
 }
@@ -265,7 +265,7 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
   const LuxLight light = lights[index];
   out->light = (int)index;
   int ok = 0;
-  switch (lux_as_int(light.a.w)) {
+  switch (LUX_LIGHT_TYPE(light)) {
 #if LUX_LIGHT_POINT
     case LUX_LIGHT_TYPE_POINT: ok = lux_lights_sample_point(&light, p, out); break;
 #endif
@@ -306,15 +306,15 @@ inline float lux_light_pdf_triangle(const __global LuxLight* lights, const __glo
 #if LUX_LIGHT_EMISSIVE
   if (light < 0) return 0.0f;
   const LuxLight l = lights[light];
-  if (lux_as_int(l.a.w) != LUX_LIGHT_TYPE_TRIANGLE) return 0.0f;
+  if (LUX_LIGHT_TYPE(l) != LUX_LIGHT_TYPE_TRIANGLE) return 0.0f;
   const float3 to = hit_point - p;
   const float d2 = dot(to, to);
   if (!(d2 > 0.0f)) return 0.0f;
   const float3 wi = to * rsqrt(d2);
-  if (!(lux_as_int(l.b.w) & LUX_LIGHT_FLAG_DOUBLE_SIDED) && !(dot(l.e.xyz, wi) < 0.0f)) return 0.0f;
+  if (!(LUX_LIGHT_FLAGS(l) & LUX_LIGHT_FLAG_DOUBLE_SIDED) && !(dot(l.shape.xyz, wi) < 0.0f)) return 0.0f;
   const float cos_l = fabs(dot(normalize(light_normal), wi));
   if (!(cos_l > 0.0f)) return 0.0f;
-  return lux_cdf_pmf(select_cdf, (uint)light) * d2 / (l.d.w * cos_l);
+  return lux_cdf_pmf(select_cdf, (uint)light) * d2 / (LUX_LIGHT_AREA(l) * cos_l);
 #else
   (void)lights;
   (void)select_cdf;

@@ -12,26 +12,27 @@
  * glTF `range` is ignored: falloff is the physical inverse square.
  * World space is +Y up; distances are scene units.
  *
- * LuxLight: 80 bytes, five float4. Integers are stored as bits in float
- * lanes (lux_as_int / lux_as_float).
+ * LuxLight: 80 bytes, five float4 named for what they hold. Integers are
+ * stored as bits in float lanes; read and write those (and the overloaded
+ * scalar lanes) through the LUX_LIGHT_* accessors below.
  *
- *   field  point          spot           directional       triangle (3)        sky (4)
- *   a.xyz  position       position       -                 v0                  -
- *   a.w    type (int)     type           type              type                type
- *   b.xyz  -              unit direction unit direction    edge1 = v1 - v0     -
- *                         light travels  light travels
- *   b.w    flags (int)    flags          flags             flags               flags
- *   c.xyz  -              -              -                 edge2 = v2 - v0     -
- *   c.w    -              -              -                 world triangle id   -
- *   d.xyz  intensity      intensity      irradiance E, or  radiance            mean radiance
- *          W/sr           W/sr           disc radiance                         (information)
- *          (rgb)                         E/(pi sin^2 a)
- *                                        when a > 0
- *   d.w    -              -              -                 area                -
- *   e.x    -              cos inner      -                 unit front normal x
- *   e.y    -              cos outer      -                 normal y
- *   e.z    -              -              1 - cos(a)        normal z
- *   e.w    -              -              -                 material (int)
+ *   field        point          spot           directional       triangle (3)        sky (4)
+ *   origin.xyz   position       position       -                 v0                  -
+ *   origin.w     type (int)     type           type              type                type
+ *   axis.xyz     -              unit direction unit direction    edge1 = v1 - v0     -
+ *                               light travels  light travels
+ *   axis.w       flags (int)    flags          flags             flags               flags
+ *   edge2.xyz    -              -              -                 edge2 = v2 - v0     -
+ *   edge2.w      -              -              -                 world triangle id   -
+ *   emission.xyz intensity      intensity      irradiance E, or  radiance            mean radiance
+ *                W/sr           W/sr           disc radiance                         (information)
+ *                (rgb)                         E/(pi sin^2 a)
+ *                                              when a > 0
+ *   emission.w   -              -              -                 area                -
+ *   shape.x      -              cos inner      -                 unit front normal x
+ *   shape.y      -              cos outer      -                 normal y
+ *   shape.z      -              -              1 - cos(a)        normal z
+ *   shape.w      -              -              -                 material (int)
  *
  * "-" lanes are 0. Triangle barycentrics (LuxLightSample.bary) weigh v1 and
  * v2, like LuxHit.u/v. The triangle's front normal follows its world winding
@@ -81,12 +82,23 @@ namespace luxel::cl {
 #endif
 
 typedef struct LuxLight {
-  float4 a;
-  float4 b;
-  float4 c;
-  float4 d;
-  float4 e;
+  float4 origin;
+  float4 axis;
+  float4 edge2;
+  float4 emission;
+  float4 shape;
 } LuxLight;
+
+/* Lanes with a meaning of their own (table above). Each is an lvalue where
+ * it is a float, so host builders assign through them too. */
+#define LUX_LIGHT_TYPE(l) lux_as_int((l).origin.w)
+#define LUX_LIGHT_FLAGS(l) lux_as_int((l).axis.w)
+#define LUX_LIGHT_TRIANGLE(l) lux_as_int((l).edge2.w) /* world triangle id */
+#define LUX_LIGHT_AREA(l) ((l).emission.w)
+#define LUX_LIGHT_COS_INNER(l) ((l).shape.x)         /* spot */
+#define LUX_LIGHT_COS_OUTER(l) ((l).shape.y)         /* spot */
+#define LUX_LIGHT_ONE_MINUS_COS(l) ((l).shape.z)     /* directional disc: 1 - cos(a) */
+#define LUX_LIGHT_MATERIAL(l) lux_as_int((l).shape.w) /* triangle */
 
 /* The sky (environment), passed to kernels by value. 48 bytes.
  *   kind        LUX_SKY_KIND_*

@@ -150,7 +150,7 @@ TEST(LightEstimator, LargeEmissiveTriangleMatchesLambertsFormula) {
     b.add_triangles(tri, glow);
     auto table = build_light_table(b.s, b.soup(), {}, unit_bounds());
     ASSERT_TRUE(table.is_ok());
-    ASSERT_LT(table->lights[0].e.y, 0) << "the test wants the front face towards p";
+    ASSERT_LT(table->lights[0].shape.y, 0) << "the test wants the front face towards p";
     const double e = polygon_irradiance(1.0, p, n, tri);
     expect_agrees(estimate_irradiance(table.value(), p, n, 200000, 15), {2 * e, e, 0.5 * e},
                   double_sided ? "double-sided triangle" : "triangle");

@@ -23,7 +23,7 @@ Bounds3 unit_bounds() {
   return b;
 }
 
-int type_of(const cl::LuxLight& l) { return lux_as_int(l.a.w); }
+int type_of(const cl::LuxLight& l) { return LUX_LIGHT_TYPE(l); }
 double pmf(const LightTable& t, size_t i) { return double(t.select_cdf[i + 1]) - t.select_cdf[i]; }
 
 Result<LightTable> build(const SceneBuilder& b, const LightSettings& settings = {}) {
@@ -93,17 +93,17 @@ TEST(LightTable, EmissiveTrianglesRecordGeometryFlagsAndTheirWorldTriangle) {
   ASSERT_EQ(t->lights.size(), 3u);
   EXPECT_EQ(t->triangle_light, (std::vector<int32_t>{-1, 0, 1, 2}));
   const cl::LuxLight& l = t->lights[0];
-  EXPECT_EQ(lux_as_int(l.c.w), 1) << "world triangle id";
-  EXPECT_EQ(lux_as_int(l.e.w), one_sided) << "material";
-  EXPECT_FLOAT_EQ(l.d.x, 2);  // emissive factor x strength
-  EXPECT_FLOAT_EQ(l.d.z, 6);
-  EXPECT_FLOAT_EQ(l.d.w, 2);  // area
-  EXPECT_FLOAT_EQ(l.b.x, 2);  // edge1
-  EXPECT_FLOAT_EQ(l.c.z, 2);  // edge2
-  EXPECT_FLOAT_EQ(l.e.y, -1) << "front normal follows the winding";
-  EXPECT_EQ(lux_as_int(l.b.w), 0);
-  EXPECT_FLOAT_EQ(t->lights[1].e.y, 1) << "a mirrored instance's front face is the other side";
-  EXPECT_EQ(lux_as_int(t->lights[2].b.w), LUX_LIGHT_FLAG_DOUBLE_SIDED);
+  EXPECT_EQ(LUX_LIGHT_TRIANGLE(l), 1) << "world triangle id";
+  EXPECT_EQ(LUX_LIGHT_MATERIAL(l), one_sided) << "material";
+  EXPECT_FLOAT_EQ(l.emission.x, 2);  // emissive factor x strength
+  EXPECT_FLOAT_EQ(l.emission.z, 6);
+  EXPECT_FLOAT_EQ(LUX_LIGHT_AREA(l), 2);  // area
+  EXPECT_FLOAT_EQ(l.axis.x, 2);  // edge1
+  EXPECT_FLOAT_EQ(l.edge2.z, 2);  // edge2
+  EXPECT_FLOAT_EQ(l.shape.y, -1) << "front normal follows the winding";
+  EXPECT_EQ(LUX_LIGHT_FLAGS(l), 0);
+  EXPECT_FLOAT_EQ(t->lights[1].shape.y, 1) << "a mirrored instance's front face is the other side";
+  EXPECT_EQ(LUX_LIGHT_FLAGS(t->lights[2]), LUX_LIGHT_FLAG_DOUBLE_SIDED);
   // Double-sided emitters emit (and are chosen) twice as much per area.
   const double per_area_one = pmf(t.value(), 0) / 2.0 / luminance({2, 4, 6});
   const double per_area_two = pmf(t.value(), 2) / 0.5 / luminance({1, 1, 1});
@@ -127,8 +127,8 @@ TEST(LightTable, TexturedEmittersAreFlaggedAndWeighedByTheTextureMean) {
   auto t = build(b);
   ASSERT_TRUE(t.is_ok()) << t.status().to_string();
   ASSERT_EQ(t->lights.size(), 2u);
-  EXPECT_EQ(lux_as_int(t->lights[1].b.w), LUX_LIGHT_FLAG_TEXTURED);
-  EXPECT_FLOAT_EQ(t->lights[1].d.x, 1.0f) << "radiance is the constant; the caller applies the texture";
+  EXPECT_EQ(LUX_LIGHT_FLAGS(t->lights[1]), LUX_LIGHT_FLAG_TEXTURED);
+  EXPECT_FLOAT_EQ(t->lights[1].emission.x, 1.0f) << "radiance is the constant; the caller applies the texture";
   EXPECT_NEAR(pmf(t.value(), 1) / pmf(t.value(), 0), 0.5, 1e-6);
 }
 
@@ -171,12 +171,12 @@ TEST(LightTable, SunAndDirectionalDiscsStoreOneMinusCosAndDiscRadiance) {
   ASSERT_TRUE(t.is_ok()) << t.status().to_string();
   ASSERT_EQ(t->lights.size(), 2u);
   const double a5 = 5 * kPi / 180;
-  EXPECT_NEAR(t->lights[0].e.z, 1 - std::cos(a5), 1e-9);
-  EXPECT_NEAR(t->lights[0].d.x, 2.0 / (kPi * std::sin(a5) * std::sin(a5)), 1e-3);
+  EXPECT_NEAR(LUX_LIGHT_ONE_MINUS_COS(t->lights[0]), 1 - std::cos(a5), 1e-9);
+  EXPECT_NEAR(t->lights[0].emission.x, 2.0 / (kPi * std::sin(a5) * std::sin(a5)), 1e-3);
   const cl::LuxLight& sun = t->lights[1];
   const double a = 0.27 * kPi / 180;
-  EXPECT_NEAR(sun.e.z / (1 - std::cos(a)), 1.0, 1e-5) << "1 - cos kept to float precision";
-  EXPECT_NEAR(sun.b.x, std::sqrt(0.5), 1e-6) << "direction normalized";
+  EXPECT_NEAR(LUX_LIGHT_ONE_MINUS_COS(sun) / (1 - std::cos(a)), 1.0, 1e-5) << "1 - cos kept to float precision";
+  EXPECT_NEAR(sun.axis.x, std::sqrt(0.5), 1e-6) << "direction normalized";
   EXPECT_NEAR(pmf(t.value(), 1) / pmf(t.value(), 0), 500.0, 1e-3);
   device::FeatureSet f;
   add_light_features(t.value(), &f);

@@ -91,15 +91,15 @@ Status add_emissive_triangles(const scene::Scene& scene, const accel::TriangleSo
 
     LightCandidate c;
     set_type(&c.light, LUX_LIGHT_TYPE_TRIANGLE);
-    c.light.a = {v0.x, v0.y, v0.z, c.light.a.w};
-    c.light.b = {e1.x, e1.y, e1.z, lux_as_float(static_cast<int32_t>(e.flags))};
-    c.light.c = {e2.x, e2.y, e2.z, lux_as_float(static_cast<int32_t>(t))};
-    c.light.d = {e.radiance.x, e.radiance.y, e.radiance.z, static_cast<float>(0.5 * twice_area)};
-    c.light.e = {static_cast<float>(cx * n_scale), static_cast<float>(cy * n_scale),
+    c.light.origin = {v0.x, v0.y, v0.z, c.light.origin.w};
+    c.light.axis = {e1.x, e1.y, e1.z, lux_as_float(static_cast<int32_t>(e.flags))};
+    c.light.edge2 = {e2.x, e2.y, e2.z, lux_as_float(static_cast<int32_t>(t))};
+    c.light.emission = {e.radiance.x, e.radiance.y, e.radiance.z, static_cast<float>(0.5 * twice_area)};
+    c.light.shape = {static_cast<float>(cx * n_scale), static_cast<float>(cy * n_scale),
                  static_cast<float>(cz * n_scale), lux_as_float(static_cast<int32_t>(material))};
     // A triangle whose area rounds to 0 in float would give the device an
     // infinite pdf; power 0 makes build_light_table drop it.
-    c.power = c.light.d.w > 0 ? 0.5 * twice_area * e.power_scale : 0.0;
+    c.power = LUX_LIGHT_AREA(c.light) > 0 ? 0.5 * twice_area * e.power_scale : 0.0;
     out->push_back(c);
   }
   return Status::ok();

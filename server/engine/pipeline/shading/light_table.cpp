@@ -41,7 +41,7 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
   if (sky->sky.kind != LUX_SKY_KIND_NONE) {
     detail::LightCandidate c;
     detail::set_type(&c.light, LUX_LIGHT_TYPE_SKY);
-    c.light.d = {sky->mean_radiance.x, sky->mean_radiance.y, sky->mean_radiance.z, 0};
+    c.light.emission = {sky->mean_radiance.x, sky->mean_radiance.y, sky->mean_radiance.z, 0};
     c.power = kPi * sky->mean_luminance * disc_area;
     candidates.push_back(c);
   }
@@ -63,7 +63,7 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
       case LUX_LIGHT_TYPE_DIRECTIONAL: table.has_directional = true; break;
       case LUX_LIGHT_TYPE_TRIANGLE:
         table.has_emissive = true;
-        table.triangle_light[static_cast<size_t>(lux_as_int(c.light.c.w))] = index;
+        table.triangle_light[static_cast<size_t>(LUX_LIGHT_TRIANGLE(c.light))] = index;
         break;
       case LUX_LIGHT_TYPE_SKY:
         table.has_sky = true;

@@ -25,17 +25,17 @@ Status directional_candidate(const std::string& what, Vec3 direction, Vec3 irrad
     return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, 90)", what.c_str(),
                                       static_cast<double>(angular_radius_degrees)));
   set_type(&c->light, LUX_LIGHT_TYPE_DIRECTIONAL);
-  c->light.b = f4(normalize(direction), c->light.b.w);
+  c->light.axis = f4(normalize(direction), c->light.axis.w);
   Vec3 radiance = irradiance;
   if (angular_radius_degrees > 0) {
     const double a = angular_radius_degrees * kPi / 180.0;
     const double one_minus_cos = 2.0 * std::sin(a / 2) * std::sin(a / 2);
     const double sin2 = std::sin(a) * std::sin(a);
     radiance = irradiance * static_cast<float>(1.0 / (kPi * sin2));
-    c->light.e.z = static_cast<float>(one_minus_cos);
+    LUX_LIGHT_ONE_MINUS_COS(c->light) = static_cast<float>(one_minus_cos);
   }
   if (!is_finite(radiance)) return invalid_argument(what + ": radiance overflows a float");
-  c->light.d = f4(radiance);
+  c->light.emission = f4(radiance);
   c->power = luminance(irradiance) * disc_area;
   return Status::ok();
 }
@@ -77,8 +77,8 @@ Status add_punctual_lights(const scene::Scene& scene, float directional_angular_
       continue;
     }
     if (!is_finite(l.position)) return invalid_argument(what + ": position is not finite");
-    c.light.a = f4(l.position);
-    c.light.d = f4(value);
+    c.light.origin = f4(l.position);
+    c.light.emission = f4(value);
     if (l.type == scene::LightType::kPoint) {
       set_type(&c.light, LUX_LIGHT_TYPE_POINT);
       c.power = 4 * kPi * luminance(value);
@@ -90,9 +90,9 @@ Status add_punctual_lights(const scene::Scene& scene, float directional_angular_
         return invalid_argument(strprintf("%s: spot cone angles inner %g, outer %g must satisfy "
                                           "0 <= inner <= outer <= pi/2", what.c_str(), inner, outer));
       set_type(&c.light, LUX_LIGHT_TYPE_SPOT);
-      c.light.b = f4(normalize(l.direction), c.light.b.w);
-      c.light.e.x = static_cast<float>(std::cos(inner));
-      c.light.e.y = static_cast<float>(std::cos(outer));
+      c.light.axis = f4(normalize(l.direction), c.light.axis.w);
+      LUX_LIGHT_COS_INNER(c.light) = static_cast<float>(std::cos(inner));
+      LUX_LIGHT_COS_OUTER(c.light) = static_cast<float>(std::cos(outer));
       c.power = 2 * kPi * (1 - std::cos((inner + outer) / 2)) * luminance(value);
     }
     out->push_back(c);
