@@ -199,17 +199,6 @@ Status Baker::compute_stats(BakeProgress& progress) {
   return Status::ok();
 }
 
-// Restores a checkpoint's accumulation and its error series.
-Status resume_from(const BakeCheckpoint& c, BakeResult& result) {
-  const auto& s = c.series;
-  const size_t stride = c.series_stride;
-  for (size_t i = 0; i + stride <= s.size(); i += stride)
-    result.series.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2],
-                             static_cast<uint32_t>(s[i + 3]), s[i + 4],
-                             stride >= 7 ? s[i + 5] : -1.0, stride >= 7 ? s[i + 6] : -1.0});
-  return Status::ok();
-}
-
 Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   LUXEL_RETURN_IF_ERROR(validate_settings(settings_));
   const auto t_setup = Clock::now();
@@ -225,7 +214,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     paths_done_ = hooks.resume->paths_done;
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
-    LUXEL_RETURN_IF_ERROR(resume_from(*hooks.resume, result));
+    result.series = series_from_checkpoint(*hooks.resume);
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   result.setup_s = seconds_since(t_setup);
@@ -299,9 +288,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       c.fingerprint = hooks.fingerprint;
       c.iteration = progress.iteration;
       c.elapsed_s = elapsed();
-      for (const auto& e : result.series)
-        c.series.insert(c.series.end(), {e.elapsed_s, double(e.paths), e.mean_spp,
-                                         double(e.min_spp), e.error, e.rmse, e.rel_mse});
+      series_to_checkpoint(result.series, c);
       hooks.on_checkpoint(c);
       last_checkpoint = Clock::now();
       // A host that checkpoints to stop (daemon shutdown) cancels in the
@@ -319,26 +306,11 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto state = read_state();
   if (!state) return state.status();
   assemble_result(s_, settings_, state.value(), result);
-  result.atlas = s_.atlas;
-  result.covered_texels = s_.info.covered_texels.size();
+  record_final_progress(progress, ctx_, result);
   result.termination = why;
-  result.paths = paths_done_;
-  result.mean_spp = progress.mean_spp;
-  result.min_spp = progress.min_spp;
-  result.error = progress.error;
-  result.rmse = progress.rmse;
-  result.rel_mse = progress.rel_mse;
-  device::FeatureSet reported = s_.features;
-  for (const auto& [name, value] : s_.tracer->features().values()) reported.set(name, value);
-  result.features = reported.describe();
-  result.device = ctx_.info().describe();
-  result.sample_info_bytes = s_.info.bytes();
   result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() +
                              sort_->device_bytes() +
                              (compaction_ ? compaction_->device_bytes() : 0);
-  result.kernel_table = ctx_.timer().table();
-  for (const auto& [name, stats] : ctx_.timer().stats())
-    result.kernel_ms.push_back({name, stats.total_ms});
   return result;
 }
 

@@ -67,6 +67,42 @@ void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
   }
   r.nonfinite_dropped = state.nonfinite;
   assemble_encodings(setup, settings, state, r);
+  r.atlas = setup.atlas;
+  r.covered_texels = setup.info.covered_texels.size();
+  device::FeatureSet reported = setup.features;
+  for (const auto& [name, value] : setup.tracer->features().values()) reported.set(name, value);
+  r.features = reported.describe();
+  r.sample_info_bytes = setup.info.bytes();
+}
+
+void record_final_progress(const BakeProgress& p, device::Context& ctx, BakeResult& r) {
+  r.paths = p.paths;
+  r.mean_spp = p.mean_spp;
+  r.min_spp = p.min_spp;
+  r.error = p.error;
+  r.rmse = p.rmse;
+  r.rel_mse = p.rel_mse;
+  r.device = ctx.info().describe();
+  r.kernel_table = ctx.timer().table();
+  for (const auto& [name, stats] : ctx.timer().stats()) r.kernel_ms.push_back({name, stats.total_ms});
+}
+
+std::vector<ErrorSample> series_from_checkpoint(const BakeCheckpoint& c) {
+  std::vector<ErrorSample> out;
+  const auto& s = c.series;
+  const size_t stride = c.series_stride;
+  for (size_t i = 0; i + stride <= s.size(); i += stride)
+    out.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2],
+                   static_cast<uint32_t>(s[i + 3]), s[i + 4], stride >= 7 ? s[i + 5] : -1.0,
+                   stride >= 7 ? s[i + 6] : -1.0});
+  return out;
+}
+
+void series_to_checkpoint(const std::vector<ErrorSample>& series, BakeCheckpoint& c) {
+  c.series_stride = 7;
+  for (const auto& e : series)
+    c.series.insert(c.series.end(), {e.elapsed_s, double(e.paths), e.mean_spp, double(e.min_spp),
+                                     e.error, e.rmse, e.rel_mse});
 }
 
 }  // namespace luxel::pipeline

@@ -17,8 +17,17 @@ void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean
                      std::vector<float>& rgba);
 
 // Fills r's images (irradiance, samples, rel_error), nonfinite count and
-// encodings from the state.
+// encodings from the state, and what the setup decided (atlas, coverage,
+// compiled features of the bake and the tracer, sample-info size).
 void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
                      const BakeCheckpoint& state, BakeResult& r);
+
+// The final progress report's figures, and the device's timing table.
+void record_final_progress(const BakeProgress& p, device::Context& ctx, BakeResult& r);
+
+// The error series as checkpoints store it (ErrorSample fields flattened,
+// series_stride per point), both ways.
+std::vector<ErrorSample> series_from_checkpoint(const BakeCheckpoint& c);
+void series_to_checkpoint(const std::vector<ErrorSample>& series, BakeCheckpoint& c);
 
 }  // namespace luxel::pipeline
