@@ -14,7 +14,7 @@
 #include "commands.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
-#include "output/exr.h"
+#include "output/reference_exr.h"
 #include "pipeline/bake_outputs.h"
 #include "progress_bar.h"
 #include "scene/gltf_import.h"
@@ -52,21 +52,12 @@ int run_bake(const std::vector<std::string>& args) {
   }
   if (!a.reference_file.empty()) {
     // Benchmark mode: RGBA (or RGB) float EXR of the lightmap's size.
-    auto image = output::read_exr(a.reference_file);
+    auto image = output::read_reference_exr(a.reference_file);
     if (!image) {
       std::fprintf(stderr, "luxel bake: --reference: %s\n", image.status().to_string().c_str());
       return 1;
     }
-    if (image->channels != 4 && image->channels != 3) {
-      std::fprintf(stderr, "luxel bake: --reference: %s has %d channels, expected RGB or RGBA\n",
-                   a.reference_file.c_str(), image->channels);
-      return 1;
-    }
-    std::vector<float> rgba(image->texel_count() * 4, 1.0f);
-    for (size_t t = 0; t < image->texel_count(); ++t)
-      for (int c = 0; c < image->channels; ++c)
-        rgba[t * 4 + size_t(c)] = image->pixels[t * size_t(image->channels) + size_t(c)];
-    a.settings.reference = std::make_shared<const std::vector<float>>(std::move(rgba));
+    a.settings.reference = std::make_shared<const std::vector<float>>(std::move(image->pixels));
     a.settings.reference_name = a.reference_file;
   }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {

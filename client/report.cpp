@@ -15,7 +15,7 @@
 
 #include "commands.h"
 #include "common/status.h"
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "output/manifest.h"
 #include "remote/connection.h"
 #include "remote/fetch.h"
@@ -225,7 +225,7 @@ int run_report(const std::vector<std::string>& args) {
   }
   int rc = 0;
   if (!csv_out.empty()) {
-    if (Status st = output::write_file_atomic(csv_out, csv.data(), csv.size()); !st.is_ok()) {
+    if (Status st = write_file_atomic(csv_out, csv.data(), csv.size()); !st.is_ok()) {
       std::fprintf(stderr, "luxel report: %s\n", st.message().c_str());
       rc = 1;
     } else {

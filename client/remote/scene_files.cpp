@@ -9,6 +9,8 @@
 #include <iterator>
 #include <set>
 
+#include "common/scene_id.h"
+#include "common/uri.h"
 #include "remote/sha256.h"
 
 namespace luxel::cli::remote {
@@ -21,21 +23,6 @@ std::string lower_extension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
-}
-
-// glTF uris are RFC 3986 references: "%20" is a space in the file name.
-std::string percent_decode(const std::string& s) {
-  std::string out;
-  for (size_t i = 0; i < s.size(); ++i) {
-    if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
-        std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
-      out += static_cast<char>(std::stoi(s.substr(i + 1, 2), nullptr, 16));
-      i += 2;
-    } else {
-      out += s[i];
-    }
-  }
-  return out;
 }
 
 // The JSON of a .gltf file, or the JSON chunk of a .glb (glTF 2.0 §4.4: a
@@ -73,9 +60,14 @@ grpc::Status add_resources(const nlohmann::json& json, const char* array, const 
     const std::string where = std::string(array) + "[" + std::to_string(i) + "].uri '" + uri + "'";
     if (uri.find("://") != std::string::npos || (!uri.empty() && uri[0] == '/'))
       return {grpc::StatusCode::INVALID_ARGUMENT, where + ": only relative file uris can be uploaded"};
+    // glTF uris are RFC 3986 references: "%20" is a space in the file name.
+    auto decoded = percent_decode_uri(uri);
+    if (!decoded)
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              std::string(array) + "[" + std::to_string(i) + "]: " + decoded.status().message()};
     SceneFile f;
     f.uri = uri;
-    f.path = (dir / percent_decode(uri)).string();
+    f.path = (dir / decoded.value()).string();
     if (auto st = hash_file(f.path, f.size, f.sha256); !st.ok())
       return {st.error_code(), where + ": " + st.error_message()};
     out.push_back(std::move(f));
@@ -103,17 +95,9 @@ grpc::Status collect_scene_files(const std::string& path, SceneFiles& out) {
 }
 
 std::string scene_id(const SceneFiles& files) {
-  if (files.resources.empty()) return files.main.sha256;
-  std::vector<const SceneFile*> sorted;
-  for (const SceneFile& r : files.resources) sorted.push_back(&r);
-  // std::string's operator< compares bytes as unsigned char: byte order.
-  std::sort(sorted.begin(), sorted.end(), [](const SceneFile* a, const SceneFile* b) { return a->uri < b->uri; });
-  std::string manifest = "luxel-scene-v1\n" + files.main.sha256 + "\n";
-  for (const SceneFile* r : sorted)
-    manifest += r->uri + "\t" + std::to_string(r->size) + "\t" + r->sha256 + "\n";
-  Sha256 hasher;
-  hasher.update(manifest.data(), manifest.size());
-  return hasher.hex_digest();
+  std::vector<SceneIdResource> resources;
+  for (const SceneFile& r : files.resources) resources.push_back({r.uri, r.size, r.sha256});
+  return luxel::scene_id(files.main.sha256, std::move(resources));
 }
 
 luxel::v1::SceneUploadHeader upload_header(const SceneFiles& files, const std::string& name) {

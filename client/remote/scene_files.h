@@ -31,11 +31,8 @@ struct SceneFiles {
 // JSON, a uri that is not a relative file), NOT_FOUND (a missing resource).
 grpc::Status collect_scene_files(const std::string& path, SceneFiles& out);
 
-// The id the daemon gives these files (the rule in luxel.proto's header
-// comment): the main file's sha256 without external resources; otherwise the
-// sha256 of "luxel-scene-v1\n" + "<main sha256>\n" + one line
-// "<uri>\t<size>\t<sha256>\n" per resource, sorted by uri (byte order). So a
-// changed .bin beside an unchanged .gltf is a different scene.
+// The id the daemon gives these files: common/scene_id.h, the function the
+// daemon's SceneStore uses too.
 std::string scene_id(const SceneFiles& files);
 
 // The upload header for `files` (display name `name`, or the file name).

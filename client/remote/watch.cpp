@@ -10,7 +10,7 @@
 
 #include "commands.h"
 #include "common/status.h"
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "remote/output.h"
 
 namespace luxel::cli::remote {
@@ -65,7 +65,7 @@ class EventPrinter {
     path = (std::filesystem::path(o_.snapshots_dir) / strprintf("snapshot_%04d.%s", next_++, ext))
                .string();
     // Atomic, so an editor polling the folder never reads half an image.
-    Status st = output::write_file_atomic(path, s.data().data(), s.data().size());
+    Status st = write_file_atomic(path, s.data().data(), s.data().size());
     if (!st.is_ok()) return {grpc::StatusCode::INTERNAL, st.message()};
     return grpc::Status::OK;
   }

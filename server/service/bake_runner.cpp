@@ -4,9 +4,8 @@
 #include <filesystem>
 
 #include "pipeline/bake.h"
-#include "output/exr.h"
+#include "output/reference_exr.h"
 #include "pipeline/bake_outputs.h"
-#include "scene/gltf_import.h"
 #include "service/files.h"
 #include "service/log.h"
 
@@ -138,20 +137,16 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   if (!settings) return finish_failed(bake_id, settings.status());
   if (const std::string& ref = info->settings().reference_bake_id(); !ref.empty()) {
     // Benchmark mode: the reference bake's irradiance.exr (RGBA).
-    auto image = output::read_exr(bakes_.results_dir(ref) + "/irradiance.exr");
+    auto image = output::read_reference_exr(bakes_.results_dir(ref) + "/irradiance.exr");
     if (!image)
       return finish_failed(bake_id, invalid_argument(strprintf(
-          "settings.reference_bake_id: cannot read the result of bake %s: %s", ref.c_str(),
+          "settings.reference_bake_id: cannot use the result of bake %s: %s", ref.c_str(),
           image.status().message().c_str())));
-    if (image->channels != 4)
-      return finish_failed(bake_id, invalid_argument(strprintf(
-          "settings.reference_bake_id: bake %s's lightmap has %d channels, expected RGBA", ref.c_str(),
-          image->channels)));
     settings->reference = std::make_shared<const std::vector<float>>(std::move(image->pixels));
   }
   auto scene_info = scenes_.get(info->scene_id());
   if (!scene_info) return finish_failed(bake_id, scene_info.status());
-  auto scene = scene::import_gltf_file(scenes_.main_file_path(scene_info.value()));
+  auto scene = scenes_.load_scene(scene_info.value());  // imported once, at upload
   if (!scene) return finish_failed(bake_id, scene.status());
   if (!ctx) {
     auto created = device::Context::create(options_.device_spec);
@@ -223,7 +218,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     };
   }
 
-  auto result = pipeline::bake(scene.value(), settings.value(), *ctx, hooks);
+  auto result = pipeline::bake(*scene.value(), settings.value(), *ctx, hooks);
   if (!result) {
     ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
     return finish_failed(bake_id, result.status());
@@ -254,9 +249,10 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   const std::string final_dir = bakes_.results_dir(bake_id);
   remove_tree(partial);
   remove_tree(final_dir);
-  auto written = pipeline::write_bake_outputs(partial, scene.value(), settings.value(), r, info->scene_id());
+  auto written = pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r,
+                                              info->scene_id());
   if (!written) return finish_failed(bake_id, written.status());
-  if (Status st = output::fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
+  if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
   if (Status st = rename_durable(partial, final_dir); !st.is_ok()) return finish_failed(bake_id, st);
 
   log_event("bake_finished", {{"bake", bake_id}, {"scene", info->scene_id()},

@@ -105,7 +105,7 @@ Status BakeStore::persist(Entry& entry) {
     id = entry.info.bake_id();
   }
   if (!text) return text.status();
-  return write_file_durable(bake_dir(id) + "/record.json", text.value());
+  return write_file_atomic(bake_dir(id) + "/record.json", text.value());
 }
 
 Result<BakeStore::Created> BakeStore::create(const std::string& scene_id,

@@ -12,16 +12,12 @@
 
 #include <chrono>
 
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "service/log.h"
 
 namespace luxel::service {
 
 namespace fs = std::filesystem;
-
-Status write_file_durable(const std::string& path, const std::string& bytes) {
-  return output::write_file_atomic(path, bytes.data(), bytes.size());
-}
 
 Result<std::string> read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -36,7 +32,7 @@ Status rename_durable(const std::string& from, const std::string& to) {
   if (::rename(from.c_str(), to.c_str()) != 0)
     return internal_error(strprintf("rename %s -> %s: %s", from.c_str(), to.c_str(),
                                     std::strerror(errno)));
-  return output::fsync_directory(fs::path(to).parent_path().string());
+  return fsync_directory(fs::path(to).parent_path().string());
 }
 
 Status make_directories(const std::string& dir) {

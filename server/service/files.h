@@ -1,16 +1,16 @@
-// File-system helpers for the stores. Every store write is atomic: write a
-// temporary file, fsync it, rename it over the target, fsync the directory
-// (output::write_file_atomic), so a crash leaves the old or the new version.
+// File-system helpers for the stores. Every store write goes through
+// write_file_atomic (common/atomic_file.h: temporary file, fsync, rename over
+// the target, fsync of the directory), so a crash leaves the old or the new
+// version.
 #pragma once
 
 #include <string>
 
 #include "common/status.h"
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace luxel::service {
 
-Status write_file_durable(const std::string& path, const std::string& bytes);
 Result<std::string> read_whole_file(const std::string& path);
 
 // rename(2) then fsync of the destination's directory.

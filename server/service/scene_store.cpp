@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
 #include "service/files.h"
 #include "service/log.h"
+#include "common/scene_id.h"
 #include "common/sha256.h"
 
 namespace luxel::service {
@@ -47,25 +47,21 @@ Result<v1::SceneInfo> load_info(const std::string& path) {
 }  // namespace
 
 std::string scene_id_of(const v1::SceneUploadHeader& header) {
-  if (header.resources_size() == 0) return header.sha256();
-  std::vector<const v1::ResourceHeader*> sorted;
-  for (const auto& r : header.resources()) sorted.push_back(&r);
-  // std::string's operator< compares bytes as unsigned char: byte order.
-  std::sort(sorted.begin(), sorted.end(),
-            [](const v1::ResourceHeader* a, const v1::ResourceHeader* b) { return a->uri() < b->uri(); });
-  Sha256 manifest;
-  manifest.update("luxel-scene-v1\n");
-  manifest.update(header.sha256() + "\n");
-  for (const v1::ResourceHeader* r : sorted)
-    manifest.update(r->uri() + "\t" + std::to_string(r->size()) + "\t" + r->sha256() + "\n");
-  return manifest.hex_digest();
+  std::vector<SceneIdResource> resources;
+  for (const auto& r : header.resources()) resources.push_back({r.uri(), r.size(), r.sha256()});
+  return scene_id(header.sha256(), std::move(resources));
 }
 
-SceneStore::SceneStore(std::string data_dir)
-    : scenes_dir_(data_dir + "/scenes"), staging_dir_(data_dir + "/staging") {}
+SceneStore::SceneStore(std::string data_dir, SceneCacheLimits cache,
+                       SceneCache::Importer importer)
+    : scenes_dir_(data_dir + "/scenes"),
+      staging_dir_(data_dir + "/staging"),
+      cache_(cache, std::move(importer)) {}
 
-Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& data_dir) {
-  std::unique_ptr<SceneStore> store(new SceneStore(data_dir));
+Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& data_dir,
+                                                     SceneCacheLimits cache,
+                                                     SceneCache::Importer importer) {
+  std::unique_ptr<SceneStore> store(new SceneStore(data_dir, cache, std::move(importer)));
   LUXEL_RETURN_IF_ERROR(make_directories(store->scenes_dir_));
   LUXEL_RETURN_IF_ERROR(make_directories(store->staging_dir_));
   std::error_code ec;
@@ -123,7 +119,7 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
     return existing;
   }
   const std::string main_path = staging_dir + "/" + main_file_name(header.format());
-  auto imported = scene::import_gltf_file(main_path);
+  auto imported = cache_.import(main_path);
   if (!imported) {
     const Status& st = imported.status();
     // Whatever the importer says, the upload is what is wrong.
@@ -148,8 +144,8 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   options.add_whitespace = true;
   if (auto st = pbu::MessageToJsonString(info, &json, options); !st.ok())
     return internal_error("scene info to JSON: " + st.ToString());
-  LUXEL_RETURN_IF_ERROR(write_file_durable(staging_dir + "/info.json", json));
-  LUXEL_RETURN_IF_ERROR(output::fsync_directory(staging_dir));
+  LUXEL_RETURN_IF_ERROR(write_file_atomic(staging_dir + "/info.json", json));
+  LUXEL_RETURN_IF_ERROR(fsync_directory(staging_dir));
 
   std::lock_guard<std::mutex> lock(mu_);
   if (auto it = scenes_.find(id); it != scenes_.end()) {  // a concurrent upload won
@@ -160,7 +156,15 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   LUXEL_RETURN_IF_ERROR(rename_durable(staging_dir, scene_dir(id)));
   cleanup.dir.clear();
   scenes_[id] = info;
+  // What load_scene would import from the stored file: the importer names the
+  // scene after the path it was given (manifests carry it).
+  imported->source_name = main_file_path(info);
+  cache_.put(id, std::make_shared<const scene::Scene>(std::move(imported.value())));
   return info;
+}
+
+Result<std::shared_ptr<const scene::Scene>> SceneStore::load_scene(const v1::SceneInfo& info) {
+  return cache_.get_or_import(info.scene_id(), main_file_path(info));
 }
 
 Result<v1::SceneInfo> SceneStore::get(const std::string& scene_id) const {
@@ -190,6 +194,7 @@ Status SceneStore::remove(const std::string& scene_id) {
   const std::string doomed = staging_dir_ + "/deleted-" + random_hex_id();
   LUXEL_RETURN_IF_ERROR(rename_durable(scene_dir(scene_id), doomed));
   scenes_.erase(scene_id);
+  cache_.erase(scene_id);
   remove_tree(doomed);
   return Status::ok();
 }

@@ -19,22 +19,26 @@
 
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
+#include "scene/scene.h"
+#include "service/scene_cache.h"
 
 namespace luxel::service {
 
-// The scene id of an upload (the rule in luxel.proto's header comment): the
-// main file's sha256 when there are no external resources; otherwise the
-// sha256 of "luxel-scene-v1\n" + "<main sha256>\n" + one line
-// "<uri>\t<size>\t<sha256>\n" per resource, sorted by uri as written (byte
-// order). Covering the resources means a changed .bin is a new scene instead
-// of an already_stored hit that keeps the old bytes. The header's hashes must
-// already be verified against the bytes (SceneUpload does that).
+// The scene id of an upload (common/scene_id.h, the rule in luxel.proto's
+// header comment; the CLI computes it with the same function). Covering the
+// resources means a changed .bin is a new scene instead of an already_stored
+// hit that keeps the old bytes. The header's hashes must already be verified
+// against the bytes (SceneUpload does that).
 std::string scene_id_of(const v1::SceneUploadHeader& header);
 
 class SceneStore {
  public:
-  // Creates the folders, removes stale staging folders, loads every scene's info.
-  static Result<std::unique_ptr<SceneStore>> open(const std::string& data_dir);
+  // Creates the folders, removes stale staging folders, loads every scene's
+  // info. `cache` bounds the imported scenes kept in memory (SceneCache);
+  // `importer` replaces scene::import_gltf_file (tests).
+  static Result<std::unique_ptr<SceneStore>> open(const std::string& data_dir,
+                                                  SceneCacheLimits cache = {},
+                                                  SceneCache::Importer importer = {});
 
   // A new, empty staging folder for one upload.
   Result<std::string> new_staging_dir();
@@ -46,7 +50,8 @@ class SceneStore {
   // the scene is already stored, removes the folder and returns the stored
   // info with already_stored = true; otherwise imports and validates the main
   // file (INVALID_ARGUMENT naming what fails), writes info.json and moves the
-  // folder into place. The folder is gone afterwards in every case.
+  // folder into place. The folder is gone afterwards in every case. The
+  // validated import is kept in the scene cache for the first bake.
   Result<v1::SceneInfo> commit(const std::string& staging_dir, const v1::SceneUploadHeader& header,
                                uint64_t stored_bytes);
 
@@ -57,15 +62,21 @@ class SceneStore {
   Status remove(const std::string& scene_id);
   // Path of the main file of a stored scene.
   std::string main_file_path(const v1::SceneInfo& info) const;
+  // The imported scene of a stored scene: from the cache, or imported from
+  // its main file (and cached). Errors are the importer's.
+  Result<std::shared_ptr<const scene::Scene>> load_scene(const v1::SceneInfo& info);
+  // Importer runs (commit's validation and load_scene's misses), for tests.
+  size_t scene_imports() const { return cache_.imports(); }
   size_t size() const;
 
  private:
-  explicit SceneStore(std::string data_dir);
+  SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer);
   std::string scene_dir(const std::string& scene_id) const;
 
   std::string scenes_dir_, staging_dir_;
   mutable std::mutex mu_;
   std::map<std::string, v1::SceneInfo> scenes_;
+  SceneCache cache_;
 };
 
 }  // namespace luxel::service

@@ -6,38 +6,12 @@
 #include <filesystem>
 #include <set>
 
+#include "common/uri.h"
 #include "service/files.h"
 
 namespace luxel::service {
 
 namespace fs = std::filesystem;
-
-// glTF uris are URI references: "tex%20a.png" names the file "tex a.png" (the
-// importer decodes them the same way). Decoding first also means "%2e%2e"
-// cannot slip past the path checks below.
-Result<std::string> decode_resource_uri(const std::string& uri) {
-  std::string out;
-  out.reserve(uri.size());
-  for (size_t i = 0; i < uri.size(); ++i) {
-    if (uri[i] != '%') {
-      out.push_back(uri[i]);
-      continue;
-    }
-    auto hex = [](char c) -> int {
-      if (c >= '0' && c <= '9') return c - '0';
-      if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-      if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-      return -1;
-    };
-    const int hi = i + 2 < uri.size() ? hex(uri[i + 1]) : -1;
-    const int lo = i + 2 < uri.size() ? hex(uri[i + 2]) : -1;
-    if (hi < 0 || lo < 0)
-      return invalid_argument(strprintf("header.resources.uri '%s': malformed %%-escape", uri.c_str()));
-    out.push_back(static_cast<char>(hi * 16 + lo));
-    i += 2;
-  }
-  return out;
-}
 
 Status check_resource_uri(const std::string& uri) {
   auto bad = [&](const char* why) {
@@ -78,8 +52,12 @@ Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
   std::set<std::string> uris;
   std::vector<std::string> paths;  // decoded, relative to the scene folder
   for (const auto& r : header.resources()) {
-    auto decoded = decode_resource_uri(r.uri());
-    if (!decoded) return decoded.status();
+    // glTF uris are URI references: "tex%20a.png" names the file "tex a.png"
+    // (common/uri.h, as the importer reads it). Decoding first also means
+    // "%2e%2e" cannot slip past the path checks below.
+    auto decoded = percent_decode_uri(r.uri());
+    if (!decoded)
+      return invalid_argument("header.resources.uri: " + decoded.status().message());
     LUXEL_RETURN_IF_ERROR(check_resource_uri(decoded.value()));
     paths.push_back(decoded.value());
     if (!uris.insert(decoded.value()).second)

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <set>
 
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "output/oiio_codec.h"
 
 namespace luxel::output {

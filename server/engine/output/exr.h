@@ -18,7 +18,7 @@ namespace luxel::output {
 inline const std::vector<std::string> kRgbaChannels = {"R", "G", "B", "A"};
 inline const std::vector<std::string> kLuminanceChannel = {"Y"};
 
-// Writes `image` to `path` atomically (see atomic_file.h; nothing is left
+// Writes `image` to `path` atomically (see common/atomic_file.h; nothing is left
 // half-written). `channel_names` names every channel (non-empty, unique).
 // `metadata` becomes string header attributes, e.g. {"luxel/encoding",
 // "irradiance"}; keys "compression" and "oiio:*" are reserved. The header

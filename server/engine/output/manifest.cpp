@@ -11,7 +11,7 @@
 #include <sstream>
 #include <system_error>
 
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace luxel::output {
 namespace {

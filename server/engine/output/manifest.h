@@ -96,7 +96,7 @@ Result<std::string> manifest_to_json(const Manifest& manifest);
 // rule, or for another format / an unsupported version.
 Result<Manifest> manifest_from_json(const std::string& text, const std::string& what);
 
-// Validates, then writes atomically (atomic_file.h). Errors name the path.
+// Validates, then writes atomically (common/atomic_file.h). Errors name the path.
 Status write_manifest(const std::string& path, const Manifest& manifest);
 
 // Reads and validates; NOT_FOUND for a missing file, otherwise as

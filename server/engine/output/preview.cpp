@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "output/oiio_codec.h"
 #include "output/tone_map.h"
 

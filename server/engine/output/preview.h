@@ -29,7 +29,7 @@ struct PreviewOptions {
 // The exposure scale k the preview of `image` uses (always finite and > 0).
 double preview_exposure_scale(const Image& image, const PreviewOptions& options = {});
 
-// Writes the full-size preview of `rgba` to `path` atomically (atomic_file.h).
+// Writes the full-size preview of `rgba` to `path` atomically (common/atomic_file.h).
 // INVALID_ARGUMENT naming the path for a malformed image, an unsupported
 // channel count or an unwritable destination.
 Status write_png_preview(const std::string& path, const Image& rgba,

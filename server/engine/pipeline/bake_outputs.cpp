@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 #include "output/dilate.h"
 #include "output/exr.h"
 #include "output/preview.h"
@@ -140,7 +140,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   }
 
   const std::string csv = series_csv(result);
-  LUXEL_RETURN_IF_ERROR(output::write_file_atomic(paths.series_csv, csv.data(), csv.size()));
+  LUXEL_RETURN_IF_ERROR(write_file_atomic(paths.series_csv, csv.data(), csv.size()));
 
   output::Manifest m = make_manifest(scene, settings, result, scene_sha256);
   m.files = {

@@ -5,7 +5,7 @@
 #include <iterator>
 
 #include "common/hash.h"
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 
 namespace luxel::pipeline {
 namespace {
@@ -80,7 +80,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   w.vec(c.basis);
   const std::string sum = Hasher().add(w.bytes()).hex();
   w.raw(sum.data(), sum.size());
-  return output::write_file_atomic(path, w.bytes().data(), w.bytes().size());
+  return write_file_atomic(path, w.bytes().data(), w.bytes().size());
 }
 
 Result<BakeCheckpoint> read_checkpoint(const std::string& path) {

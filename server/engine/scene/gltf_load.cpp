@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/uri.h"
+
 namespace luxel::scene::detail {
 namespace {
 
@@ -137,11 +139,14 @@ uint64_t data_uri_size(const std::string& uri) {
 
 // Resolves an external URI for `what` ("buffer 0", "image 3 'wood'").
 Result<fs::path> resolve_external(const std::string& uri, const std::string& base_dir, const std::string& what) {
-  const std::string path = percent_decode(uri);
   if (base_dir.empty()) {
     return not_found(strprintf("%s: external file '%s' cannot be read: the scene was given without its folder "
                                "(embed the data or upload the file with it)", what.c_str(), uri.c_str()));
   }
+  // The uri is a URI reference: "%20" is a space in the file name.
+  auto decoded = percent_decode_uri(uri);
+  if (!decoded) return invalid_argument(what + ": " + decoded.status().message());
+  const std::string& path = decoded.value();
   const fs::path rel(path);
   bool escapes = rel.is_absolute() || path.find('\0') != std::string::npos;
   for (const auto& part : rel) escapes = escapes || part == "..";
@@ -286,26 +291,6 @@ std::string trim(std::string s) {
 }
 
 }  // namespace
-
-std::string percent_decode(const std::string& uri) {
-  std::string out;
-  out.reserve(uri.size());
-  auto hex = [](char h) -> int {
-    if (h >= '0' && h <= '9') return h - '0';
-    if (h >= 'a' && h <= 'f') return h - 'a' + 10;
-    if (h >= 'A' && h <= 'F') return h - 'A' + 10;
-    return -1;
-  };
-  for (size_t i = 0; i < uri.size(); ++i) {
-    if (uri[i] == '%' && i + 2 < uri.size() && hex(uri[i + 1]) >= 0 && hex(uri[i + 2]) >= 0) {
-      out.push_back(static_cast<char>(hex(uri[i + 1]) * 16 + hex(uri[i + 2])));
-      i += 2;
-    } else {
-      out.push_back(uri[i]);
-    }
-  }
-  return out;
-}
 
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
                   tinygltf::Model* model) {

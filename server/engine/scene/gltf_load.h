@@ -26,7 +26,4 @@ inline constexpr int kMaxJsonDepth = 64;
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
                   tinygltf::Model* model);
 
-// Decodes %XX escapes of a URI (tinygltf resolves files the same way).
-std::string percent_decode(const std::string& uri);
-
 }  // namespace luxel::scene::detail

@@ -9,105 +9,17 @@ namespace luxel::sampling_test {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-// Cells expecting fewer samples are pooled: below this the chi-square
-// approximation of Pearson's statistic breaks down.
-constexpr double kMinExpected = 5.0;
-
 // 5-point Gauss-Legendre rule on [0, 1] (exact for polynomials of degree 9).
 constexpr double kGaussNodes[5] = {0.04691007703066800, 0.23076534494715845, 0.5,
                                    0.76923465505284155, 0.95308992296933200};
 constexpr double kGaussWeights[5] = {0.11846344252809454, 0.23931433524968324, 0.28444444444444444,
                                      0.23931433524968324, 0.11846344252809454};
 
-// Regularised upper incomplete gamma function Q(a, x) (Numerical Recipes
-// §6.2: series below a + 1, Lentz's continued fraction above).
-double gamma_q(double a, double x) {
-  if (x <= 0.0) return 1.0;
-  const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
-  if (x < a + 1.0) {
-    double term = 1.0 / a, sum = term;
-    for (double ap = a + 1.0; std::fabs(term) > std::fabs(sum) * 1e-16; ap += 1.0) {
-      term *= x / ap;
-      sum += term;
-    }
-    return std::max(0.0, 1.0 - sum * std::exp(log_prefactor));
-  }
-  const double tiny = 1e-300;
-  double b = x + 1.0 - a, c = 1.0 / tiny, d = 1.0 / b, h = d;
-  for (int i = 1; i < 1000000; ++i) {
-    const double an = -i * (i - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::fabs(d) < tiny) d = tiny;
-    c = b + an / c;
-    if (std::fabs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::fabs(delta - 1.0) < 1e-15) break;
-  }
-  return std::exp(log_prefactor) * h;
-}
-
 }  // namespace
 
 Vec3 spherical_direction(double cos_theta, double phi) {
   const double sin_theta = std::sqrt(std::max(0.0, 1.0 - cos_theta * cos_theta));
   return {sin_theta * std::cos(phi), sin_theta * std::sin(phi), cos_theta};
-}
-
-double chi2_upper_tail(double x, double dof) {
-  return gamma_q(0.5 * dof, 0.5 * x);
-}
-
-Chi2Outcome chi2_test(const std::vector<double>& observed, const std::vector<double>& expected,
-                      double significance) {
-  Chi2Outcome out;
-  LUXEL_CHECK(observed.size() == expected.size());
-  // Pool the sparsest cells (ascending expectation) until each pool expects
-  // kMinExpected; a remainder joins the first regular cell. Cells expecting
-  // nothing are pooled too: quadrature may miss a sliver of support at the
-  // edge of a cell, while many samples where the density is 0 still blow up
-  // the statistic of their pool.
-  std::vector<size_t> order(observed.size());
-  std::iota(order.begin(), order.end(), size_t(0));
-  std::sort(order.begin(), order.end(),
-            [&](size_t a, size_t b) { return expected[a] < expected[b]; });
-  struct Cell {
-    double obs, exp;
-    size_t first;
-  };
-  std::vector<Cell> cells;
-  Cell pool{0, 0, 0};
-  bool pooling = false;
-  for (size_t i : order) {
-    if (!pooling) pool = {0, 0, i};
-    pool.obs += observed[i];
-    pool.exp += expected[i];
-    pooling = pool.exp < kMinExpected;
-    if (!pooling) cells.push_back(pool);
-  }
-  if (pooling) {
-    if (cells.empty())
-      cells.push_back(pool);
-    else
-      cells.front().obs += pool.obs, cells.front().exp += pool.exp;
-  }
-  for (const Cell& c : cells) out.statistic += (c.obs - c.exp) * (c.obs - c.exp) / c.exp;
-  out.dof = int(cells.size()) - 1;
-  out.p_value = out.dof > 0 ? chi2_upper_tail(out.statistic, out.dof) : 1.0;
-  out.passed = out.dof > 0 && out.p_value >= significance;
-  // The cells contributing most, for the failure message.
-  std::sort(cells.begin(), cells.end(), [](const Cell& a, const Cell& b) {
-    return (a.obs - a.exp) * (a.obs - a.exp) / a.exp > (b.obs - b.exp) * (b.obs - b.exp) / b.exp;
-  });
-  out.detail = strprintf(
-      "chi2 = %.1f, dof = %d, p = %.3g (threshold %.3g); worst cells (first index: observed / "
-      "expected):",
-      out.statistic, out.dof, out.p_value, significance);
-  for (size_t i = 0; i < std::min<size_t>(cells.size(), 4); ++i)
-    out.detail += strprintf(" #%zu: %.0f / %.1f", cells[i].first, cells[i].obs, cells[i].exp);
-  return out;
 }
 
 int DirectionBinning::cell(Vec3 d) const {

@@ -1,6 +1,7 @@
 // Statistics for the sampling tests: chi-square goodness of fit of sampled
-// directions against a density (after Mitsuba 3's chi2.py), direction
-// binnings with their Jacobians, and small vector helpers.
+// directions against a density (the test itself is tests/support/chi2.h,
+// shared with the shading tests), direction binnings with their Jacobians,
+// and small vector helpers.
 //
 // A chi-square case bins N samples into cells of a partition of the domain;
 // the expected count of a cell is N times the density integrated over the
@@ -8,7 +9,8 @@
 // device reports). Cells expected to hold fewer than 5 samples are pooled.
 // Samples outside the binned domain (or rejected by the sampler) form one
 // extra cell expecting N - sum(expected), so a density that does not
-// integrate to what the sampler delivers fails too.
+// integrate to what the sampler delivers fails too (the pooling rule is
+// chi2_test's).
 #pragma once
 
 #include <cmath>
@@ -16,6 +18,7 @@
 #include <vector>
 
 #include "shared/compat.h"
+#include "support/chi2.h"
 
 namespace luxel::sampling_test {
 
@@ -56,19 +59,9 @@ inline cl::float4 to_float4(Vec3 v, float w = 0.0f) {
 // Unit direction with polar cosine cos_theta and azimuth phi.
 Vec3 spherical_direction(double cos_theta, double phi);
 
-// Upper tail P(X >= x) of the chi-square distribution with dof degrees of freedom.
-double chi2_upper_tail(double x, double dof);
-
-struct Chi2Outcome {
-  bool passed = false;
-  double statistic = 0, p_value = 0;
-  int dof = 0;
-  std::string detail;  // statistic, p-value and the worst cells, for failure messages
-};
-
-// Pearson's test of observed against expected counts (same length).
-Chi2Outcome chi2_test(const std::vector<double>& observed, const std::vector<double>& expected,
-                      double significance);
+using test_support::chi2_test;
+using test_support::chi2_upper_tail;
+using test_support::Chi2Outcome;
 
 // A partition of a set of directions into res_a x res_b cells through a map
 // from [0,1)^2 onto the set.

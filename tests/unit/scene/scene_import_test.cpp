@@ -391,6 +391,20 @@ TEST(SceneImportErrors, MissingBinAndImage) {
   expect_error(import_gltf_file(p3), StatusCode::kInvalidArgument, {"../secret.png"});
 }
 
+TEST(SceneImportErrors, PercentEscapesInUris) {
+  test::TempDir dir;
+  GltfBuilder b = quad_scene();
+  dir.write("my scene.bin", std::string(b.bin.begin(), b.bin.end()));
+  // "%20" is a space (common/uri.h), so the file beside the .gltf is found.
+  auto ok = import_gltf_file(dir.write("ok.gltf", b.gltf_external("my%20scene.bin")));
+  ASSERT_TRUE(ok.is_ok()) << ok.status().to_string();
+  // Malformed escapes are refused with the uri named, not read literally.
+  for (const char* uri : {"my%2scene.bin", "my%zzscene.bin", "scene.bin%", "a.bin%00.txt"}) {
+    const std::string path = dir.write("bad.gltf", b.gltf_external(uri));
+    expect_error(import_gltf_file(path), StatusCode::kInvalidArgument, {"buffer 0", uri});
+  }
+}
+
 TEST(SceneImportErrors, TruncatedBin) {
   test::TempDir dir;
   GltfBuilder b = quad_scene();

@@ -1,6 +1,6 @@
 // Crash-safe file replacement.
 //
-// Every file the output stage produces is written whole or not at all: bytes
+// Every file the engine, the daemon and the CLI write is written whole or not at all: bytes
 // go to "<path>.tmp", which is fsync'ed and renamed over `path` (rename is
 // atomic on POSIX file systems), then the directory is fsync'ed so the rename
 // itself survives a power cut. A crash therefore leaves either the old file or
@@ -14,10 +14,11 @@
 
 #include <cstddef>
 #include <string>
+#include <string_view>
 
 #include "common/status.h"
 
-namespace luxel::output {
+namespace luxel {
 
 // Replaces `path` atomically with `bytes` bytes from `data` (permissions 0644
 // before the umask). Errors name the path:
@@ -26,6 +27,9 @@ namespace luxel::output {
 //   INTERNAL           any other I/O failure
 // On error no "<path>.tmp" is left behind and `path` is unchanged.
 Status write_file_atomic(const std::string& path, const void* data, size_t bytes);
+inline Status write_file_atomic(const std::string& path, std::string_view bytes) {
+  return write_file_atomic(path, bytes.data(), bytes.size());
+}
 
 // Makes renames and creations inside `dir` durable (fsync of the directory).
 Status fsync_directory(const std::string& dir);
@@ -33,4 +37,4 @@ Status fsync_directory(const std::string& dir);
 // The temporary name write_file_atomic uses for `path` ("<path>.tmp").
 std::string atomic_temp_path(const std::string& path);
 
-}  // namespace luxel::output
+}  // namespace luxel

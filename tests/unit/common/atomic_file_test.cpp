@@ -1,16 +1,16 @@
 // write_file_atomic: whole files or nothing, no temporaries left behind.
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 
 #include <gtest/gtest.h>
 
 #include "temp_dir.h"
 
-namespace luxel::output {
+namespace luxel {
 namespace {
 
-using testing::read_bytes;
-using testing::TempDir;
-using testing::write_bytes;
+using output::testing::read_bytes;
+using output::testing::TempDir;
+using output::testing::write_bytes;
 
 TEST(AtomicFile, WritesAndReplacesWithoutTemporaries) {
   TempDir dir("atomic");
@@ -66,4 +66,4 @@ TEST(AtomicFile, EmptyPathIsInvalid) {
 }
 
 }  // namespace
-}  // namespace luxel::output
+}  // namespace luxel

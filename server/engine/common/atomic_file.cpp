@@ -1,4 +1,4 @@
-#include "output/atomic_file.h"
+#include "common/atomic_file.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -7,7 +7,7 @@
 #include <cstring>
 #include <filesystem>
 
-namespace luxel::output {
+namespace luxel {
 namespace {
 
 // Maps an errno from creating/writing/renaming `path` onto a Status: problems
@@ -92,4 +92,4 @@ Status write_file_atomic(const std::string& path, const void* data, size_t bytes
   return sync_directory_of(path);
 }
 
-}  // namespace luxel::output
+}  // namespace luxel
