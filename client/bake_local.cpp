@@ -50,16 +50,16 @@ int run_bake(const std::vector<std::string>& args) {
                  a.remote_only.front().c_str());
     return 2;
   }
-  if (!a.reference_file.empty()) {
+  if (const std::string& file = a.settings.reference_name; !file.empty()) {
     // Benchmark mode: RGBA (or RGB) float EXR of the lightmap's size.
-    auto image = output::read_exr(a.reference_file);
+    auto image = output::read_exr(file);
     if (!image) {
       std::fprintf(stderr, "luxel bake: --reference: %s\n", image.status().to_string().c_str());
       return 1;
     }
     if (image->channels != 4 && image->channels != 3) {
       std::fprintf(stderr, "luxel bake: --reference: %s has %d channels, expected RGB or RGBA\n",
-                   a.reference_file.c_str(), image->channels);
+                   file.c_str(), image->channels);
       return 1;
     }
     std::vector<float> rgba(image->texel_count() * 4, 1.0f);
@@ -67,7 +67,6 @@ int run_bake(const std::vector<std::string>& args) {
       for (int c = 0; c < image->channels; ++c)
         rgba[t * 4 + size_t(c)] = image->pixels[t * size_t(image->channels) + size_t(c)];
     a.settings.reference = std::make_shared<const std::vector<float>>(std::move(rgba));
-    a.settings.reference_name = a.reference_file;
   }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {
     std::fprintf(stderr, "luxel bake: %s\n", st.message().c_str());
