@@ -84,7 +84,7 @@ def enum_value(enum_descriptor, value, where):
     wanted = str(value).upper().replace("-", "_")
     prefix = _enum_prefix(enum_descriptor)
     for candidate in enum_descriptor.values:
-        if wanted in (candidate.name, prefix + wanted):
+        if candidate.name in (wanted, prefix + wanted):
             return candidate.number
     names = ", ".join(v.name for v in enum_descriptor.values)
     raise LuxelError("INVALID_ARGUMENT", f"{where}: '{value}' is not one of {names}", local=True)
