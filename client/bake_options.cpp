@@ -24,13 +24,19 @@ const char* kRemoteOptions =
     "  (and the connection options of `luxel upload --help`)\n"
     "exit codes: 0 done, 1 error (daemon, network, files), 2 usage, 3 bake failed/cancelled\n";
 
-const char* kLocalOptions =
-    "  --device SPEC            OpenCL device (see `luxel devices`)\n";
+const char* kLocalOptions = "  --device SPEC            OpenCL device (see `luxel devices`)\n";
 
 // "  --bounces B              indirect bounces ... (default 4)", wrapped at 100 columns.
 std::string option_help(const Setting& st) {
-  std::string left = std::string("  ") + st.flag + (st.metavar ? std::string(" ") + st.metavar : "");
+  std::string metavar = st.metavar ? st.metavar : "";
+  if (st.type == pipeline::SettingType::kChoice) {
+    metavar.clear();
+    for (const char* c : st.choices) metavar += (metavar.empty() ? "" : "|") + std::string(c);
+  }
+  std::string left = std::string("  ") + st.flag + (metavar.empty() ? "" : " " + metavar);
   std::string text = st.help;
+  if (st.type == pipeline::SettingType::kChoiceList)
+    text += ", comma-separated: " + pipeline::describe_range(st);
   if (*st.units) text += std::string(" [") + st.units + "]";
   if (st.type != pipeline::SettingType::kBool) {
     const std::string d = pipeline::format_setting_value(st, st.default_value);
@@ -38,7 +44,8 @@ std::string option_help(const Setting& st) {
   }
   constexpr size_t kColumn = 27, kWidth = 100;
   std::string out = left;
-  out += left.size() + 1 < kColumn ? std::string(kColumn - left.size(), ' ') : "\n" + std::string(kColumn, ' ');
+  out += left.size() + 1 < kColumn ? std::string(kColumn - left.size(), ' ')
+                                   : "\n" + std::string(kColumn, ' ');
   size_t col = kColumn;
   size_t start = 0;
   while (start < text.size()) {
@@ -123,14 +130,22 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
       std::printf("%s%s", usage().c_str(), remote::kConnectionUsage);
       return ParseOutcome::kHelpShown;
     }
-    if (k == "--local") a.local = true;
-    else if (k == "--quiet") a.quiet = true;
-    else if (k == "--detach") a.detach = true;
-    else if (k == "--out") ok = text(a.out);
-    else if (k == "--device") ok = text(a.device);
-    else if (k == "--name") ok = text(a.name);
-    else if (k == "--snapshots") ok = text(a.snapshots_dir);
-    else if (k == "--idempotency-key") ok = text(a.idempotency_key);
+    if (k == "--local")
+      a.local = true;
+    else if (k == "--quiet")
+      a.quiet = true;
+    else if (k == "--detach")
+      a.detach = true;
+    else if (k == "--out")
+      ok = text(a.out);
+    else if (k == "--device")
+      ok = text(a.device);
+    else if (k == "--name")
+      ok = text(a.name);
+    else if (k == "--snapshots")
+      ok = text(a.snapshots_dir);
+    else if (k == "--idempotency-key")
+      ok = text(a.idempotency_key);
     else if (const Setting* st = setting_for_flag(k)) {
       if (st->scope == SettingScope::kLocalOnly) a.local_only.push_back(k);
       if (st->scope == SettingScope::kApiOnly) a.remote_only.push_back(k);
@@ -148,10 +163,15 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
       } else if (st->implies) {
         st->implies(a.settings);
       }
+    } else if (!k.empty() && k[0] == '-') {
+      std::fprintf(stderr, "luxel bake: unknown option '%s' (luxel bake --help)\n", k.c_str());
+      ok = false;
+    } else if (a.scene.empty())
+      a.scene = k;
+    else {
+      std::fprintf(stderr, "luxel bake: unexpected argument '%s'\n", k.c_str());
+      ok = false;
     }
-    else if (!k.empty() && k[0] == '-') { std::fprintf(stderr, "luxel bake: unknown option '%s' (luxel bake --help)\n", k.c_str()); ok = false; }
-    else if (a.scene.empty()) a.scene = k;
-    else { std::fprintf(stderr, "luxel bake: unexpected argument '%s'\n", k.c_str()); ok = false; }
     if (!ok) return ParseOutcome::kUsageError;
   }
   if (a.scene.empty() || (a.out.empty() && !a.detach)) {
@@ -164,12 +184,14 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
 int run_settings(const std::vector<std::string>& args) {
   bool json = false;
   for (const auto& a : args) {
-    if (a == "--json") json = true;
+    if (a == "--json")
+      json = true;
     else {
-      std::fprintf(a == "--help" ? stdout : stderr,
-                   "usage: luxel settings [--json]\n"
-                   "  every bake setting: name (the field path in errors and in the API), CLI\n"
-                   "  option, default, range, units, where it applies; --json: the schema as JSON\n");
+      std::fprintf(
+          a == "--help" ? stdout : stderr,
+          "usage: luxel settings [--json]\n"
+          "  every bake setting: name (the field path in errors and in the API), CLI\n"
+          "  option, default, range, units, where it applies; --json: the schema as JSON\n");
       return a == "--help" ? 0 : 2;
     }
   }

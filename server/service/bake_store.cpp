@@ -36,7 +36,8 @@ void upgrade_settings(json& info) {
   if (!info.contains("settings") || !info["settings"].is_object()) return;
   json& s = info["settings"];
   auto enum_name = [](const char* prefix, std::string v) {
-    for (char& c : v) c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    for (char& c : v)
+      c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     return prefix + v;
   };
   if (s.contains("encoding") && s["encoding"].is_string()) {

@@ -36,7 +36,8 @@ std::string enum_prefix(const pb::EnumDescriptor* e) {
 // KIND_CONSTANT -> "constant", SOLVER_PROGRESSIVE_NN -> "progressive-nn".
 std::string choice_of(const pb::EnumValueDescriptor* v) {
   std::string name = v->name().substr(enum_prefix(v->type()).size());
-  for (char& c : name) c = c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (char& c : name)
+    c = c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return name;
 }
 
@@ -64,28 +65,51 @@ pb::Message* mutable_holder(pb::Message& root, const std::string& path) {
 double get_number(const pb::Message& m, const pb::FieldDescriptor* f) {
   const pb::Reflection* r = m.GetReflection();
   switch (f->cpp_type()) {
-    case pb::FieldDescriptor::CPPTYPE_INT32: return r->GetInt32(m, f);
-    case pb::FieldDescriptor::CPPTYPE_UINT32: return r->GetUInt32(m, f);
-    case pb::FieldDescriptor::CPPTYPE_INT64: return double(r->GetInt64(m, f));
-    case pb::FieldDescriptor::CPPTYPE_UINT64: return double(r->GetUInt64(m, f));
-    case pb::FieldDescriptor::CPPTYPE_FLOAT: return r->GetFloat(m, f);
-    case pb::FieldDescriptor::CPPTYPE_DOUBLE: return r->GetDouble(m, f);
-    case pb::FieldDescriptor::CPPTYPE_BOOL: return r->GetBool(m, f) ? 1 : 0;
-    default: return 0;
+    case pb::FieldDescriptor::CPPTYPE_INT32:
+      return r->GetInt32(m, f);
+    case pb::FieldDescriptor::CPPTYPE_UINT32:
+      return r->GetUInt32(m, f);
+    case pb::FieldDescriptor::CPPTYPE_INT64:
+      return double(r->GetInt64(m, f));
+    case pb::FieldDescriptor::CPPTYPE_UINT64:
+      return double(r->GetUInt64(m, f));
+    case pb::FieldDescriptor::CPPTYPE_FLOAT:
+      return r->GetFloat(m, f);
+    case pb::FieldDescriptor::CPPTYPE_DOUBLE:
+      return r->GetDouble(m, f);
+    case pb::FieldDescriptor::CPPTYPE_BOOL:
+      return r->GetBool(m, f) ? 1 : 0;
+    default:
+      return 0;
   }
 }
 
 void set_number(pb::Message& m, const pb::FieldDescriptor* f, double x) {
   const pb::Reflection* r = m.GetReflection();
   switch (f->cpp_type()) {
-    case pb::FieldDescriptor::CPPTYPE_INT32: r->SetInt32(&m, f, static_cast<int32_t>(x)); break;
-    case pb::FieldDescriptor::CPPTYPE_UINT32: r->SetUInt32(&m, f, static_cast<uint32_t>(x)); break;
-    case pb::FieldDescriptor::CPPTYPE_INT64: r->SetInt64(&m, f, static_cast<int64_t>(x)); break;
-    case pb::FieldDescriptor::CPPTYPE_UINT64: r->SetUInt64(&m, f, static_cast<uint64_t>(x)); break;
-    case pb::FieldDescriptor::CPPTYPE_FLOAT: r->SetFloat(&m, f, static_cast<float>(x)); break;
-    case pb::FieldDescriptor::CPPTYPE_DOUBLE: r->SetDouble(&m, f, x); break;
-    case pb::FieldDescriptor::CPPTYPE_BOOL: r->SetBool(&m, f, x != 0); break;
-    default: break;
+    case pb::FieldDescriptor::CPPTYPE_INT32:
+      r->SetInt32(&m, f, static_cast<int32_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_UINT32:
+      r->SetUInt32(&m, f, static_cast<uint32_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_INT64:
+      r->SetInt64(&m, f, static_cast<int64_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_UINT64:
+      r->SetUInt64(&m, f, static_cast<uint64_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_FLOAT:
+      r->SetFloat(&m, f, static_cast<float>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_DOUBLE:
+      r->SetDouble(&m, f, x);
+      break;
+    case pb::FieldDescriptor::CPPTYPE_BOOL:
+      r->SetBool(&m, f, x != 0);
+      break;
+    default:
+      break;
   }
 }
 
@@ -97,12 +121,17 @@ Result<SettingValue> read_value(const Setting& st, const pb::Message& m,
   switch (st.type) {
     case SettingType::kInt:
     case SettingType::kFloat:
-    case SettingType::kBool: v.number = get_number(m, f); break;
-    case SettingType::kText: v.text = r->GetString(m, f); break;
+    case SettingType::kBool:
+      v.number = get_number(m, f);
+      break;
+    case SettingType::kText:
+      v.text = r->GetString(m, f);
+      break;
     case SettingType::kChoice: {
       const int n = r->GetEnumValue(m, f);
       const auto* e = f->enum_type()->FindValueByNumber(n);
-      if (!e) return bad(st, strprintf("unknown value %d of %s", n, f->enum_type()->name().c_str()));
+      if (!e)
+        return bad(st, strprintf("unknown value %d of %s", n, f->enum_type()->name().c_str()));
       v.text = choice_of(e);
       break;
     }
@@ -128,11 +157,16 @@ Result<SettingValue> read_value(const Setting& st, const pb::Message& m,
 
 bool is_zero(const Setting& st, const SettingValue& v) {
   switch (st.type) {
-    case SettingType::kChoiceList: return v.list.empty();
-    case SettingType::kText: return v.text.empty();
-    case SettingType::kChoice: return false;  // enums are written by name
-    case SettingType::kVec3: return false;
-    default: return v.number == 0;
+    case SettingType::kChoiceList:
+      return v.list.empty();
+    case SettingType::kText:
+      return v.text.empty();
+    case SettingType::kChoice:
+      return false;  // enums are written by name
+    case SettingType::kVec3:
+      return false;
+    default:
+      return v.number == 0;
   }
 }
 
@@ -148,9 +182,8 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
     if (!st.in_api()) continue;
     const pb::FieldDescriptor* f = proto_field(st.name);
     const pb::Message* m = holder(in, st.name);
-    const bool present =
-        m && (f->is_repeated() ? m->GetReflection()->FieldSize(*m, f) > 0
-                               : m->GetReflection()->HasField(*m, f));
+    const bool present = m && (f->is_repeated() ? m->GetReflection()->FieldSize(*m, f) > 0
+                                                : m->GetReflection()->HasField(*m, f));
     SettingValue v;  // the zero value
     if (present) {
       auto read = read_value(st, *m, f);
@@ -162,7 +195,8 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
     } else if (st.api_zero == pipeline::ApiZero::kDefault) {
       continue;  // keeps the schema's default
     }
-    if (present && (st.name == std::string("resolution") || st.name == std::string("texel_density")))
+    if (present &&
+        (st.name == std::string("resolution") || st.name == std::string("texel_density")))
       size_given = true;
     if (errors) {
       if (Status c = pipeline::check_setting(st, v); !c.is_ok()) {
@@ -195,7 +229,8 @@ const pb::FieldDescriptor* proto_field(const std::string& path) {
 
 std::string proto_enum_name(const pb::EnumDescriptor* e, const std::string& choice) {
   std::string name = enum_prefix(e) + choice;
-  for (char& c : name) c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  for (char& c : name)
+    c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return name;
 }
 
@@ -238,8 +273,12 @@ Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
     switch (st.type) {
       case SettingType::kInt:
       case SettingType::kFloat:
-      case SettingType::kBool: set_number(m, f, v.number); break;
-      case SettingType::kText: r->SetString(&m, f, v.text); break;
+      case SettingType::kBool:
+        set_number(m, f, v.number);
+        break;
+      case SettingType::kText:
+        r->SetString(&m, f, v.text);
+        break;
       case SettingType::kChoice: {
         const auto* e = f->enum_type()->FindValueByName(proto_enum_name(f->enum_type(), v.text));
         if (!e) return bad(st, strprintf("'%s' is not available through the API", v.text.c_str()));
@@ -248,8 +287,9 @@ Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
       }
       case SettingType::kChoiceList:
         for (const auto& name : v.list)
-          r->AddEnumValue(&m, f,
-                          f->enum_type()->FindValueByName(proto_enum_name(f->enum_type(), name))->number());
+          r->AddEnumValue(
+              &m, f,
+              f->enum_type()->FindValueByName(proto_enum_name(f->enum_type(), name))->number());
         break;
       case SettingType::kVec3:
         for (int i = 0; i < 3; ++i) r->AddFloat(&m, f, v.vec[i]);
@@ -261,9 +301,12 @@ Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
 
 v1::SnapshotFormat to_proto(pipeline::SnapshotFormat f) {
   switch (f) {
-    case pipeline::SnapshotFormat::kPng: return v1::SNAPSHOT_FORMAT_PNG;
-    case pipeline::SnapshotFormat::kExr: return v1::SNAPSHOT_FORMAT_EXR;
-    case pipeline::SnapshotFormat::kNone: return v1::SNAPSHOT_FORMAT_NONE;
+    case pipeline::SnapshotFormat::kPng:
+      return v1::SNAPSHOT_FORMAT_PNG;
+    case pipeline::SnapshotFormat::kExr:
+      return v1::SNAPSHOT_FORMAT_EXR;
+    case pipeline::SnapshotFormat::kNone:
+      return v1::SNAPSHOT_FORMAT_NONE;
   }
   return v1::SNAPSHOT_FORMAT_PNG;
 }

@@ -85,7 +85,8 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))
     return bad("resolution", "give a resolution or a positive texel density");
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))
-    return bad("samples_per_texel", "no stopping rule: set samples, a time budget or a target error");
+    return bad("samples_per_texel",
+               "no stopping rule: set samples, a time budget or a target error");
   const bool has_reference = s.reference || !s.job.reference_bake_id.empty();
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",

@@ -8,7 +8,7 @@
 // Everything else follows from this table: validate_settings() checks it,
 // the CLI builds its flags and help from it, the service translates
 // luxel.v1.BakeSettings with it (proto field = setting name), `luxel settings
-// --json` describes it for the Python client and docs/api.md lists it.
+// --json` describes it for the Python client, and docs/api.md tabulates it.
 // Adding a setting is one entry here (plus the proto field when the API
 // carries it); a unit test fails when the schema and the proto disagree.
 #pragma once
@@ -63,12 +63,12 @@ struct SettingValue {
 inline constexpr double kUnbounded = std::numeric_limits<double>::infinity();
 
 struct Setting {
-  const char* name;         // field path below "settings." (proto field path too)
+  const char* name;  // field path below "settings." (proto field path too)
   SettingType type;
-  const char* units;        // "" when dimensionless
-  const char* help;         // one line; the CLI, docs and proto comments say the same
-  const char* flag;         // CLI option ("--bounces"); nullptr: no option of its own
-  const char* metavar;      // CLI value name ("N"); nullptr for kBool
+  const char* units;    // "" when dimensionless
+  const char* help;     // one line; the CLI, docs and proto comments say the same
+  const char* flag;     // CLI option ("--bounces"); nullptr: no option of its own
+  const char* metavar;  // CLI value name ("N"); nullptr for kBool
   SettingValue default_value;
   // Range of a number, or of each component of a kVec3; for kChoiceList,
   // max is the most entries. Bounds are inclusive unless *_open.
@@ -78,8 +78,8 @@ struct Setting {
   bool max_open = false;
   // Values in (0, raise_to) are raised to raise_to (rate limits); 0: none.
   double raise_to = 0;
-  bool nonzero = false;     // kVec3: must not be (0, 0, 0)
-  std::vector<const char*> choices;      // kChoice, kChoiceList
+  bool nonzero = false;                    // kVec3: must not be (0, 0, 0)
+  std::vector<const char*> choices;        // kChoice, kChoiceList
   std::vector<const char*> local_choices;  // choices the API cannot carry
   SettingScope scope = SettingScope::kEverywhere;
   ApiZero api_zero = ApiZero::kDefault;
@@ -123,7 +123,7 @@ std::string describe_range(const Setting& setting);
 
 // The schema as JSON (name, type, units, help, flag, default, range,
 // choices, scope, api_zero): `luxel settings --json`, read by the Python
-// client and used to check docs/api.md.
+// client.
 std::string settings_schema_json();
 
 }  // namespace luxel::pipeline

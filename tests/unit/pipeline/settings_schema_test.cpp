@@ -1,18 +1,21 @@
 // The settings schema and validate_settings: one test per rule family, the
 // sun radius (once two disagreeing ranges), and that the schema's defaults are
 // the ones BakeSettings' initialisers and the rest of the engine assume.
+#include "pipeline/settings_schema.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <set>
 
 #include "pipeline/bake_settings.h"
-#include "pipeline/settings_schema.h"
 
 namespace luxel::pipeline {
 namespace {
 
-std::string error_of(const Status& st) { return st.is_ok() ? "ok" : st.message(); }
+std::string error_of(const Status& st) {
+  return st.is_ok() ? "ok" : st.message();
+}
 
 // Sets one setting from its command-line text and validates, as the CLI does.
 std::string cli_error(const std::string& name, const std::string& text,
@@ -66,24 +69,32 @@ TEST(SettingsSchema, StructInitialisersAgreeWithTheSchema) {
 TEST(SettingsValidation, IntegerRanges) {
   EXPECT_EQ(cli_error("max_bounces", "99"), "settings.max_bounces: must be in [0, 64], got 99");
   EXPECT_EQ(cli_error("max_bounces", "-1"), "settings.max_bounces: must be in [0, 64], got -1");
-  EXPECT_EQ(cli_error("max_bounces", "2.5"), "settings.max_bounces: must be a whole number, got 2.5");
+  EXPECT_EQ(cli_error("max_bounces", "2.5"),
+            "settings.max_bounces: must be a whole number, got 2.5");
   EXPECT_EQ(cli_error("max_bounces", "64"), "ok");
   EXPECT_EQ(cli_error("paths_per_iteration", "5"),
             "settings.paths_per_iteration: must be in [1024, 67108864], got 5");
   EXPECT_EQ(cli_error("samples_per_texel", "-3"),
             "settings.samples_per_texel: must be in [0, 4294967295], got -3");
   EXPECT_EQ(cli_error("rr_depth", "0"), "settings.rr_depth: must be in [1, 64], got 0");
-  EXPECT_EQ(cli_error("dilation_texels", "65"), "settings.dilation_texels: must be in [0, 64], got 65");
-  EXPECT_EQ(cli_error("max_bounces", "lots"), "settings.max_bounces: expected a number, got 'lots'");
+  EXPECT_EQ(cli_error("dilation_texels", "65"),
+            "settings.dilation_texels: must be in [0, 64], got 65");
+  EXPECT_EQ(cli_error("max_bounces", "lots"),
+            "settings.max_bounces: expected a number, got 'lots'");
 }
 
 TEST(SettingsValidation, RealRangesAndFiniteness) {
   EXPECT_EQ(cli_error("time_budget_s", "-1"), "settings.time_budget_s: must be >= 0, got -1");
-  EXPECT_EQ(cli_error("time_budget_s", "inf"), "settings.time_budget_s: must be a finite number, got inf");
-  EXPECT_EQ(cli_error("target_error", "nan"), "settings.target_error: must be a finite number, got nan");
-  EXPECT_EQ(cli_error("sg_sharpness", "0.1"), "settings.sg_sharpness: must be in [0.25, 256], got 0.1");
-  EXPECT_EQ(cli_error("acceleration", "100"), "settings.acceleration: must be in [0.5, 8], got 100");
-  EXPECT_EQ(cli_error("progress_interval_s", "0"), "settings.progress_interval_s: must be > 0, got 0");
+  EXPECT_EQ(cli_error("time_budget_s", "inf"),
+            "settings.time_budget_s: must be a finite number, got inf");
+  EXPECT_EQ(cli_error("target_error", "nan"),
+            "settings.target_error: must be a finite number, got nan");
+  EXPECT_EQ(cli_error("sg_sharpness", "0.1"),
+            "settings.sg_sharpness: must be in [0.25, 256], got 0.1");
+  EXPECT_EQ(cli_error("acceleration", "100"),
+            "settings.acceleration: must be in [0.5, 8], got 100");
+  EXPECT_EQ(cli_error("progress_interval_s", "0"),
+            "settings.progress_interval_s: must be > 0, got 0");
   EXPECT_EQ(cli_error("clamp_luminance", "-2"), "settings.clamp_luminance: must be >= 0, got -2");
 }
 
@@ -124,18 +135,22 @@ TEST(SettingsValidation, Choices) {
 
 TEST(SettingsValidation, ChoiceLists) {
   EXPECT_EQ(cli_error("encodings", "irradiance,sh2,sg12-hemi"), "ok");
-  EXPECT_EQ(cli_error("encodings", "sh9").substr(0, 45), "settings.encodings: 'sh9' is not one of irrad");
+  EXPECT_EQ(cli_error("encodings", "sh9").substr(0, 45),
+            "settings.encodings: 'sh9' is not one of irrad");
   EXPECT_EQ(cli_error("encodings", "sh2,sh2"), "settings.encodings: 'sh2' is listed twice");
-  EXPECT_EQ(cli_error("encodings", "sh1,sh2,sg6,sg9,sg12,sg6-hemi,sg9-hemi,sg12-hemi,ambient-dice9"),
-            "settings.encodings: at most 8 at once, got 9");
+  EXPECT_EQ(
+      cli_error("encodings", "sh1,sh2,sg6,sg9,sg12,sg6-hemi,sg9-hemi,sg12-hemi,ambient-dice9"),
+      "settings.encodings: at most 8 at once, got 9");
   BakeSettings s = default_settings();
-  ASSERT_TRUE(apply_setting(s, *find_setting("encodings"), SettingValue::of_list({"irradiance", "sh2"}))
-                  .is_ok());
+  ASSERT_TRUE(
+      apply_setting(s, *find_setting("encodings"), SettingValue::of_list({"irradiance", "sh2"}))
+          .is_ok());
   EXPECT_EQ(s.encodings.names, std::vector<std::string>{"sh2"});  // irradiance is implicit
 }
 
 TEST(SettingsValidation, Vectors) {
-  EXPECT_EQ(cli_error("sky.color", "1,2"), "settings.sky.color: expected three comma-separated numbers, got '1,2'");
+  EXPECT_EQ(cli_error("sky.color", "1,2"),
+            "settings.sky.color: expected three comma-separated numbers, got '1,2'");
   EXPECT_EQ(cli_error("sky.color", "1,-2,3"),
             "settings.sky.color: each value must be >= 0, got (1, -2, 3)");
   EXPECT_EQ(cli_error("sun.direction", "0,0,0"), "settings.sun.direction: must not be zero");
@@ -156,7 +171,8 @@ TEST(SettingsValidation, RulesBetweenSettings) {
             "target error");
   s = default_settings();
   s.target_metric = ErrorMetric::kRmse;
-  EXPECT_EQ(error_of(validate_settings(s)), "settings.target_metric: 'rmse' needs a reference lightmap");
+  EXPECT_EQ(error_of(validate_settings(s)),
+            "settings.target_metric: 'rmse' needs a reference lightmap");
   s.job.reference_bake_id = "0123";
   EXPECT_TRUE(validate_settings(s).is_ok());
   s = default_settings();
@@ -172,7 +188,8 @@ TEST(SettingsValidation, RulesBetweenSettings) {
 
 TEST(SettingsSchema, RateLimitsAreRaisedNotRejected) {
   BakeSettings s = default_settings();
-  ASSERT_TRUE(apply_setting(s, *find_setting("progress_interval_s"), SettingValue::of(0.01)).is_ok());
+  ASSERT_TRUE(
+      apply_setting(s, *find_setting("progress_interval_s"), SettingValue::of(0.01)).is_ok());
   EXPECT_EQ(s.progress_interval_s, 0.05);
 }
 
@@ -191,7 +208,8 @@ TEST(SettingsSchema, FlagsImplyTheirLight) {
 TEST(SettingsSchema, JsonDescribesEverySetting) {
   const std::string json = settings_schema_json();
   for (const Setting& st : settings_schema())
-    EXPECT_NE(json.find(std::string("\"name\": \"") + st.name + "\""), std::string::npos) << st.name;
+    EXPECT_NE(json.find(std::string("\"name\": \"") + st.name + "\""), std::string::npos)
+        << st.name;
 }
 
 }  // namespace

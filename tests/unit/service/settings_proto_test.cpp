@@ -18,11 +18,14 @@ using pipeline::Setting;
 using pipeline::SettingType;
 
 // Paths of every leaf field of BakeSettings ("sky.color").
-void collect_fields(const pb::Descriptor* d, const std::string& prefix, std::set<std::string>* out) {
+void collect_fields(const pb::Descriptor* d, const std::string& prefix,
+                    std::set<std::string>* out) {
   for (int i = 0; i < d->field_count(); ++i) {
     const pb::FieldDescriptor* f = d->field(i);
-    if (f->message_type()) collect_fields(f->message_type(), prefix + f->name() + ".", out);
-    else out->insert(prefix + f->name());
+    if (f->message_type())
+      collect_fields(f->message_type(), prefix + f->name() + ".", out);
+    else
+      out->insert(prefix + f->name());
   }
 }
 
@@ -45,8 +48,12 @@ TEST(SettingsProto, EverySchemaSettingHasItsProtoFieldAndViceVersa) {
                     f->cpp_type() != pb::FieldDescriptor::CPPTYPE_ENUM)
             << st.name;
         break;
-      case SettingType::kBool: EXPECT_EQ(f->type(), pb::FieldDescriptor::TYPE_BOOL) << st.name; break;
-      case SettingType::kText: EXPECT_EQ(f->type(), pb::FieldDescriptor::TYPE_STRING) << st.name; break;
+      case SettingType::kBool:
+        EXPECT_EQ(f->type(), pb::FieldDescriptor::TYPE_BOOL) << st.name;
+        break;
+      case SettingType::kText:
+        EXPECT_EQ(f->type(), pb::FieldDescriptor::TYPE_STRING) << st.name;
+        break;
       case SettingType::kVec3:
         EXPECT_TRUE(f->is_repeated() && f->type() == pb::FieldDescriptor::TYPE_FLOAT) << st.name;
         break;
@@ -136,7 +143,8 @@ TEST(SettingsProto, ErrorsNameTheFieldIdenticallyInCliAndService) {
          p.add_encodings(v1::ENCODING_SH2);
          p.add_encodings(v1::ENCODING_SH2);
        }},
-      {"target_metric", "rmse", [](v1::BakeSettings& p) { p.set_target_metric(v1::TARGET_METRIC_RMSE); }},
+      {"target_metric", "rmse",
+       [](v1::BakeSettings& p) { p.set_target_metric(v1::TARGET_METRIC_RMSE); }},
   };
   for (const auto& c : cases) {
     v1::BakeSettings p = base();
@@ -155,7 +163,8 @@ TEST(SettingsProto, ErrorsNameTheFieldIdenticallyInCliAndService) {
   EXPECT_EQ(service_error(p), "settings.solver: unknown value 42 of Solver");
   p = base();
   p.set_resolution(5000);
-  EXPECT_EQ(service_error(p), "settings.resolution: 5000 exceeds the daemon's limit --max-resolution=4096");
+  EXPECT_EQ(service_error(p),
+            "settings.resolution: 5000 exceeds the daemon's limit --max-resolution=4096");
 }
 
 TEST(SettingsProto, UnsetFieldsTakeTheApiDefaults) {
@@ -216,7 +225,8 @@ TEST(SettingsProto, RoundTripThroughTheApiKeepsTheBake) {
   EXPECT_EQ(back->job.snapshot_format, pipeline::SnapshotFormat::kExr);
   // What the API cannot carry is refused, naming the field.
   s.dilation_texels = 0;
-  EXPECT_EQ(to_proto_settings(s).status().message().rfind("settings.dilation_texels: 0 cannot", 0), 0u);
+  EXPECT_EQ(to_proto_settings(s).status().message().rfind("settings.dilation_texels: 0 cannot", 0),
+            0u);
 }
 
 }  // namespace
