@@ -50,15 +50,14 @@ int run_bake(const std::vector<std::string>& args) {
                  a.remote_only.front().c_str());
     return 2;
   }
-  if (!a.reference_file.empty()) {
+  if (const std::string& file = a.settings.reference_name; !file.empty()) {
     // Benchmark mode: RGBA (or RGB) float EXR of the lightmap's size.
-    auto image = output::read_reference_exr(a.reference_file);
+    auto image = output::read_reference_exr(file);
     if (!image) {
       std::fprintf(stderr, "luxel bake: --reference: %s\n", image.status().to_string().c_str());
       return 1;
     }
     a.settings.reference = std::make_shared<const std::vector<float>>(std::move(image->pixels));
-    a.settings.reference_name = a.reference_file;
   }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {
     std::fprintf(stderr, "luxel bake: %s\n", st.message().c_str());

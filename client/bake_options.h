@@ -1,6 +1,7 @@
 // The command line of `luxel bake`, shared by the in-process path (--local)
 // and the remote path (submit to luxeld): one parser, so both accept the same
-// settings options with the same meaning and errors.
+// settings options with the same meaning and errors. The settings' options
+// and their help come from the settings schema (pipeline/settings_schema.h).
 #pragma once
 
 #include <string>
@@ -16,21 +17,18 @@ struct BakeArgs {
   std::string out;    // output folder (required unless --detach)
   bool local = false;
   bool quiet = false;
+  // Every schema setting, from the schema's defaults and the options given
+  // (settings.reference_name: --reference FILE.exr, loaded by the local path;
+  // settings.job: priority, snapshots and reference bake of a remote bake).
   pipeline::BakeSettings settings;
 
   std::string device;  // --local only: OpenCL device
-  std::string reference_file;  // --local only: reference lightmap EXR (RGBA)
 
   // Remote only.
   remote::ConnectionOptions connection;
   std::string name;                // scene display name for the upload
-  int priority = 0;                // higher runs first
-  double snapshot_interval_s = 0;  // 0: the daemon's default
-  std::string snapshot_format;     // "png", "exr", "none"; empty: the daemon's default (png)
-  uint32_t snapshot_max_side = 0;  // PNG snapshot longest side; 0: the daemon's default
   std::string snapshots_dir;       // write snapshots while watching
   std::string idempotency_key;
-  std::string reference_bake;      // a finished bake on the daemon whose lightmap is the reference
   bool detach = false;             // print the bake id and return after SubmitBake
 
   // Options given on the command line that only one path understands; the

@@ -23,5 +23,7 @@ int run_cancel(const std::vector<std::string>& args);
 int run_fetch(const std::vector<std::string>& args);
 // `luxel report DIR|BAKE`: error against time (report.cpp; a folder or luxeld).
 int run_report(const std::vector<std::string>& args);
+// `luxel settings [--json]`: the bake settings schema (bake_options.cpp).
+int run_settings(const std::vector<std::string>& args);
 
 }  // namespace luxel::cli

@@ -34,6 +34,7 @@ void usage(FILE* out) {
                "  cancel BAKE           cancel a queued or running bake\n"
                "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
                "  report DIR|BAKE [--csv F] [--plot F.png]   error against time of a bake\n"
+               "  settings [--json]     every bake setting: option, default, range, units\n"
                "  common options: --server HOST:PORT (default $LUXEL_SERVER or 127.0.0.1:50051),\n"
                "        --token T ($LUXEL_TOKEN), --tls-ca FILE, --tls, --timeout S, --json\n\n"
                "exit codes: 0 success, 1 error (daemon, network, files), 2 usage error,\n"
@@ -69,6 +70,7 @@ int main(int argc, char** argv) {
   if (cmd == "cancel") return luxel::cli::run_cancel(args);
   if (cmd == "fetch") return luxel::cli::run_fetch(args);
   if (cmd == "report") return luxel::cli::run_report(args);
+  if (cmd == "settings") return luxel::cli::run_settings(args);
   std::fprintf(stderr, "luxel: unknown command '%s'\n\n", cmd.c_str());
   usage(stderr);
   return 2;

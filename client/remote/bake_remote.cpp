@@ -13,61 +13,12 @@
 #include "remote/output.h"
 #include "remote/upload.h"
 #include "remote/watch.h"
+#include "service/settings_translate.h"
 
 namespace luxel::cli {
 namespace {
 
 using namespace remote;
-
-luxel::v1::BakeSettings to_proto(const BakeArgs& a) {
-  const pipeline::BakeSettings& s = a.settings;
-  luxel::v1::BakeSettings p;
-  p.set_resolution(static_cast<uint32_t>(std::max(s.atlas.resolution, 0)));
-  p.set_texel_density(s.atlas.texel_density);
-  p.set_samples_per_texel(s.samples_per_texel);
-  p.set_time_budget_s(s.time_budget_s);
-  p.set_target_error(s.target_error);
-  p.set_max_bounces(static_cast<uint32_t>(s.max_bounces));
-  p.set_filter(s.filter == pipeline::Filter::kGaussian ? luxel::v1::FILTER_GAUSSIAN
-                                                       : luxel::v1::FILTER_BOX);
-  if (s.lights.sky.kind == pipeline::SkySettings::Kind::kConstant) {
-    auto* sky = p.mutable_sky();
-    sky->set_kind(luxel::v1::Sky::KIND_CONSTANT);
-    for (float c : {s.lights.sky.color.x, s.lights.sky.color.y, s.lights.sky.color.z}) sky->add_color(c);
-    sky->set_intensity(s.lights.sky.intensity);
-  }
-  if (s.lights.sun.enabled) {
-    // Sent in full (the engine's defaults included) so that a remote bake
-    // lights the scene exactly as `--local` would.
-    auto* sun = p.mutable_sun();
-    const auto& in = s.lights.sun;
-    for (float d : {in.direction.x, in.direction.y, in.direction.z}) sun->add_direction(d);
-    for (float c : {in.color.x, in.color.y, in.color.z}) sun->add_color(c);
-    sun->set_illuminance(in.illuminance);
-    sun->set_angular_radius_degrees(in.angular_radius_degrees);
-  }
-  p.set_seed(s.seed);
-  if (!s.encodings.names.empty()) {
-    std::string list = "irradiance";
-    for (const auto& n : s.encodings.names) list += "," + n;
-    p.set_encoding(list);
-    p.set_sg_sharpness(s.encodings.sg_sharpness);
-    p.set_solver(pipeline::solver_name(s.encodings.solver));
-    p.set_acceleration(s.encodings.acceleration);
-  }
-  if (!a.reference_bake.empty()) p.set_reference_bake_id(a.reference_bake);
-  if (s.target_metric != pipeline::ErrorMetric::kEstimate)
-    p.set_target_metric(pipeline::error_metric_name(s.target_metric));
-  p.set_paths_per_iteration(s.paths_per_iteration);
-  p.set_dilation_texels(static_cast<uint32_t>(std::max(s.dilation_texels, 0)));
-  p.set_priority(a.priority);
-  p.set_snapshot_interval_s(a.snapshot_interval_s);
-  p.set_snapshot_max_side(a.snapshot_max_side);
-  if (a.snapshot_format == "png") p.set_snapshot_format(luxel::v1::SNAPSHOT_FORMAT_PNG);
-  if (a.snapshot_format == "exr") p.set_snapshot_format(luxel::v1::SNAPSHOT_FORMAT_EXR);
-  if (a.snapshot_format == "none") p.set_snapshot_format(luxel::v1::SNAPSHOT_FORMAT_NONE);
-  return p;
-}
 
 // Settings the API cannot carry are refused, never silently dropped.
 int check_remote_args(const BakeArgs& a) {
@@ -77,12 +28,12 @@ int check_remote_args(const BakeArgs& a) {
                  "setting)\n", a.local_only.front().c_str());
     return kExitUsage;
   }
-  if (a.settings.dilation_texels == 0) {
-    std::fprintf(stderr, "luxel bake: --dilate 0 needs --local (0 means the default 2 in the API)\n");
-    return kExitUsage;
-  }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {
     std::fprintf(stderr, "luxel bake: %s\n", st.message().c_str());
+    return kExitUsage;
+  }
+  if (auto p = service::to_proto_settings(a.settings); !p) {
+    std::fprintf(stderr, "luxel bake: %s\n", p.status().message().c_str());
     return kExitUsage;
   }
   return kExitOk;
@@ -139,7 +90,7 @@ int run_bake_remote(BakeArgs& a) {
     conn->prepare_unary(ctx);
     luxel::v1::SubmitBakeRequest req;
     req.set_scene_id(scene.scene_id());
-    *req.mutable_settings() = to_proto(a);
+    *req.mutable_settings() = service::to_proto_settings(a.settings).value();
     req.set_idempotency_key(a.idempotency_key);
     if (auto st = conn->stub().SubmitBake(&ctx, req, &bake); !st.ok()) return conn->fail("bake", st);
   }

@@ -132,9 +132,10 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
                           Running& running) {
   auto info = bakes_.get(bake_id);
   if (!info) return;
-  ServiceBakeOptions opts;
-  auto settings = to_engine_settings(info->settings(), options_.limits, &opts);
-  if (!settings) return finish_failed(bake_id, settings.status());
+  // Validated once, at SubmitBake; here it is only translated.
+  std::optional<pipeline::BakeSettings> settings =
+      stored_engine_settings(info->settings(), options_.limits);
+  const pipeline::JobSettings& opts = settings->job;
   if (const std::string& ref = info->settings().reference_bake_id(); !ref.empty()) {
     // Benchmark mode: the reference bake's irradiance.exr (RGBA).
     auto image = output::read_reference_exr(bakes_.results_dir(ref) + "/irradiance.exr");
@@ -194,12 +195,12 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
     return true;
   };
-  if (opts.snapshot_format != v1::SNAPSHOT_FORMAT_NONE) {
+  if (opts.snapshot_format != pipeline::SnapshotFormat::kNone) {
     hooks.snapshot_interval_s = opts.snapshot_interval_s;
     hooks.on_snapshot = [&](const pipeline::BakeSnapshot& s) {
       output::Image image{s.width, s.height, 4, s.irradiance};
       bakes_.publish_snapshot(bake_id, std::make_shared<SnapshotFrame>(
-          std::move(image), to_proto(s.progress), opts.snapshot_format, opts.snapshot_max_side,
+          std::move(image), to_proto(s.progress), to_proto(opts.snapshot_format), opts.snapshot_max_side,
           bakes_.bake_dir(bake_id)));
     };
   }

@@ -3,6 +3,7 @@
 #include <google/protobuf/util/json_util.h>
 
 #include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
@@ -27,6 +28,38 @@ Result<std::string> record_to_json(const v1::BakeInfo& info, uint64_t seq) {
   return record.dump(1) + "\n";
 }
 
+// Records written before the settings had typed fields carried encoding,
+// solver and target_metric as strings ("irradiance,sh2", "progressive-nn",
+// "rmse"); they become the enum names of today's fields, so a bake queued
+// before an upgrade resumes with the same settings.
+void upgrade_settings(json& info) {
+  if (!info.contains("settings") || !info["settings"].is_object()) return;
+  json& s = info["settings"];
+  auto enum_name = [](const char* prefix, std::string v) {
+    for (char& c : v)
+      c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return prefix + v;
+  };
+  if (s.contains("encoding") && s["encoding"].is_string()) {
+    json list = json::array();
+    std::string text = s["encoding"].get<std::string>();
+    for (size_t start = 0; start <= text.size();) {
+      size_t end = std::min(text.find(',', start), text.size());
+      if (end > start) list.push_back(enum_name("ENCODING_", text.substr(start, end - start)));
+      start = end + 1;
+    }
+    s.erase("encoding");
+    if (!list.empty()) s["encodings"] = list;
+  }
+  for (auto [key, prefix] : {std::pair{"solver", "SOLVER_"}, {"targetMetric", "TARGET_METRIC_"}}) {
+    if (!s.contains(key) || !s[key].is_string()) continue;
+    const std::string v = s[key].get<std::string>();
+    if (v.rfind(prefix, 0) == 0) continue;  // already an enum name
+    if (v.empty()) s.erase(key);
+    else s[key] = enum_name(prefix, v);
+  }
+}
+
 Status record_from_json(const std::string& text, const std::string& what, v1::BakeInfo* info,
                         uint64_t* seq) {
   const json record = json::parse(text, nullptr, /*allow_exceptions=*/false);
@@ -34,9 +67,11 @@ Status record_from_json(const std::string& text, const std::string& what, v1::Ba
       !record.contains("info") || !record.contains("seq") || !record["seq"].is_number_unsigned())
     return data_loss(strprintf("%s: not a %s record", what.c_str(), kRecordFormat));
   *seq = record["seq"].get<uint64_t>();
+  json info_json = record["info"];
+  upgrade_settings(info_json);
   pbu::JsonParseOptions options;
   options.ignore_unknown_fields = true;  // records written by a newer daemon
-  if (auto st = pbu::JsonStringToMessage(record["info"].dump(), info, options); !st.ok())
+  if (auto st = pbu::JsonStringToMessage(info_json.dump(), info, options); !st.ok())
     return data_loss(strprintf("%s: %s", what.c_str(), st.ToString().c_str()));
   return Status::ok();
 }

@@ -148,6 +148,7 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
   if (auto st = authenticate(ctx, "SubmitBake"); !st.ok()) return st;
   if (auto st = check_id(req->scene_id(), "scene_id", 64); !st.ok()) return st;
   if (req->idempotency_key().size() > 256) return invalid("idempotency_key: longer than 256 bytes");
+  // The one validation of the settings (the runner only translates them).
   auto settings = to_engine_settings(req->settings(), options_.settings);
   if (!settings) return to_grpc(settings.status());
 

@@ -1,136 +1,314 @@
 #include "service/settings_translate.h"
 
-#include <cmath>
+#include <algorithm>
+#include <cctype>
+#include <map>
 
 #include "common/hash.h"
 
 namespace luxel::service {
 namespace {
 
-Status bad(const char* field, const std::string& why) {
-  return invalid_argument(strprintf("settings.%s: %s", field, why.c_str()));
+namespace pb = google::protobuf;
+using pipeline::Setting;
+using pipeline::SettingType;
+using pipeline::SettingValue;
+
+Status bad(const Setting& st, const std::string& why) {
+  return invalid_argument(strprintf("settings.%s: %s", st.name, why.c_str()));
 }
 
-Status read_vec3(const google::protobuf::RepeatedField<float>& v, const char* field, Vec3* out) {
-  if (v.size() != 3) return bad(field, strprintf("expected 3 values, got %d", v.size()));
-  for (float x : v)
-    if (!std::isfinite(x)) return bad(field, "values must be finite");
-  *out = Vec3{v[0], v[1], v[2]};
-  return Status::ok();
+std::vector<std::string> split_path(const std::string& path) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  for (size_t dot; (dot = path.find('.', start)) != std::string::npos; start = dot + 1)
+    parts.push_back(path.substr(start, dot - start));
+  parts.push_back(path.substr(start));
+  return parts;
 }
 
-bool finite_nonneg(double x) { return std::isfinite(x) && x >= 0; }
+// "KIND_" for Sky.Kind (zero value KIND_NONE), "SOLVER_" for Solver.
+std::string enum_prefix(const pb::EnumDescriptor* e) {
+  const std::string& zero = e->FindValueByNumber(0)->name();
+  return zero.substr(0, zero.rfind('_') + 1);
+}
+
+// KIND_CONSTANT -> "constant", SOLVER_PROGRESSIVE_NN -> "progressive-nn".
+std::string choice_of(const pb::EnumValueDescriptor* v) {
+  std::string name = v->name().substr(enum_prefix(v->type()).size());
+  for (char& c : name)
+    c = c == '_' ? '-' : static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return name;
+}
+
+// The message holding the setting's field, or nullptr when a parent message
+// is absent (every field below it is then unset).
+const pb::Message* holder(const pb::Message& root, const std::string& path) {
+  const pb::Message* m = &root;
+  const auto parts = split_path(path);
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    const pb::FieldDescriptor* f = m->GetDescriptor()->FindFieldByName(parts[i]);
+    if (!m->GetReflection()->HasField(*m, f)) return nullptr;
+    m = &m->GetReflection()->GetMessage(*m, f);
+  }
+  return m;
+}
+
+pb::Message* mutable_holder(pb::Message& root, const std::string& path) {
+  pb::Message* m = &root;
+  const auto parts = split_path(path);
+  for (size_t i = 0; i + 1 < parts.size(); ++i)
+    m = m->GetReflection()->MutableMessage(m, m->GetDescriptor()->FindFieldByName(parts[i]));
+  return m;
+}
+
+double get_number(const pb::Message& m, const pb::FieldDescriptor* f) {
+  const pb::Reflection* r = m.GetReflection();
+  switch (f->cpp_type()) {
+    case pb::FieldDescriptor::CPPTYPE_INT32:
+      return r->GetInt32(m, f);
+    case pb::FieldDescriptor::CPPTYPE_UINT32:
+      return r->GetUInt32(m, f);
+    case pb::FieldDescriptor::CPPTYPE_INT64:
+      return double(r->GetInt64(m, f));
+    case pb::FieldDescriptor::CPPTYPE_UINT64:
+      return double(r->GetUInt64(m, f));
+    case pb::FieldDescriptor::CPPTYPE_FLOAT:
+      return r->GetFloat(m, f);
+    case pb::FieldDescriptor::CPPTYPE_DOUBLE:
+      return r->GetDouble(m, f);
+    case pb::FieldDescriptor::CPPTYPE_BOOL:
+      return r->GetBool(m, f) ? 1 : 0;
+    default:
+      return 0;
+  }
+}
+
+void set_number(pb::Message& m, const pb::FieldDescriptor* f, double x) {
+  const pb::Reflection* r = m.GetReflection();
+  switch (f->cpp_type()) {
+    case pb::FieldDescriptor::CPPTYPE_INT32:
+      r->SetInt32(&m, f, static_cast<int32_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_UINT32:
+      r->SetUInt32(&m, f, static_cast<uint32_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_INT64:
+      r->SetInt64(&m, f, static_cast<int64_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_UINT64:
+      r->SetUInt64(&m, f, static_cast<uint64_t>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_FLOAT:
+      r->SetFloat(&m, f, static_cast<float>(x));
+      break;
+    case pb::FieldDescriptor::CPPTYPE_DOUBLE:
+      r->SetDouble(&m, f, x);
+      break;
+    case pb::FieldDescriptor::CPPTYPE_BOOL:
+      r->SetBool(&m, f, x != 0);
+      break;
+    default:
+      break;
+  }
+}
+
+// The value of a present field, in the schema's terms.
+Result<SettingValue> read_value(const Setting& st, const pb::Message& m,
+                                const pb::FieldDescriptor* f) {
+  const pb::Reflection* r = m.GetReflection();
+  SettingValue v;
+  switch (st.type) {
+    case SettingType::kInt:
+    case SettingType::kFloat:
+    case SettingType::kBool:
+      v.number = get_number(m, f);
+      break;
+    case SettingType::kText:
+      v.text = r->GetString(m, f);
+      break;
+    case SettingType::kChoice: {
+      const int n = r->GetEnumValue(m, f);
+      const auto* e = f->enum_type()->FindValueByNumber(n);
+      if (!e)
+        return bad(st, strprintf("unknown value %d of %s", n, f->enum_type()->name().c_str()));
+      v.text = choice_of(e);
+      break;
+    }
+    case SettingType::kChoiceList:
+      for (int i = 0; i < r->FieldSize(m, f); ++i) {
+        const int n = r->GetRepeatedEnumValue(m, f, i);
+        const auto* e = f->enum_type()->FindValueByNumber(n);
+        if (!e || n == 0)
+          return bad(st, strprintf("unknown value %d of %s", n, f->enum_type()->name().c_str()));
+        v.list.push_back(choice_of(e));
+      }
+      break;
+    case SettingType::kVec3: {
+      const int n = r->FieldSize(m, f);
+      if (n != 3) return bad(st, strprintf("expected 3 values, got %d", n));
+      v.vec = Vec3{r->GetRepeatedFloat(m, f, 0), r->GetRepeatedFloat(m, f, 1),
+                   r->GetRepeatedFloat(m, f, 2)};
+      break;
+    }
+  }
+  return v;
+}
+
+bool is_zero(const Setting& st, const SettingValue& v) {
+  switch (st.type) {
+    case SettingType::kChoiceList:
+      return v.list.empty();
+    case SettingType::kText:
+      return v.text.empty();
+    case SettingType::kChoice:
+      return false;  // enums are written by name
+    case SettingType::kVec3:
+      return false;
+    default:
+      return v.number == 0;
+  }
+}
+
+// Reads every API setting into `s`. A value that breaks its setting's rule is
+// not stored; its error is kept in `errors` (reported only if the setting is
+// active, e.g. sun.* only with a sun).
+void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
+                   pipeline::BakeSettings& s, std::map<std::string, Status>* errors) {
+  s = pipeline::default_settings();
+  s.atlas.max_resolution = limits.max_resolution;
+  bool size_given = false;
+  for (const Setting& st : pipeline::settings_schema()) {
+    if (!st.in_api()) continue;
+    const pb::FieldDescriptor* f = proto_field(st.name);
+    const pb::Message* m = holder(in, st.name);
+    const bool present = m && (f->is_repeated() ? m->GetReflection()->FieldSize(*m, f) > 0
+                                                : m->GetReflection()->HasField(*m, f));
+    SettingValue v;  // the zero value
+    if (present) {
+      auto read = read_value(st, *m, f);
+      if (!read) {
+        if (errors) errors->emplace(st.name, read.status());
+        continue;
+      }
+      v = std::move(read.value());
+    } else if (st.api_zero == pipeline::ApiZero::kDefault) {
+      continue;  // keeps the schema's default
+    }
+    if (present &&
+        (st.name == std::string("resolution") || st.name == std::string("texel_density")))
+      size_given = true;
+    if (errors) {
+      if (Status c = pipeline::check_setting(st, v); !c.is_ok()) {
+        errors->emplace(st.name, c);
+        continue;
+      }
+    }
+    (void)pipeline::apply_setting(s, st, std::move(v));
+  }
+  // Rules of the API form (documented in luxel.proto): the sun is on when it
+  // has an illuminance; the default lightmap size respects the daemon's limit.
+  s.lights.sun.enabled = s.lights.sun.illuminance > 0;
+  if (!size_given) s.atlas.resolution = std::min(s.atlas.resolution, limits.max_resolution);
+  if (!s.job.reference_bake_id.empty()) s.reference_name = "bake " + s.job.reference_bake_id;
+}
 
 }  // namespace
 
+const pb::FieldDescriptor* proto_field(const std::string& path) {
+  const pb::Descriptor* d = v1::BakeSettings::descriptor();
+  const pb::FieldDescriptor* f = nullptr;
+  for (const auto& part : split_path(path)) {
+    if (!d) return nullptr;
+    f = d->FindFieldByName(part);
+    if (!f) return nullptr;
+    d = f->message_type();
+  }
+  return f;
+}
+
+std::string proto_enum_name(const pb::EnumDescriptor* e, const std::string& choice) {
+  std::string name = enum_prefix(e) + choice;
+  for (char& c : name)
+    c = c == '-' ? '_' : static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return name;
+}
+
 Result<pipeline::BakeSettings> to_engine_settings(const v1::BakeSettings& in,
-                                                  const SettingsLimits& limits,
-                                                  ServiceBakeOptions* options) {
+                                                  const SettingsLimits& limits) {
   pipeline::BakeSettings s;
-  s.atlas.max_resolution = limits.max_resolution;
-  if (in.resolution() > static_cast<uint32_t>(limits.max_resolution))
-    return bad("resolution", strprintf("%u exceeds the daemon's limit --max-resolution=%d",
-                                       in.resolution(), limits.max_resolution));
-  if (!std::isfinite(in.texel_density()) || in.texel_density() < 0)
-    return bad("texel_density", strprintf("must be >= 0, got %g", double(in.texel_density())));
-  s.atlas.resolution = static_cast<int>(in.resolution());
-  s.atlas.texel_density = in.resolution() == 0 ? in.texel_density() : 0.0f;
-  if (in.resolution() == 0 && in.texel_density() == 0) s.atlas.resolution = std::min(512, limits.max_resolution);
-
-  s.samples_per_texel = in.samples_per_texel();
-  s.time_budget_s = in.time_budget_s();
-  s.target_error = in.target_error();
-  if (in.has_max_bounces()) {
-    if (in.max_bounces() > 64) return bad("max_bounces", strprintf("must be in [0, 64], got %u", in.max_bounces()));
-    s.max_bounces = static_cast<int>(in.max_bounces());
+  std::map<std::string, Status> errors;
+  read_settings(in, limits, s, &errors);
+  for (const Setting& st : pipeline::settings_schema()) {
+    auto e = errors.find(st.name);
+    if (e != errors.end() && st.is_active(s)) return e->second;
   }
-  switch (in.filter()) {
-    case v1::FILTER_UNSPECIFIED:
-    case v1::FILTER_BOX: s.filter = pipeline::Filter::kBox; break;
-    case v1::FILTER_GAUSSIAN: s.filter = pipeline::Filter::kGaussian; break;
-    default: return bad("filter", strprintf("unknown filter %d", static_cast<int>(in.filter())));
-  }
-  switch (in.sky().kind()) {
-    case v1::Sky::KIND_NONE: break;
-    case v1::Sky::KIND_CONSTANT: {
-      auto& sky = s.lights.sky;
-      sky.kind = pipeline::SkySettings::Kind::kConstant;
-      LUXEL_RETURN_IF_ERROR(read_vec3(in.sky().color(), "sky.color", &sky.color));
-      if (!finite_nonneg(in.sky().intensity()))
-        return bad("sky.intensity", strprintf("must be >= 0, got %g", double(in.sky().intensity())));
-      sky.intensity = in.sky().intensity() == 0 ? 1.0f : in.sky().intensity();
-      break;
-    }
-    default: return bad("sky.kind", strprintf("unknown sky kind %d", static_cast<int>(in.sky().kind())));
-  }
-  if (!finite_nonneg(in.sun().illuminance()))
-    return bad("sun.illuminance", strprintf("must be >= 0, got %g", double(in.sun().illuminance())));
-  if (in.sun().illuminance() > 0) {
-    auto& sun = s.lights.sun;
-    sun.enabled = true;
-    sun.illuminance = in.sun().illuminance();
-    LUXEL_RETURN_IF_ERROR(read_vec3(in.sun().direction(), "sun.direction", &sun.direction));
-    if (sun.direction.x == 0 && sun.direction.y == 0 && sun.direction.z == 0)
-      return bad("sun.direction", "must not be zero");
-    if (in.sun().color_size() > 0) LUXEL_RETURN_IF_ERROR(read_vec3(in.sun().color(), "sun.color", &sun.color));
-    const float r = in.sun().angular_radius_degrees();
-    if (!std::isfinite(r) || r < 0 || r > 45)
-      return bad("sun.angular_radius_degrees", strprintf("must be in [0, 45], got %g", double(r)));
-    sun.angular_radius_degrees = r;
-  }
-  s.seed = in.seed() == 0 ? 1 : in.seed();
-  if (in.paths_per_iteration() != 0) s.paths_per_iteration = in.paths_per_iteration();
-  if (!in.encoding().empty()) {
-    auto names = pipeline::parse_encoding_list(in.encoding());
-    if (!names) return bad("encoding", names.status().message());
-    s.encodings.names = names.value();
-  }
-  if (in.sg_sharpness() != 0) s.encodings.sg_sharpness = in.sg_sharpness();
-  if (!in.solver().empty()) {
-    auto solver = pipeline::parse_solver(in.solver());
-    if (!solver) return bad("solver", solver.status().message());
-    s.encodings.solver = solver.value();
-  }
-  if (in.acceleration() != 0) s.encodings.acceleration = in.acceleration();
-  if (!in.reference_bake_id().empty()) {
-    // The pixels are loaded by the runner (it has the bake store); an empty
-    // placeholder keeps validation of target_metric meaningful here.
-    s.reference = std::make_shared<const std::vector<float>>();
-    s.reference_name = "bake " + in.reference_bake_id();
-  }
-  if (!in.target_metric().empty()) {
-    auto metric = pipeline::parse_error_metric(in.target_metric());
-    if (!metric) return bad("target_metric", metric.status().message());
-    s.target_metric = metric.value();
-  }
-  if (in.dilation_texels() != 0) {
-    if (in.dilation_texels() > 64)
-      return bad("dilation_texels", strprintf("must be in [0, 64], got %u", in.dilation_texels()));
-    s.dilation_texels = static_cast<int>(in.dilation_texels());
-  }
-  if (!finite_nonneg(in.progress_interval_s()))
-    return bad("progress_interval_s", strprintf("must be >= 0, got %g", in.progress_interval_s()));
-  if (in.progress_interval_s() > 0) s.progress_interval_s = std::max(0.05, in.progress_interval_s());
-
-  ServiceBakeOptions opt;
-  if (!finite_nonneg(in.snapshot_interval_s()))
-    return bad("snapshot_interval_s", strprintf("must be >= 0, got %g", in.snapshot_interval_s()));
-  if (in.snapshot_interval_s() > 0) opt.snapshot_interval_s = std::max(0.05, in.snapshot_interval_s());
-  switch (in.snapshot_format()) {
-    case v1::SNAPSHOT_FORMAT_UNSPECIFIED:
-    case v1::SNAPSHOT_FORMAT_PNG: opt.snapshot_format = v1::SNAPSHOT_FORMAT_PNG; break;
-    case v1::SNAPSHOT_FORMAT_EXR:
-    case v1::SNAPSHOT_FORMAT_NONE: opt.snapshot_format = in.snapshot_format(); break;
-    default:
-      return bad("snapshot_format", strprintf("unknown format %d", static_cast<int>(in.snapshot_format())));
-  }
-  if (in.snapshot_max_side() > 8192)
-    return bad("snapshot_max_side", strprintf("must be at most 8192, got %u", in.snapshot_max_side()));
-  if (in.snapshot_max_side() != 0) opt.snapshot_max_side = static_cast<int>(in.snapshot_max_side());
-  if (options) *options = opt;
-
-  LUXEL_RETURN_IF_ERROR(pipeline::validate_settings(s));
+  LUXEL_RETURN_IF_ERROR(pipeline::validate_settings(s, "the daemon's limit --max-resolution"));
   return s;
+}
+
+pipeline::BakeSettings stored_engine_settings(const v1::BakeSettings& in,
+                                              const SettingsLimits& limits) {
+  pipeline::BakeSettings s;
+  read_settings(in, limits, s, nullptr);
+  return s;
+}
+
+Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
+  v1::BakeSettings out;
+  for (const Setting& st : pipeline::settings_schema()) {
+    if (!st.in_api() || !st.is_active(s)) continue;
+    const pb::FieldDescriptor* f = proto_field(st.name);
+    const SettingValue v = st.get(s);
+    if (is_zero(st, v)) {
+      if (st.api_zero == pipeline::ApiZero::kDefault && !f->has_presence() &&
+          !is_zero(st, st.default_value))
+        return bad(st, strprintf("0 cannot be sent to luxeld: the API reads 0 as the default %s "
+                                 "(bake with --local)",
+                                 pipeline::format_setting_value(st, st.default_value).c_str()));
+      if (!f->has_presence() || f->is_repeated()) continue;
+    }
+    pb::Message& m = *mutable_holder(out, st.name);
+    const pb::Reflection* r = m.GetReflection();
+    switch (st.type) {
+      case SettingType::kInt:
+      case SettingType::kFloat:
+      case SettingType::kBool:
+        set_number(m, f, v.number);
+        break;
+      case SettingType::kText:
+        r->SetString(&m, f, v.text);
+        break;
+      case SettingType::kChoice: {
+        const auto* e = f->enum_type()->FindValueByName(proto_enum_name(f->enum_type(), v.text));
+        if (!e) return bad(st, strprintf("'%s' is not available through the API", v.text.c_str()));
+        r->SetEnumValue(&m, f, e->number());
+        break;
+      }
+      case SettingType::kChoiceList:
+        for (const auto& name : v.list)
+          r->AddEnumValue(
+              &m, f,
+              f->enum_type()->FindValueByName(proto_enum_name(f->enum_type(), name))->number());
+        break;
+      case SettingType::kVec3:
+        for (int i = 0; i < 3; ++i) r->AddFloat(&m, f, v.vec[i]);
+        break;
+    }
+  }
+  return out;
+}
+
+v1::SnapshotFormat to_proto(pipeline::SnapshotFormat f) {
+  switch (f) {
+    case pipeline::SnapshotFormat::kPng:
+      return v1::SNAPSHOT_FORMAT_PNG;
+    case pipeline::SnapshotFormat::kExr:
+      return v1::SNAPSHOT_FORMAT_EXR;
+    case pipeline::SnapshotFormat::kNone:
+      return v1::SNAPSHOT_FORMAT_NONE;
+  }
+  return v1::SNAPSHOT_FORMAT_PNG;
 }
 
 v1::BakeProgress to_proto(const pipeline::BakeProgress& p) {

@@ -226,7 +226,11 @@ def test_errors(d):
     check("cannot reach luxeld" in err and "UNAVAILABLE" in err, f"no daemon: {err}")
     luxel("bake", ARGS.scene, *s, rc=2)                        # no --out
     luxel("bake", ARGS.scene, "--out", "x", "--clamp", 2, *s, rc=2)  # local-only setting
-    luxel("bake", ARGS.scene, "--out", "x", "--bounces", 99, *s, rc=2)  # invalid setting
+    _, err = luxel("bake", ARGS.scene, "--out", "x", "--bounces", 99, *s, rc=2)  # invalid setting
+    # The daemon and the Python client report the same words (tests/python).
+    check("settings.max_bounces: must be in [0, 64], got 99" in err, f"--bounces 99: {err}")
+    _, err = luxel("bake", ARGS.scene, "--out", "x", "--dilate", 0, *s, rc=2)  # API reads 0 as 2
+    check("settings.dilation_texels: 0 cannot be sent" in err, f"--dilate 0: {err}")
     luxel("list", "--state", "sleeping", *s, rc=2)
     luxel("frobnicate", rc=2)
     _, err = luxel("upload", os.path.join(ARGS.work, "missing.gltf"), *s, rc=1)

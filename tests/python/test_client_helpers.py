@@ -132,10 +132,44 @@ class SettingsTest(unittest.TestCase):
         self.assertEqual(s.priority, -3)
         self.assertFalse(make_settings(resolution=8).HasField("max_bounces"))
 
+    def test_typed_lists_and_enums_take_names(self):
+        s = make_settings(encodings="irradiance,sh2,ambient-dice9", solver="progressive-nn",
+                          target_metric="rmse")
+        self.assertEqual(list(s.encodings), [luxel_pb2.ENCODING_IRRADIANCE, luxel_pb2.ENCODING_SH2,
+                                             luxel_pb2.ENCODING_AMBIENT_DICE9])
+        self.assertEqual(s.solver, luxel_pb2.SOLVER_PROGRESSIVE_NN)
+        self.assertEqual(s.target_metric, luxel_pb2.TARGET_METRIC_RMSE)
+        # The field's name before it was typed still works, as does a list.
+        old = make_settings(encoding="sg12-hemi")
+        self.assertEqual(list(old.encodings), [luxel_pb2.ENCODING_SG12_HEMI])
+        self.assertEqual(list(make_settings(encodings=["sh1", "SG6"]).encodings),
+                         [luxel_pb2.ENCODING_SH1, luxel_pb2.ENCODING_SG6])
+
+    def test_schema_comes_from_the_build(self):
+        from luxel_client import settings
+        self.assertIn("max_bounces", settings.SCHEMA, "settings_schema.json missing beside the stubs")
+        d = settings.defaults()
+        self.assertEqual((d["max_bounces"], d["resolution"], d["seed"]), (4, 512, 1))
+        self.assertNotIn("rr_depth", d)  # local only
+        self.assertIn("[0, 64]", settings.describe("max_bounces"))
+        # Every API setting of the schema is a field of the proto.
+        for name, entry in settings.SCHEMA.items():
+            if entry["scope"] == "local_only":
+                continue
+            message, field = luxel_pb2.BakeSettings.DESCRIPTOR, None
+            for part in name.split("."):
+                field = message.fields_by_name.get(part)
+                self.assertIsNotNone(field, name)
+                message = field.message_type
+        with self.assertRaises(LuxelError) as caught:
+            make_settings(rr_depth=2)
+        self.assertIn("settings.rr_depth: only in-process", caught.exception.message)
+
     def test_bad_keywords_name_the_field(self):
         for kwargs, field in [({"resolutoin": 3}, "settings.resolutoin"),
                               ({"resolution": -1}, "settings.resolution"),
                               ({"filter": "bilinear"}, "settings.filter"),
+                              ({"encodings": "sh9"}, "settings.encodings"),
                               ({"sun": {"power": 1}}, "settings.sun.power")]:
             with self.assertRaises(LuxelError) as caught:
                 make_settings(**kwargs)

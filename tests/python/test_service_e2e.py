@@ -235,7 +235,10 @@ class ServiceEndToEndTest(unittest.TestCase):
                  ({"resolution": 1_000_000}, "resolution"),
                  ({"samples_per_texel": 0}, "samples_per_texel"),
                  ({"paths_per_iteration": 7}, "paths_per_iteration"),
-                 ({"time_budget_s": -1.0}, "time_budget_s")]
+                 ({"time_budget_s": -1.0}, "time_budget_s"),
+                 ({"encodings": ["sh2", "sh2"]}, "settings.encodings: 'sh2' is listed twice"),
+                 ({"sun": {"illuminance": 1.0, "angular_radius_degrees": 95.0}},
+                  "settings.sun.angular_radius_degrees: must be in [0, 90), got 95")]
         for overrides, field in cases:
             settings = dict(SMALL, **overrides)
             with self.subTest(field=field), self.assertRaises(LuxelError) as caught:
@@ -243,6 +246,10 @@ class ServiceEndToEndTest(unittest.TestCase):
             self.assertEqual(caught.exception.code, "INVALID_ARGUMENT", str(caught.exception))
             self.assertIn(field, caught.exception.message)
             self.assertFalse(caught.exception.local, "the daemon, not the client, should refuse it")
+        # The same words as `luxel bake --bounces 99` (tests/cli) and the schema's unit tests.
+        with self.assertRaises(LuxelError) as caught:
+            self.client.submit_bake(scene.scene_id, **dict(SMALL, max_bounces=99))
+        self.assertEqual(caught.exception.message, "settings.max_bounces: must be in [0, 64], got 99")
         self.assertEqual(len(self.client.list_bakes()), before, "an invalid bake was queued")
 
     def test_concurrent_clients_with_two_watchers_each(self):

@@ -292,7 +292,8 @@ TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
   v1::SubmitBakeRequest submit;
   submit.set_scene_id(scene_id);
   *submit.mutable_settings() = small_settings(16, 32);
-  submit.mutable_settings()->set_encoding("irradiance,sh2,ambient-dice9");
+  for (auto e : {v1::ENCODING_IRRADIANCE, v1::ENCODING_SH2, v1::ENCODING_AMBIENT_DICE9})
+    submit.mutable_settings()->add_encodings(e);
   v1::BakeInfo bake;
   auto ctx = daemon_->context();
   ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());

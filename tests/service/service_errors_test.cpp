@@ -184,12 +184,16 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
   const std::vector<Case> cases = {
       {"settings.max_bounces", [](v1::BakeSettings& s) { s.set_max_bounces(99); }},
       {"settings.resolution", [](v1::BakeSettings& s) { s.set_resolution(1024); }},  // > --max-resolution
-      {"settings.encoding", [](v1::BakeSettings& s) { s.set_encoding("sh9"); }},
+      {"settings.encodings", [](v1::BakeSettings& s) { s.add_encodings(static_cast<v1::Encoding>(99)); }},
+      {"settings.encodings", [](v1::BakeSettings& s) {
+         s.add_encodings(v1::ENCODING_SH2);
+         s.add_encodings(v1::ENCODING_SH2);
+       }},
       {"settings.reference_bake_id", [](v1::BakeSettings& s) { s.set_reference_bake_id(std::string(32, 'a')); }},
-      {"settings.target_metric", [](v1::BakeSettings& s) { s.set_target_metric("rmse"); }},
-      {"settings.solver", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_solver("magic"); }},
-      {"settings.sg_sharpness", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_sg_sharpness(-2); }},
-      {"settings.acceleration", [](v1::BakeSettings& s) { s.set_encoding("sg12"); s.set_acceleration(100); }},
+      {"settings.target_metric", [](v1::BakeSettings& s) { s.set_target_metric(v1::TARGET_METRIC_RMSE); }},
+      {"settings.solver", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_solver(static_cast<v1::Solver>(42)); }},
+      {"settings.sg_sharpness", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_sg_sharpness(-2); }},
+      {"settings.acceleration", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_acceleration(100); }},
       {"settings.sky.color", [](v1::BakeSettings& s) {
          s.mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
          s.mutable_sky()->add_color(1);

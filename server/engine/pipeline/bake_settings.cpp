@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "pipeline/settings_schema.h"
+
 namespace luxel::pipeline {
 
 const char* filter_name(Filter f) { return f == Filter::kGaussian ? "gaussian" : "box"; }
@@ -68,40 +70,32 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   return m;
 }
 
-Status validate_settings(const BakeSettings& s) {
+Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
+  // Each setting's own rule, from the schema.
+  for (const Setting& st : settings_schema())
+    if (st.is_active(s)) LUXEL_RETURN_IF_ERROR(check_setting(st, st.get(s)));
+
+  // Rules between settings.
   auto bad = [](const char* field, const std::string& why) {
     return invalid_argument(strprintf("settings.%s: %s", field, why.c_str()));
   };
-  if (s.atlas.resolution < 0 || s.atlas.resolution > s.atlas.max_resolution)
-    return bad("resolution", strprintf("must be in [1, %d], got %d", s.atlas.max_resolution,
-                                       s.atlas.resolution));
-  if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0 && std::isfinite(s.atlas.texel_density)))
+  if (s.atlas.resolution > s.atlas.max_resolution)
+    return bad("resolution", strprintf("%d exceeds %s=%d", s.atlas.resolution, resolution_limit,
+                                       s.atlas.max_resolution));
+  if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))
     return bad("resolution", "give a resolution or a positive texel density");
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))
-    return bad("samples_per_texel", "no stopping rule: set samples, a time budget or a target error");
-  if (!(s.time_budget_s >= 0) || !std::isfinite(s.time_budget_s))
-    return bad("time_budget_s", strprintf("must be >= 0, got %g", s.time_budget_s));
-  if (!(s.target_error >= 0) || !std::isfinite(s.target_error))
-    return bad("target_error", strprintf("must be >= 0, got %g", s.target_error));
-  if (s.target_metric != ErrorMetric::kEstimate && !s.reference)
-    return bad("target_metric", strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
+    return bad("samples_per_texel",
+               "no stopping rule: set samples, a time budget or a target error");
+  const bool has_reference = s.reference || !s.job.reference_bake_id.empty();
+  if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
+    return bad("target_metric",
+               strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
   if (s.reference) {
     for (float v : *s.reference)
       if (!std::isfinite(v)) return bad("reference", "contains a non-finite value");
   }
-  if (s.max_bounces < 0 || s.max_bounces > 64)
-    return bad("max_bounces", strprintf("must be in [0, 64], got %d", s.max_bounces));
-  if (s.rr_depth < 1 || s.rr_depth > 64)
-    return bad("rr_depth", strprintf("must be in [1, 64], got %d", s.rr_depth));
-  if (s.paths_per_iteration < 1024 || s.paths_per_iteration > (1u << 26))
-    return bad("paths_per_iteration", strprintf("must be in [1024, 2^26], got %u", s.paths_per_iteration));
-  if (!(s.clamp_luminance >= 0) || !std::isfinite(s.clamp_luminance))
-    return bad("clamp_luminance", strprintf("must be >= 0, got %g", s.clamp_luminance));
-  if (!(s.progress_interval_s > 0))
-    return bad("progress_interval_s", strprintf("must be > 0, got %g", s.progress_interval_s));
-  if (s.dilation_texels < 0 || s.dilation_texels > 64)
-    return bad("dilation_texels", strprintf("must be in [0, 64], got %d", s.dilation_texels));
-  return validate_encodings(s.encodings);
+  return Status::ok();
 }
 
 }  // namespace luxel::pipeline

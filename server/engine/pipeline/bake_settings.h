@@ -1,6 +1,8 @@
 // What a bake is asked to do: lightmap size, stopping rules, light transport
-// and ablation switches. Validated by validate_settings(), which names the
-// offending field, so the CLI and the service report the same errors.
+// and ablation switches. The defaults, ranges, units and help of every field
+// are in the settings schema (settings_schema.h); validate_settings() checks
+// them and names the offending field, so the CLI and the service report the
+// same errors.
 #pragma once
 
 #include <cstdint>
@@ -24,6 +26,17 @@ enum class ErrorMetric { kEstimate, kRmse, kRelMse };
 const char* error_metric_name(ErrorMetric m);
 // "estimate", "rmse", "relmse"; INVALID_ARGUMENT otherwise.
 Result<ErrorMetric> parse_error_metric(const std::string& name);
+
+// How the daemon runs and delivers a bake; not read by the engine. Part of
+// BakeSettings so that one schema describes every setting of a SubmitBake.
+enum class SnapshotFormat { kPng, kExr, kNone };
+struct JobSettings {
+  int priority = 0;                  // higher runs first; FIFO among equals
+  double snapshot_interval_s = 5;    // seconds between snapshots
+  SnapshotFormat snapshot_format = SnapshotFormat::kPng;
+  int snapshot_max_side = 512;       // PNG snapshot longest side, pixels
+  std::string reference_bake_id;     // benchmark mode on the daemon
+};
 
 struct BakeSettings {
   atlas::AtlasSettings atlas;   // resolution or texel density
@@ -57,13 +70,17 @@ struct BakeSettings {
 
   double progress_interval_s = 1.0;  // progress callback period
   int dilation_texels = 2;           // output: fill uncovered texels this far
+  JobSettings job;                   // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.
   std::map<std::string, std::string> describe() const;
 };
 
-// INVALID_ARGUMENT naming the field ("settings.max_bounces: must be in [0, 64], got 99").
-Status validate_settings(const BakeSettings& settings);
+// INVALID_ARGUMENT naming the field ("settings.max_bounces: must be in [0, 64], got 99"):
+// every active setting's schema rule, then the rules between settings.
+// `resolution_limit` names where atlas.max_resolution comes from in errors.
+Status validate_settings(const BakeSettings& settings,
+                         const char* resolution_limit = "the engine's limit max_resolution");
 
 const char* filter_name(Filter f);
 

@@ -4,6 +4,9 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "pipeline/bake_settings.h"
+#include "pipeline/settings_schema.h"
+
 namespace luxel::pipeline {
 
 const char* solver_name(EncodingSolver s) {
@@ -44,20 +47,17 @@ Result<std::vector<std::string>> parse_encoding_list(const std::string& list) {
 }
 
 Status validate_encodings(const EncodingSettings& e) {
-  auto bad = [](const char* field, const std::string& why) {
-    return invalid_argument(strprintf("settings.%s: %s", field, why.c_str()));
-  };
-  if (!(e.sg_sharpness >= 0.25f && e.sg_sharpness <= 256.0f))
-    return bad("sg_sharpness", strprintf("must be in [0.25, 256], got %g", e.sg_sharpness));
-  std::set<std::string> seen;
-  for (const auto& n : e.names) {
-    if (!seen.insert(n).second) return bad("encodings", strprintf("'%s' is listed twice", n.c_str()));
-    auto b = encode::SphericalBasis::from_name(n, e.sg_sharpness);
-    if (!b) return bad("encodings", b.status().message());
+  // The rules are the settings schema's (encodings, sg_sharpness, acceleration).
+  BakeSettings s;
+  s.encodings = e;
+  for (const char* name : {"sg_sharpness", "encodings", "acceleration"}) {
+    const Setting* st = find_setting(name);
+    LUXEL_RETURN_IF_ERROR(check_setting(*st, st->get(s)));
   }
-  if (e.names.size() > 8) return bad("encodings", strprintf("at most 8 at once, got %zu", e.names.size()));
-  if (!(e.acceleration >= 0.5f && e.acceleration <= 8.0f))
-    return bad("acceleration", strprintf("must be in [0.5, 8], got %g", e.acceleration));
+  for (const auto& n : e.names) {
+    auto b = encode::SphericalBasis::from_name(n, e.sg_sharpness);
+    if (!b) return invalid_argument("settings.encodings: " + b.status().message());
+  }
   return Status::ok();
 }
 

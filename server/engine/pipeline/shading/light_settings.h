@@ -12,6 +12,11 @@
 
 namespace luxel::pipeline {
 
+// Angular radii of the sun and of directional lights are in [0, this): the
+// disc must be narrower than the hemisphere (L = E / (pi sin^2 a) needs
+// a < 90 degrees). The settings schema and the light builder share it.
+inline constexpr float kMaxAngularRadiusDegrees = 90;
+
 struct SkySettings {
   enum class Kind { kNone, kConstant, kEquirect };
   Kind kind = Kind::kNone;

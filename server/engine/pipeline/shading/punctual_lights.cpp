@@ -21,9 +21,10 @@ Status directional_candidate(const std::string& what, Vec3 direction, Vec3 irrad
                              float angular_radius_degrees, double disc_area, LightCandidate* c) {
   if (!is_finite(direction) || !(length(direction) > 0))
     return invalid_argument(what + ": direction must be finite and non-zero");
-  if (!(angular_radius_degrees >= 0 && angular_radius_degrees < 90))
-    return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, 90)", what.c_str(),
-                                      static_cast<double>(angular_radius_degrees)));
+  if (!(angular_radius_degrees >= 0 && angular_radius_degrees < kMaxAngularRadiusDegrees))
+    return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, %g)", what.c_str(),
+                                      static_cast<double>(angular_radius_degrees),
+                                      static_cast<double>(kMaxAngularRadiusDegrees)));
   set_type(&c->light, LUX_LIGHT_TYPE_DIRECTIONAL);
   c->light.axis = f4(normalize(direction), c->light.axis.w);
   Vec3 radiance = irradiance;
