@@ -1,4 +1,4 @@
-// `luxel report`: the error-against-time series of a bake (issue 6) as a
+// `luxel report`: the error-against-time series of a bake as a
 // table, a CSV file or a log-log plot. The series comes from a local output
 // folder (`luxel bake --local --out DIR`, `luxel fetch`) or from a finished
 // bake on luxeld (downloaded with sha256 checks).

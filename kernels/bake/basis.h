@@ -1,4 +1,4 @@
-/* Directional encodings in the gather accumulation (issue 5; core thesis
+/* Directional encodings in the gather accumulation (core thesis
  * §3.4 "Accumulation into Linear Bases", Ch. 7-8). Compiled only with
  * LUX_BASIS.
  *

@@ -1,4 +1,4 @@
-// bench_encode_bake: directional encodings in real bakes (issue 5
+// bench_encode_bake: directional encodings in real bakes (core thesis Ch. 7-8,
 // "Measurements"), one run on one device:
 //   1. a high-sample irradiance-only bake per scene (the reference);
 //   2. one bake with every encoding at a lower sample count: the diffuse

@@ -67,7 +67,7 @@ struct Manifest {
   std::map<std::string, std::string> settings;  // bake settings as given
   std::string features;                         // compiled feature list
   std::string device;                           // device description
-  // Directional encodings (issue 5): one JSON object each (basis, directions,
+  // Directional encodings: one JSON object each (basis, directions,
   // frame, solver, file), kept as JSON text so the engine's basis description
   // passes through unchanged. Empty for irradiance-only bakes.
   std::vector<std::string> encodings_json;

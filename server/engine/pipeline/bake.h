@@ -51,7 +51,7 @@ struct ErrorSample {
   double rmse = -1, rel_mse = -1;  // -1 without a reference
 };
 
-// One directional encoding of a finished bake (issue 5).
+// One directional encoding of a finished bake.
 struct EncodedLightmap {
   std::string name;                 // "sh2", "sg12", "ambient-dice9", ...
   int count = 0;                    // coefficients per colour channel

@@ -61,7 +61,7 @@ struct BakeSettings {
   Filter filter = Filter::kBox;
   float clamp_luminance = 0;    // firefly clamp on a path's luminance; 0 = off (unbiased)
   LightSettings lights;         // sky, sun, directional angular radius
-  EncodingSettings encodings;   // directional encodings besides irradiance (issue 5)
+  EncodingSettings encodings;   // directional encodings besides irradiance
 
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;

@@ -1,4 +1,4 @@
-// Directional encodings of a bake (issue 5; core thesis Ch. 7-8): which bases
+// Directional encodings of a bake (core thesis Ch. 7-8): which bases
 // the bake accumulates besides irradiance, how each is solved, and the
 // device tables that describe them to kernels/bake/basis.h.
 //

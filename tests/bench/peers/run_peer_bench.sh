@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Luxel vs Blender Cycles, side by side (issue 6). One command, one machine,
+# Luxel vs Blender Cycles, side by side. One command, one machine,
 # one run: bakes every scene with both renderers, then prints the tables.
 #
 #   tests/bench/peers/install-blender.sh     # once (apt: blender, python3-openimageio)

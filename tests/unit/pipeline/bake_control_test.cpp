@@ -156,7 +156,7 @@ TEST_F(BakeControlTest, SnapshotsAndCancellation) {
 namespace luxel {
 namespace {
 
-// Benchmark mode (issue 6): RMSE / relMSE against a reference lightmap.
+// Benchmark mode: RMSE / relMSE against a reference lightmap.
 TEST_F(BakeControlTest, ReferenceErrorIsExactAndTracksTheEstimate) {
   const scene::Scene scene = testing::open_plane();
   pipeline::BakeSettings st = settings();

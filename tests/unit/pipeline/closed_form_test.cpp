@@ -1,5 +1,5 @@
-// The bake engine against scenes with closed-form irradiance (issue 3,
-// DESIGN.md "Accuracy"): point light over a plane, uniform sky over an open
+// The bake engine against scenes with closed-form irradiance (DESIGN.md
+// "Accuracy"): point light over a plane, uniform sky over an open
 // plane, a closed emissive furnace box. Every covered texel is z-tested
 // against the expected value with the standard error the engine reports
 // itself (Šidák-corrected over texels), plus a pooled test of the mean

@@ -1,4 +1,4 @@
-// Directional encodings in a real bake (issue 5), against closed forms:
+// Directional encodings in a real bake, against closed forms:
 //  - a constant sky over an open plane: incident radiance L on the upper
 //    hemisphere, 0 below. SH moments are known exactly; every basis must
 //    reconstruct the irradiance pi L within its own representation error,
