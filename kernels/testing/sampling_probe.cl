@@ -1,4 +1,4 @@
-/* Probe kernels for tests/unit/sampling: evaluate the device sampling
+/* Probe kernels for tests/unit/kernels/sampling: evaluate the device sampling
  * functions for batches of inputs so the host can check them statistically.
  * Not used by the renderer. Build with LUX_SPECULAR and/or
  * LUX_SEQUENCE_RANDOM to probe those variants. */

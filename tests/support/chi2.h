@@ -1,6 +1,6 @@
 // Pearson's chi-square goodness-of-fit test for sampling routines (after
 // Mitsuba 3's chi2.py), shared by every test folder that checks a sampler
-// against its density (tests/unit/sampling, tests/unit/shading).
+// against its density (tests/unit/kernels/sampling, tests/unit/pipeline/shading).
 //
 // observed[i] and expected[i] are the sample counts of cell i of a partition
 // of the sampled domain; expected sums to the number of samples (a caller
