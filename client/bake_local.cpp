@@ -13,8 +13,8 @@
 #include "bake_options.h"
 #include "commands.h"
 #include "device/context.h"
-#include "pipeline/bake.h"
 #include "output/reference_exr.h"
+#include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
 #include "progress_bar.h"
 #include "scene/gltf_import.h"
@@ -40,9 +40,12 @@ void draw_progress(const pipeline::BakeProgress& p, bool tty) {
 int run_bake(const std::vector<std::string>& args) {
   BakeArgs a;
   switch (parse_bake_args(args, a)) {
-    case ParseOutcome::kHelpShown: return 0;
-    case ParseOutcome::kUsageError: return 2;
-    case ParseOutcome::kOk: break;
+    case ParseOutcome::kHelpShown:
+      return 0;
+    case ParseOutcome::kUsageError:
+      return 2;
+    case ParseOutcome::kOk:
+      break;
   }
   if (!a.local) return run_bake_remote(a);
   if (!a.remote_only.empty()) {
@@ -73,13 +76,14 @@ int run_bake(const std::vector<std::string>& args) {
     std::fprintf(stderr, "luxel bake: %s\n", ctx.status().to_string().c_str());
     return 1;
   }
-  std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(), ctx.value()->info().describe().c_str());
+  std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
+              ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));
-  auto result = pipeline::bake(scene.value(), a.settings, *ctx.value(),
-                               [&](const pipeline::BakeProgress& p) {
-                                 if (!a.quiet) draw_progress(p, tty);
-                                 return true;
-                               });
+  auto result =
+      pipeline::bake(scene.value(), a.settings, *ctx.value(), [&](const pipeline::BakeProgress& p) {
+        if (!a.quiet) draw_progress(p, tty);
+        return true;
+      });
   if (tty && !a.quiet) std::printf("\n");
   if (!result) {
     std::fprintf(stderr, "luxel bake: %s\n", result.status().to_string().c_str());
@@ -95,11 +99,12 @@ int run_bake(const std::vector<std::string>& args) {
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
   std::printf("features   %s\n", r.features.c_str());
-  std::printf("baked      %.2f s (+%.2f s setup), %llu paths (%.2f Mpaths/s), spp mean %.1f min %u, "
-              "error %.4f, stopped by %s\n",
-              r.seconds, r.setup_s, static_cast<unsigned long long>(r.paths),
-              r.seconds > 0 ? r.paths / r.seconds / 1e6 : 0.0, r.mean_spp, r.min_spp, r.error,
-              pipeline::termination_name(r.termination));
+  std::printf(
+      "baked      %.2f s (+%.2f s setup), %llu paths (%.2f Mpaths/s), spp mean %.1f min %u, "
+      "error %.4f, stopped by %s\n",
+      r.seconds, r.setup_s, static_cast<unsigned long long>(r.paths),
+      r.seconds > 0 ? r.paths / r.seconds / 1e6 : 0.0, r.mean_spp, r.min_spp, r.error,
+      pipeline::termination_name(r.termination));
   if (r.rmse >= 0)
     std::printf("reference  rmse %.5g, relMSE %.5g against %s\n", r.rmse, r.rel_mse,
                 a.settings.reference_name.c_str());
@@ -112,10 +117,12 @@ int run_bake(const std::vector<std::string>& args) {
                 e.residual_rms >= 0 ? strprintf("running residual %.4g", e.residual_rms).c_str()
                                     : "projection");
   if (!r.encodings.empty())
-    std::printf("           basis state %zu bytes per texel on the device\n", r.basis_bytes_per_texel);
+    std::printf("           basis state %zu bytes per texel on the device\n",
+                r.basis_bytes_per_texel);
   std::printf("\nkernel timings (OpenCL profiling events)\n%s", r.kernel_table.c_str());
-  std::printf("\nwrote      %s\n           %s\n           %s\n", paths.value().irradiance_exr.c_str(),
-              paths.value().preview_png.c_str(), paths.value().manifest_json.c_str());
+  std::printf("\nwrote      %s\n           %s\n           %s\n",
+              paths.value().irradiance_exr.c_str(), paths.value().preview_png.c_str(),
+              paths.value().manifest_json.c_str());
   for (const auto& f : paths.value().encodings) std::printf("           %s\n", f.c_str());
   return 0;
 }

@@ -26,10 +26,10 @@ struct BakeArgs {
 
   // Remote only.
   remote::ConnectionOptions connection;
-  std::string name;                // scene display name for the upload
-  std::string snapshots_dir;       // write snapshots while watching
+  std::string name;           // scene display name for the upload
+  std::string snapshots_dir;  // write snapshots while watching
   std::string idempotency_key;
-  bool detach = false;             // print the bake id and return after SubmitBake
+  bool detach = false;  // print the bake id and return after SubmitBake
 
   // Options given on the command line that only one path understands; the
   // other path refuses them instead of silently ignoring them.

@@ -47,7 +47,9 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
       char* end = nullptr;
       const long long n = std::strtoll(v->c_str(), &end, 10);
       if (*end != '\0' || n < 1 || n > (1ll << 26)) {
-        std::fprintf(stderr, "luxel inspect: --rays must be an integer in [1, 67108864], got '%s'\n", v->c_str());
+        std::fprintf(stderr,
+                     "luxel inspect: --rays must be an integer in [1, 67108864], got '%s'\n",
+                     v->c_str());
         return false;
       }
       out.rays = static_cast<size_t>(n);
@@ -68,7 +70,9 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
     }
   }
   if (out.scene.empty()) {
-    std::fprintf(stderr, "usage: luxel inspect SCENE.gltf|SCENE.glb [--device SPEC] [--rays N] [--seed S] [--no-trace]\n");
+    std::fprintf(stderr,
+                 "usage: luxel inspect SCENE.gltf|SCENE.glb [--device SPEC] [--rays N] [--seed S] "
+                 "[--no-trace]\n");
     return false;
   }
   return true;
@@ -86,9 +90,8 @@ int run_devices(const std::vector<std::string>&) {
   if (!devices) return fail(devices.status());
   auto chosen = device::choose_device("");
   for (const auto& d : devices.value())
-    std::printf("%s %d:%d  %s\n",
-                chosen && chosen->id == d.id ? "*" : " ", d.platform_index, d.device_index,
-                d.describe().c_str());
+    std::printf("%s %d:%d  %s\n", chosen && chosen->id == d.id ? "*" : " ", d.platform_index,
+                d.device_index, d.describe().c_str());
   return 0;
 }
 
@@ -99,7 +102,8 @@ int run_inspect(const std::vector<std::string>& argv) {
   const auto t0 = std::chrono::steady_clock::now();
   auto scene = scene::import_gltf_file(args.scene);
   if (!scene) return fail(scene.status());
-  const double import_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double import_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   const scene::SceneStats stats = scene::compute_stats(scene.value());
   std::printf("scene      %s (imported in %.0f ms)\n", args.scene.c_str(), import_ms);
   std::printf("%s", scene::format_stats(stats).c_str());
@@ -114,35 +118,44 @@ int run_inspect(const std::vector<std::string>& argv) {
   auto bvh = accel::build_bvh(soup.value());
   if (!bvh) return fail(bvh.status());
   const auto& bs = bvh->stats;
-  std::printf("bvh        %zu nodes, %zu leaves, depth %u, SAH cost %.1f, built in %.1f ms (Embree rtcBuildBVH), %.1f MiB on device\n",
-              bs.nodes, bs.leaves, bs.max_depth, bs.sah_cost, bs.build_ms,
-              static_cast<double>(bs.device_bytes) / (1024.0 * 1024.0));
+  std::printf(
+      "bvh        %zu nodes, %zu leaves, depth %u, SAH cost %.1f, built in %.1f ms (Embree "
+      "rtcBuildBVH), %.1f MiB on device\n",
+      bs.nodes, bs.leaves, bs.max_depth, bs.sah_cost, bs.build_ms,
+      static_cast<double>(bs.device_bytes) / (1024.0 * 1024.0));
 
   const auto tc = std::chrono::steady_clock::now();
   auto cl_tracer = accel::ClTracer::create(*ctx.value(), bvh.value());
   if (!cl_tracer) return fail(cl_tracer.status());
-  std::printf("kernels    intersect.cl, features: %s (ready in %.0f ms)\n",
-              cl_tracer.value()->features().describe().c_str(),
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tc).count());
+  std::printf(
+      "kernels    intersect.cl, features: %s (ready in %.0f ms)\n",
+      cl_tracer.value()->features().describe().c_str(),
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tc).count());
   auto embree = accel::EmbreeTracer::create(bvh.value());
   if (!embree) return fail(embree.status());
   if (!args.trace) return 0;
 
-  std::printf("\nray throughput, %zu rays per set (best of 3; OpenCL: kernel time, Embree: wall time on all cores)\n",
-              args.rays);
-  std::printf("%-12s %-8s %14s %14s %12s\n", "rays", "query", "OpenCL Mray/s", "Embree Mray/s", "CL/Embree");
-  const accel::RayKind kinds[] = {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow};
+  std::printf(
+      "\nray throughput, %zu rays per set (best of 3; OpenCL: kernel time, Embree: wall time on "
+      "all cores)\n",
+      args.rays);
+  std::printf("%-12s %-8s %14s %14s %12s\n", "rays", "query", "OpenCL Mray/s", "Embree Mray/s",
+              "CL/Embree");
+  const accel::RayKind kinds[] = {accel::RayKind::kCoherent, accel::RayKind::kIncoherent,
+                                  accel::RayKind::kShadow};
   for (const auto kind : kinds) {
     const auto rays = accel::make_rays(soup.value(), kind, args.rays, args.seed);
-    const auto query = kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
-    auto tp = accel::measure_throughput(*ctx.value(), *cl_tracer.value(), *embree.value(), rays, query,
-                                        kind == accel::RayKind::kCoherent);
+    const auto query =
+        kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
+    auto tp = accel::measure_throughput(*ctx.value(), *cl_tracer.value(), *embree.value(), rays,
+                                        query, kind == accel::RayKind::kCoherent);
     if (!tp) return fail(tp.status());
     std::printf("%-12s %-8s %14.2f %14.2f %11.2fx\n", accel::ray_kind_name(kind),
                 query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(), tp->embree_mrays(),
                 tp->ratio());
   }
-  std::printf("\nkernel launches (OpenCL profiling events, all passes)\n%s", ctx.value()->timer().table().c_str());
+  std::printf("\nkernel launches (OpenCL profiling events, all passes)\n%s",
+              ctx.value()->timer().table().c_str());
   return 0;
 }
 

@@ -1,45 +1,46 @@
 // luxel: the Luxel command-line client.
 #include <cstdio>
-#include "luxel_version.h"
 #include <cstring>
 #include <string>
 #include <vector>
 
 #include "commands.h"
+#include "luxel_version.h"
 
 namespace {
 
 void usage(FILE* out) {
-  std::fprintf(out,
-               "luxel %s (%s): lightmap baker\n\n"
-               "usage: luxel <command> [options]\n\n"
-               "commands:\n"
-               "  inspect SCENE [--device SPEC] [--rays N] [--seed S] [--no-trace]\n"
-               "        scene statistics, OpenCL device, BVH build, ray throughput of the\n"
-               "        OpenCL kernels and of Embree on the scene\n"
-               "  bake SCENE --local --out DIR [--samples N] [--time S] [--target-error E]\n"
-               "        [--bounces B] [--resolution N | --texel-density D] [--seed S] ...\n"
-               "        bake an irradiance lightmap in-process (luxel bake --help for all options)\n"
-               "  devices\n"
-               "        list OpenCL devices (SPEC for --device: gpu, cpu, P:D, or a name substring;\n"
-               "        the LUXEL_DEVICE environment variable sets the default)\n\n"
-               "commands on a luxeld daemon (each: --help for its options):\n"
-               "  upload SCENE [--name N]\n"
-               "        upload a .gltf (with its buffers and images) or .glb; print its id and statistics\n"
-               "  bake SCENE --out DIR [settings] [--priority P] [--snapshots DIR] [--detach]\n"
-               "        upload if needed, submit, watch with a progress bar, download the results\n"
-               "  status BAKE           state, progress, ETA and artifacts of a bake\n"
-               "  list [--state S] | --scenes   bakes (optionally in state S) or scenes\n"
-               "  watch BAKE [--snapshots DIR]  follow a bake; write its snapshots to DIR\n"
-               "  cancel BAKE           cancel a queued or running bake\n"
-               "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
-               "  report DIR|BAKE [--csv F] [--plot F.png]   error against time of a bake\n"
-               "  settings [--json]     every bake setting: option, default, range, units\n"
-               "  common options: --server HOST:PORT (default $LUXEL_SERVER or 127.0.0.1:50051),\n"
-               "        --token T ($LUXEL_TOKEN), --tls-ca FILE, --tls, --timeout S, --json\n\n"
-               "exit codes: 0 success, 1 error (daemon, network, files), 2 usage error,\n"
-               "            3 the bake failed, was cancelled or interrupted\n",
-               LUXEL_VERSION, LUXEL_GIT_REVISION);
+  std::fprintf(
+      out,
+      "luxel %s (%s): lightmap baker\n\n"
+      "usage: luxel <command> [options]\n\n"
+      "commands:\n"
+      "  inspect SCENE [--device SPEC] [--rays N] [--seed S] [--no-trace]\n"
+      "        scene statistics, OpenCL device, BVH build, ray throughput of the\n"
+      "        OpenCL kernels and of Embree on the scene\n"
+      "  bake SCENE --local --out DIR [--samples N] [--time S] [--target-error E]\n"
+      "        [--bounces B] [--resolution N | --texel-density D] [--seed S] ...\n"
+      "        bake an irradiance lightmap in-process (luxel bake --help for all options)\n"
+      "  devices\n"
+      "        list OpenCL devices (SPEC for --device: gpu, cpu, P:D, or a name substring;\n"
+      "        the LUXEL_DEVICE environment variable sets the default)\n\n"
+      "commands on a luxeld daemon (each: --help for its options):\n"
+      "  upload SCENE [--name N]\n"
+      "        upload a .gltf (with its buffers and images) or .glb; print its id and statistics\n"
+      "  bake SCENE --out DIR [settings] [--priority P] [--snapshots DIR] [--detach]\n"
+      "        upload if needed, submit, watch with a progress bar, download the results\n"
+      "  status BAKE           state, progress, ETA and artifacts of a bake\n"
+      "  list [--state S] | --scenes   bakes (optionally in state S) or scenes\n"
+      "  watch BAKE [--snapshots DIR]  follow a bake; write its snapshots to DIR\n"
+      "  cancel BAKE           cancel a queued or running bake\n"
+      "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
+      "  report DIR|BAKE [--csv F] [--plot F.png]   error against time of a bake\n"
+      "  settings [--json]     every bake setting: option, default, range, units\n"
+      "  common options: --server HOST:PORT (default $LUXEL_SERVER or 127.0.0.1:50051),\n"
+      "        --token T ($LUXEL_TOKEN), --tls-ca FILE, --tls, --timeout S, --json\n\n"
+      "exit codes: 0 success, 1 error (daemon, network, files), 2 usage error,\n"
+      "            3 the bake failed, was cancelled or interrupted\n",
+      LUXEL_VERSION, LUXEL_GIT_REVISION);
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 namespace luxel::cli {
 
 struct ProgressView {
-  double fraction = 0;   // 0..1 towards the nearest stopping rule
-  double mean_spp = 0;   // mean samples per covered texel
+  double fraction = 0;  // 0..1 towards the nearest stopping rule
+  double mean_spp = 0;  // mean samples per covered texel
   uint32_t min_spp = 0;
   double error = 0;      // mean relative standard error
   double elapsed_s = 0;  // seconds of tracing

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "commands.h"
-#include "common/status.h"
 #include "common/atomic_file.h"
+#include "common/status.h"
 #include "output/manifest.h"
 #include "remote/connection.h"
 #include "remote/fetch.h"
@@ -54,9 +54,11 @@ Result<std::vector<Row>> parse_series(const std::string& csv, const std::string&
     if (line.empty()) continue;
     Row r;
     char rmse[64] = "", rel[64] = "";
-    const int got = std::sscanf(line.c_str(), "%lf,%llu,%lf,%u,%lf,%63[^,],%63s", &r.elapsed, &r.paths,
-                                &r.mean_spp, &r.min_spp, &r.error, rmse, rel);
-    if (got < 5) return invalid_argument(strprintf("%s: line %d is malformed: '%s'", what.c_str(), n, line.c_str()));
+    const int got = std::sscanf(line.c_str(), "%lf,%llu,%lf,%u,%lf,%63[^,],%63s", &r.elapsed,
+                                &r.paths, &r.mean_spp, &r.min_spp, &r.error, rmse, rel);
+    if (got < 5)
+      return invalid_argument(
+          strprintf("%s: line %d is malformed: '%s'", what.c_str(), n, line.c_str()));
     if (got >= 7) {
       r.rmse = std::atof(rmse);
       r.rel_mse = std::atof(rel);
@@ -104,7 +106,8 @@ fig.savefig(sys.argv[2])
 )PY";
 
 int plot(const std::string& csv_path, const std::string& png, const std::string& title) {
-  const std::string script = (fs::temp_directory_path() / strprintf("luxel_plot_%d.py", getpid())).string();
+  const std::string script =
+      (fs::temp_directory_path() / strprintf("luxel_plot_%d.py", getpid())).string();
   std::ofstream(script) << kPlotScript;
   auto quote = [](const std::string& s) {
     std::string q = "'";
@@ -114,14 +117,18 @@ int plot(const std::string& csv_path, const std::string& png, const std::string&
   // Debian's python3 (where python3-matplotlib lives) before whatever
   // python3 is first on PATH; LUXEL_PYTHON overrides both.
   std::string python = "python3";
-  if (const char* env = std::getenv("LUXEL_PYTHON"); env && *env) python = env;
-  else if (fs::exists("/usr/bin/python3")) python = "/usr/bin/python3";
-  const std::string cmd = quote(python) + " " + quote(script) + " " + quote(csv_path) + " " + quote(png) + " " + quote(title);
+  if (const char* env = std::getenv("LUXEL_PYTHON"); env && *env)
+    python = env;
+  else if (fs::exists("/usr/bin/python3"))
+    python = "/usr/bin/python3";
+  const std::string cmd = quote(python) + " " + quote(script) + " " + quote(csv_path) + " " +
+                          quote(png) + " " + quote(title);
   const int rc = std::system(cmd.c_str());
   fs::remove(script);
   if (rc != 0) {
-    std::fprintf(stderr, "luxel report: plotting failed (python3 with matplotlib is needed: "
-                         "deploy/install-deps.sh installs python3-matplotlib)\n");
+    std::fprintf(stderr,
+                 "luxel report: plotting failed (python3 with matplotlib is needed: "
+                 "deploy/install-deps.sh installs python3-matplotlib)\n");
     return 1;
   }
   std::printf("wrote      %s\n", png.c_str());
@@ -144,13 +151,18 @@ int run_report(const std::vector<std::string>& args) {
       std::printf("%s%s", kUsage, kConnectionUsage);
       return 0;
     }
-    if (k == "--csv" && i + 1 < args.size()) csv_out = args[++i];
-    else if (k == "--plot" && i + 1 < args.size()) png_out = args[++i];
-    else if (k == "--all") all = true;
+    if (k == "--csv" && i + 1 < args.size())
+      csv_out = args[++i];
+    else if (k == "--plot" && i + 1 < args.size())
+      png_out = args[++i];
+    else if (k == "--all")
+      all = true;
     else if (!k.empty() && k[0] == '-') {
-      std::fprintf(stderr, "luxel report: unknown option or missing value '%s'\n%s", k.c_str(), kUsage);
+      std::fprintf(stderr, "luxel report: unknown option or missing value '%s'\n%s", k.c_str(),
+                   kUsage);
       return 2;
-    } else if (target.empty()) target = k;
+    } else if (target.empty())
+      target = k;
     else {
       std::fprintf(stderr, "luxel report: unexpected argument '%s'\n", k.c_str());
       return 2;
@@ -175,7 +187,8 @@ int run_report(const std::vector<std::string>& args) {
     req.set_bake_id(target);
     if (auto st = conn->stub().GetBake(&ctx, req, &info); !st.ok()) return conn->fail("report", st);
     if (info.state() != luxel::v1::BAKE_STATE_SUCCEEDED) {
-      std::fprintf(stderr, "luxel report: bake %s is %s; its series is complete once it SUCCEEDED\n",
+      std::fprintf(stderr,
+                   "luxel report: bake %s is %s; its series is complete once it SUCCEEDED\n",
                    target.c_str(), state_name(info.state()).c_str());
       return 1;
     }
@@ -201,25 +214,29 @@ int run_report(const std::vector<std::string>& args) {
     std::fprintf(stderr, "luxel report: %s\n", rows.status().message().c_str());
     return 1;
   }
-  const std::string title =
-      manifest ? strprintf("%s, %dx%d", manifest->scene_name.c_str(), manifest->width, manifest->height)
-               : target;
+  const std::string title = manifest ? strprintf("%s, %dx%d", manifest->scene_name.c_str(),
+                                                 manifest->width, manifest->height)
+                                     : target;
   std::printf("bake       %s\n", title.c_str());
   if (manifest)
-    std::printf("stopped by %s after %.2f s, %llu paths, error estimate %.4g%s\n",
-                manifest->stats.termination.c_str(), manifest->stats.seconds,
-                static_cast<unsigned long long>(manifest->stats.paths), manifest->stats.error_estimate,
-                manifest->stats.rmse >= 0 ? strprintf(", RMSE %.4g, relMSE %.4g", manifest->stats.rmse,
-                                                      manifest->stats.rel_mse).c_str() : "");
+    std::printf(
+        "stopped by %s after %.2f s, %llu paths, error estimate %.4g%s\n",
+        manifest->stats.termination.c_str(), manifest->stats.seconds,
+        static_cast<unsigned long long>(manifest->stats.paths), manifest->stats.error_estimate,
+        manifest->stats.rmse >= 0
+            ? strprintf(", RMSE %.4g, relMSE %.4g", manifest->stats.rmse, manifest->stats.rel_mse)
+                  .c_str()
+            : "");
   const bool with_ref = !rows->empty() && rows->back().rmse >= 0;
-  std::printf("\n%10s %12s %9s %7s %10s%s\n", "elapsed_s", "paths", "mean_spp", "min_spp", "estimate",
-              with_ref ? "       rmse    rel_mse" : "");
+  std::printf("\n%10s %12s %9s %7s %10s%s\n", "elapsed_s", "paths", "mean_spp", "min_spp",
+              "estimate", with_ref ? "       rmse    rel_mse" : "");
   const size_t n = rows->size();
   const size_t step = all || n <= 25 ? 1 : (n + 24) / 25;
   for (size_t i = 0; i < n; ++i) {
     if (i % step != 0 && i + 1 != n) continue;
     const Row& r = (*rows)[i];
-    std::printf("%10.3f %12llu %9.2f %7u %10.4g", r.elapsed, r.paths, r.mean_spp, r.min_spp, r.error);
+    std::printf("%10.3f %12llu %9.2f %7u %10.4g", r.elapsed, r.paths, r.mean_spp, r.min_spp,
+                r.error);
     if (with_ref) std::printf(" %10.4g %10.4g", r.rmse, r.rel_mse);
     std::printf("\n");
   }

@@ -6,7 +6,7 @@ set -euo pipefail
 
 PACKAGES=(
   # toolchain
-  build-essential cmake pkg-config git clang libclang-rt-dev
+  build-essential cmake pkg-config git clang libclang-rt-dev clang-format
   # OpenCL: headers (C and C++), ICD loader, PoCL CPU driver
   opencl-headers opencl-clhpp-headers ocl-icd-opencl-dev pocl-opencl-icd clinfo
   # geometry and images

@@ -23,12 +23,12 @@
  * header per stage); its parameters come from the buffer groups of
  * kernels/shared/bake_args.h, which the host binds by name. */
 
-#include "bake/texel_domain.h"
-#include "bake/raygen.h"
-#include "bake/shade.h"
-#include "bake/resolve.h"
 #include "bake/accumulate.h"
+#include "bake/raygen.h"
+#include "bake/resolve.h"
+#include "bake/shade.h"
 #include "bake/stats.h"
+#include "bake/texel_domain.h"
 
 __kernel void texel_domain(LUX_STAGE_PARAMS(texel_domain)) {
   lux_texel_domain((uint)get_global_id(0), LUX_STAGE_ARGS(texel_domain));

@@ -9,15 +9,15 @@
  *                   masked triangles run the shared alpha test. Without it
  *                   the alpha buffers are not even arguments' targets. */
 
-#include "shared/geometry.h"
 #include "intersect/traverse.h"
+#include "shared/geometry.h"
 
 #if LUX_ALPHA_MASK
-#define LUX_ALPHA_PARAMS                                                          \
+#define LUX_ALPHA_PARAMS                                                       \
   , __global const LuxTriangleUV *tri_uvs, __global const LuxAlphaMask *masks, \
       __global const uchar *alpha_texels
-#define LUX_ALPHA_ACCEPT(tri_index, tri, u, v)                                  \
-  (lux_as_int((tri).v1.w) < 0 ||                                               \
+#define LUX_ALPHA_ACCEPT(tri_index, tri, u, v) \
+  (lux_as_int((tri).v1.w) < 0 ||               \
    lux_alpha_opaque(&tri_uvs[tri_index], &masks[lux_as_int((tri).v1.w)], alpha_texels, (u), (v)))
 #else
 #define LUX_ALPHA_PARAMS
@@ -26,9 +26,9 @@
 
 /* Traverses for ray `ray`; writes the closest (or any) hit. Returns the
  * original triangle id or -1. */
-inline int lux_trace(__global const LuxBvhNode* nodes, __global const LuxTriangle* tris
-                         LUX_ALPHA_PARAMS,
-                     const LuxRay ray, int any_hit, float* t_out, float* u_out, float* v_out) {
+inline int lux_trace(__global const LuxBvhNode* nodes,
+                     __global const LuxTriangle* tris LUX_ALPHA_PARAMS, const LuxRay ray,
+                     int any_hit, float* t_out, float* u_out, float* v_out) {
   const float3 org = ray.org_tmin.xyz;
   const float3 dir = ray.dir_tmax.xyz;
   const float tmin = ray.org_tmin.w;
@@ -77,7 +77,10 @@ inline int lux_trace(__global const LuxBvhNode* nodes, __global const LuxTriangl
           }
         }
       }
-      if (left) tl = INFINITY; else tr = INFINITY;
+      if (left)
+        tl = INFINITY;
+      else
+        tr = INFINITY;
     }
 
     /* INFINITY marks a missed (or already tested leaf) child; t_best may
@@ -94,8 +97,14 @@ inline int lux_trace(__global const LuxBvhNode* nodes, __global const LuxTriangl
       node = near_left ? lref : rref;
       continue;
     }
-    if (go_l) { node = lref; continue; }
-    if (go_r) { node = rref; continue; }
+    if (go_l) {
+      node = lref;
+      continue;
+    }
+    if (go_r) {
+      node = rref;
+      continue;
+    }
     /* Pop, skipping subtrees that start behind the closest hit. */
     node = -1;
     while (sp > 0) {
@@ -138,8 +147,8 @@ inline int lux_occluded(__global const LuxBvhNode* nodes,
   return lux_trace(nodes, tris LUX_ALPHA_ARGS, ray, 1, &t, &u, &v) >= 0 ? 1 : 0;
 }
 
-__kernel void intersect_closest(__global const LuxBvhNode* nodes, __global const LuxTriangle* tris
-                                    LUX_ALPHA_PARAMS,
+__kernel void intersect_closest(__global const LuxBvhNode* nodes,
+                                __global const LuxTriangle* tris LUX_ALPHA_PARAMS,
                                 __global const LuxRay* rays, __global const int* ray_count,
                                 __global LuxHit* hits) {
   const int gid = (int)get_global_id(0);
@@ -147,8 +156,8 @@ __kernel void intersect_closest(__global const LuxBvhNode* nodes, __global const
   hits[gid] = lux_closest_hit(nodes, tris LUX_ALPHA_ARGS, rays[gid]);
 }
 
-__kernel void intersect_any(__global const LuxBvhNode* nodes, __global const LuxTriangle* tris
-                                LUX_ALPHA_PARAMS,
+__kernel void intersect_any(__global const LuxBvhNode* nodes,
+                            __global const LuxTriangle* tris LUX_ALPHA_PARAMS,
                             __global const LuxRay* rays, __global const int* ray_count,
                             __global int* occluded) {
   const int gid = (int)get_global_id(0);

@@ -26,9 +26,11 @@
  * work-items of the table scan (each walking 16 consecutive entries) do not
  * all hit the same local memory bank. */
 #define LUX_PAD(i) ((i) + ((i) >> 5))
-#define LUX_DIGIT_TABLE LUX_PAD(LUX_RADIX_DIGITS * LUX_PRIM_WG)
+#define LUX_DIGIT_TABLE LUX_PAD(LUX_RADIX_DIGITS* LUX_PRIM_WG)
 
-inline uint lux_digit(uint key, uint shift, uint mask) { return (key >> shift) & mask; }
+inline uint lux_digit(uint key, uint shift, uint mask) {
+  return (key >> shift) & mask;
+}
 
 LUX_PRIM_KERNEL void radix_histogram(__global const uint* keys, __global const int* count,
                                      const uint capacity, const uint shift, const uint mask,

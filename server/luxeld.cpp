@@ -50,12 +50,19 @@ bool is_loopback(const std::string& address) {
 
 int run(const DaemonConfig& config) {
   auto scenes = SceneStore::open(config.data_dir);
-  if (!scenes) { log_event("fatal", {{"error", scenes.status().to_string()}}); return 1; }
+  if (!scenes) {
+    log_event("fatal", {{"error", scenes.status().to_string()}});
+    return 1;
+  }
   auto bakes = BakeStore::open(config.data_dir);
-  if (!bakes) { log_event("fatal", {{"error", bakes.status().to_string()}}); return 1; }
+  if (!bakes) {
+    log_event("fatal", {{"error", bakes.status().to_string()}});
+    return 1;
+  }
 
   std::string device_description;
-  if (auto dev = device::choose_device(config.device)) device_description = dev->describe();
+  if (auto dev = device::choose_device(config.device))
+    device_description = dev->describe();
   else {
     device_description = "unavailable: " + dev.status().to_string();
     log_event("device_unavailable", {{"error", dev.status().to_string()}});
@@ -83,7 +90,10 @@ int run(const DaemonConfig& config) {
 
   Status cred_error;
   auto creds = credentials(config, &cred_error);
-  if (!creds) { log_event("fatal", {{"error", cred_error.to_string()}}); return 1; }
+  if (!creds) {
+    log_event("fatal", {{"error", cred_error.to_string()}});
+    return 1;
+  }
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
@@ -99,7 +109,8 @@ int run(const DaemonConfig& config) {
   }
   server->GetHealthCheckService()->SetServingStatus("luxel.v1.Luxel", true);
   runner.start();
-  log_event("listening", {{"address", config.listen}, {"port", std::to_string(port)},
+  log_event("listening", {{"address", config.listen},
+                          {"port", std::to_string(port)},
                           {"tls", config.tls_cert.empty() ? "off" : "on"},
                           {"auth", config.token.empty() ? "off" : "bearer"},
                           {"device", device_description},

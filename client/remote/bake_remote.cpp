@@ -25,7 +25,8 @@ int check_remote_args(const BakeArgs& a) {
   if (!a.local_only.empty()) {
     std::fprintf(stderr,
                  "luxel bake: %s is only available with --local (the luxeld API has no such "
-                 "setting)\n", a.local_only.front().c_str());
+                 "setting)\n",
+                 a.local_only.front().c_str());
     return kExitUsage;
   }
   if (auto st = pipeline::validate_settings(a.settings); !st.is_ok()) {
@@ -92,11 +93,15 @@ int run_bake_remote(BakeArgs& a) {
     req.set_scene_id(scene.scene_id());
     *req.mutable_settings() = service::to_proto_settings(a.settings).value();
     req.set_idempotency_key(a.idempotency_key);
-    if (auto st = conn->stub().SubmitBake(&ctx, req, &bake); !st.ok()) return conn->fail("bake", st);
+    if (auto st = conn->stub().SubmitBake(&ctx, req, &bake); !st.ok())
+      return conn->fail("bake", st);
   }
-  if (json) print_json_line({{"type", "bake"}, {"bake", to_json(bake)}});
-  else if (a.detach) std::printf("%s\n", bake.bake_id().c_str());
-  else std::printf("bake       %s (%s)\n", bake.bake_id().c_str(), state_name(bake.state()).c_str());
+  if (json)
+    print_json_line({{"type", "bake"}, {"bake", to_json(bake)}});
+  else if (a.detach)
+    std::printf("%s\n", bake.bake_id().c_str());
+  else
+    std::printf("bake       %s (%s)\n", bake.bake_id().c_str(), state_name(bake.state()).c_str());
   if (a.detach) return kExitOk;
 
   WatchOptions wopt;
@@ -116,8 +121,9 @@ int run_bake_remote(BakeArgs& a) {
   if (!json) {
     const auto& p = done.progress();
     std::printf("baked      %.2f s, %llu paths, spp mean %.1f min %u, error %.4f, stopped by %s\n",
-                p.elapsed_s(), static_cast<unsigned long long>(p.paths()), p.mean_spp(), p.min_spp(),
-                p.error(), done.termination().empty() ? "-" : done.termination().c_str());
+                p.elapsed_s(), static_cast<unsigned long long>(p.paths()), p.mean_spp(),
+                p.min_spp(), p.error(),
+                done.termination().empty() ? "-" : done.termination().c_str());
     if (!done.features().empty()) std::printf("features   %s\n", done.features().c_str());
   }
   if (auto st = download_artifacts(*conn, done, {}, a.out, json); !st.ok())

@@ -16,9 +16,9 @@ namespace luxel::cli::remote {
 
 // Exit codes of the remote commands (documented in `luxel --help`).
 inline constexpr int kExitOk = 0;
-inline constexpr int kExitRuntime = 1;    // the daemon or the network failed a call
-inline constexpr int kExitUsage = 2;      // bad command line
-inline constexpr int kExitBakeFailed = 3; // the bake ended FAILED, CANCELLED or INTERRUPTED
+inline constexpr int kExitRuntime = 1;     // the daemon or the network failed a call
+inline constexpr int kExitUsage = 2;       // bad command line
+inline constexpr int kExitBakeFailed = 3;  // the bake ended FAILED, CANCELLED or INTERRUPTED
 
 struct ConnectionOptions {
   std::string server = "127.0.0.1:50051";  // host:port ($LUXEL_SERVER)
@@ -36,8 +36,8 @@ enum class OptionMatch { kNotMine, kTaken, kError };
 
 // If args[i] is one of the shared options, consumes it (and its value,
 // advancing i) into `options`. kError has printed "luxel CMD: ..." to stderr.
-OptionMatch take_connection_option(const char* cmd, const std::vector<std::string>& args,
-                                   size_t& i, ConnectionOptions& options);
+OptionMatch take_connection_option(const char* cmd, const std::vector<std::string>& args, size_t& i,
+                                   ConnectionOptions& options);
 
 // Usage lines for the shared options, for each command's --help.
 extern const char* const kConnectionUsage;

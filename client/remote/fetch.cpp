@@ -114,9 +114,10 @@ grpc::Status download_artifact(Connection& conn, const std::string& bake_id,
   if (server_sha.empty())
     return {grpc::StatusCode::DATA_LOSS, where + ": the stream ended without a checksum"};
   if (expected_size != 0 && out.size != expected_size)
-    return {grpc::StatusCode::DATA_LOSS, where + strprintf(": received %llu bytes, expected %llu",
-                                                           static_cast<unsigned long long>(out.size),
-                                                           static_cast<unsigned long long>(expected_size))};
+    return {grpc::StatusCode::DATA_LOSS,
+            where + strprintf(": received %llu bytes, expected %llu",
+                              static_cast<unsigned long long>(out.size),
+                              static_cast<unsigned long long>(expected_size))};
   if (server_sha != out.sha256)
     return {grpc::StatusCode::DATA_LOSS,
             where + ": sha256 " + out.sha256 + " does not match the daemon's " + server_sha};
@@ -139,8 +140,12 @@ grpc::Status download_artifacts(Connection& conn, const luxel::v1::BakeInfo& inf
     FetchedArtifact a;
     if (auto st = download_artifact(conn, info.bake_id(), name, out_dir, a); !st.ok()) return st;
     if (json) {
-      print_json_line({{"type", "artifact"}, {"bake_id", info.bake_id()}, {"name", a.name},
-                       {"path", a.path}, {"size", a.size}, {"sha256", a.sha256}});
+      print_json_line({{"type", "artifact"},
+                       {"bake_id", info.bake_id()},
+                       {"name", a.name},
+                       {"path", a.path},
+                       {"size", a.size},
+                       {"sha256", a.sha256}});
     } else {
       std::printf("wrote      %s (%llu bytes, sha256 %.16s… verified)\n", a.path.c_str(),
                   static_cast<unsigned long long>(a.size), a.sha256.c_str());
@@ -171,12 +176,16 @@ int run_fetch(const std::vector<std::string>& args) {
       std::printf("%s%s", kUsage, kConnectionUsage);
       return kExitOk;
     }
-    if (k == "--out" && i + 1 < args.size()) out = args[++i];
-    else if (k == "--artifact" && i + 1 < args.size()) names.push_back(args[++i]);
+    if (k == "--out" && i + 1 < args.size())
+      out = args[++i];
+    else if (k == "--artifact" && i + 1 < args.size())
+      names.push_back(args[++i]);
     else if (!k.empty() && k[0] == '-') {
-      std::fprintf(stderr, "luxel fetch: unknown option or missing value '%s'\n%s", k.c_str(), kUsage);
+      std::fprintf(stderr, "luxel fetch: unknown option or missing value '%s'\n%s", k.c_str(),
+                   kUsage);
       return kExitUsage;
-    } else if (bake_id.empty()) bake_id = k;
+    } else if (bake_id.empty())
+      bake_id = k;
     else {
       std::fprintf(stderr, "luxel fetch: unexpected argument '%s'\n", k.c_str());
       return kExitUsage;
@@ -198,9 +207,10 @@ int run_fetch(const std::vector<std::string>& args) {
   }
   if (info.state() != luxel::v1::BAKE_STATE_SUCCEEDED) {
     if (is_terminal(info.state())) return bake_outcome("fetch", info);
-    std::fprintf(stderr, "luxel fetch: bake %s is %s; its results exist once it SUCCEEDED "
-                 "(luxel watch %s)\n", bake_id.c_str(), state_name(info.state()).c_str(),
-                 bake_id.c_str());
+    std::fprintf(stderr,
+                 "luxel fetch: bake %s is %s; its results exist once it SUCCEEDED "
+                 "(luxel watch %s)\n",
+                 bake_id.c_str(), state_name(info.state()).c_str(), bake_id.c_str());
     return kExitRuntime;
   }
   if (auto st = download_artifacts(*conn, info, names, out, copt.json); !st.ok())

@@ -112,8 +112,9 @@ void print_bake_info(const luxel::v1::BakeInfo& b) {
               100.0 * p.fraction(), p.mean_spp(), p.min_spp(), p.error(),
               format_duration(p.elapsed_s()).c_str(), format_duration(p.eta_s()).c_str(),
               static_cast<unsigned long long>(p.paths()));
-  std::printf("submitted  %s\nstarted    %s\nfinished   %s\n", format_time(b.submitted_at()).c_str(),
-              format_time(b.started_at()).c_str(), format_time(b.finished_at()).c_str());
+  std::printf("submitted  %s\nstarted    %s\nfinished   %s\n",
+              format_time(b.submitted_at()).c_str(), format_time(b.started_at()).c_str(),
+              format_time(b.finished_at()).c_str());
   if (!b.features().empty()) std::printf("features   %s\n", b.features().c_str());
   if (!b.termination().empty()) std::printf("stopped by %s\n", b.termination().c_str());
   if (!b.error_message().empty()) std::printf("error      %s\n", b.error_message().c_str());

@@ -1,12 +1,11 @@
 #include "remote/scene_files.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "common/scene_id.h"
@@ -39,7 +38,8 @@ grpc::Status read_gltf_json(const std::string& path, bool glb, nlohmann::json& j
     std::memcpy(&chunk_length, bytes.data() + 12, 4);
     std::memcpy(&chunk_type, bytes.data() + 16, 4);
     if (chunk_type != 0x4E4F534Au || 20 + uint64_t{chunk_length} > bytes.size())
-      return {grpc::StatusCode::INVALID_ARGUMENT, "'" + path + "': the first .glb chunk is not JSON"};
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              "'" + path + "': the first .glb chunk is not JSON"};
     text = bytes.substr(20, chunk_length);
   }
   json = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
@@ -59,7 +59,8 @@ grpc::Status add_resources(const nlohmann::json& json, const char* array, const 
     if (uri.rfind("data:", 0) == 0 || !seen.insert(uri).second) continue;
     const std::string where = std::string(array) + "[" + std::to_string(i) + "].uri '" + uri + "'";
     if (uri.find("://") != std::string::npos || (!uri.empty() && uri[0] == '/'))
-      return {grpc::StatusCode::INVALID_ARGUMENT, where + ": only relative file uris can be uploaded"};
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              where + ": only relative file uris can be uploaded"};
     // glTF uris are RFC 3986 references: "%20" is a space in the file name.
     auto decoded = percent_decode_uri(uri);
     if (!decoded)

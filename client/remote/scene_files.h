@@ -3,11 +3,11 @@
 // that are not data: URIs), each with its size and sha256.
 #pragma once
 
+#include <grpcpp/support/status.h>
+
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <grpcpp/support/status.h>
 
 #include "luxel/v1/luxel.pb.h"
 

@@ -2,11 +2,11 @@
 // verifies what it uploads and downloads.
 #pragma once
 
+#include <grpcpp/support/status.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
-
-#include <grpcpp/support/status.h>
 
 #include "common/sha256.h"
 

@@ -28,7 +28,8 @@ int parse_common(const char* cmd, const char* usage, const std::vector<std::stri
     }
     if (!k.empty() && k[0] == '-') {
       if (extra(args, i)) continue;
-      std::fprintf(stderr, "luxel %s: unknown option or missing value '%s'\n%s", cmd, k.c_str(), usage);
+      std::fprintf(stderr, "luxel %s: unknown option or missing value '%s'\n%s", cmd, k.c_str(),
+                   usage);
       return kExitUsage;
     }
     positional.push_back(k);
@@ -54,8 +55,10 @@ int bake_call(const char* cmd, const char* usage, const std::vector<std::string>
   conn->prepare_unary(ctx);
   luxel::v1::BakeInfo info;
   if (auto st = call(*conn, ctx, pos[0], info); !st.ok()) return conn->fail(cmd, st);
-  if (copt.json) print_json_line(to_json(info));
-  else print_bake_info(info);
+  if (copt.json)
+    print_json_line(to_json(info));
+  else
+    print_bake_info(info);
   return kExitOk;
 }
 
@@ -65,8 +68,9 @@ int run_status(const std::vector<std::string>& args) {
   return bake_call("status",
                    "usage: luxel status BAKE [connection options]\n"
                    "  state, progress, ETA, features and artifacts of a bake\n",
-                   args, [](Connection& c, grpc::ClientContext& ctx, const std::string& id,
-                            luxel::v1::BakeInfo& info) {
+                   args,
+                   [](Connection& c, grpc::ClientContext& ctx, const std::string& id,
+                      luxel::v1::BakeInfo& info) {
                      luxel::v1::GetBakeRequest req;
                      req.set_bake_id(id);
                      return c.stub().GetBake(&ctx, req, &info);
@@ -77,8 +81,9 @@ int run_cancel(const std::vector<std::string>& args) {
   return bake_call("cancel",
                    "usage: luxel cancel BAKE [connection options]\n"
                    "  cancels a queued or running bake (a finished one is left as it is)\n",
-                   args, [](Connection& c, grpc::ClientContext& ctx, const std::string& id,
-                            luxel::v1::BakeInfo& info) {
+                   args,
+                   [](Connection& c, grpc::ClientContext& ctx, const std::string& id,
+                      luxel::v1::BakeInfo& info) {
                      luxel::v1::CancelBakeRequest req;
                      req.set_bake_id(id);
                      return c.stub().CancelBake(&ctx, req, &info);
@@ -128,14 +133,19 @@ int run_list(const std::vector<std::string>& args) {
   if (scenes) {
     luxel::v1::ListScenesResponse resp;
     if (auto st = conn->stub().ListScenes(&ctx, {}, &resp); !st.ok()) return conn->fail("list", st);
-    if (!copt.json) print_scene_table(resp);
-    else for (const auto& s : resp.scenes()) print_json_line(to_json(s));
+    if (!copt.json)
+      print_scene_table(resp);
+    else
+      for (const auto& s : resp.scenes()) print_json_line(to_json(s));
     return kExitOk;
   }
   luxel::v1::ListBakesResponse resp;
-  if (auto st = conn->stub().ListBakes(&ctx, bakes_req, &resp); !st.ok()) return conn->fail("list", st);
-  if (!copt.json) print_bake_table(resp);
-  else for (const auto& b : resp.bakes()) print_json_line(to_json(b));
+  if (auto st = conn->stub().ListBakes(&ctx, bakes_req, &resp); !st.ok())
+    return conn->fail("list", st);
+  if (!copt.json)
+    print_bake_table(resp);
+  else
+    for (const auto& b : resp.bakes()) print_json_line(to_json(b));
   return kExitOk;
 }
 

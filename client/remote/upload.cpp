@@ -94,11 +94,14 @@ int run_upload(const std::vector<std::string>& args) {
       std::printf("%s%s", kUsage, kConnectionUsage);
       return kExitOk;
     }
-    if (k == "--name" && i + 1 < args.size()) name = args[++i];
+    if (k == "--name" && i + 1 < args.size())
+      name = args[++i];
     else if (!k.empty() && k[0] == '-') {
-      std::fprintf(stderr, "luxel upload: unknown option or missing value '%s'\n%s", k.c_str(), kUsage);
+      std::fprintf(stderr, "luxel upload: unknown option or missing value '%s'\n%s", k.c_str(),
+                   kUsage);
       return kExitUsage;
-    } else if (scene.empty()) scene = k;
+    } else if (scene.empty())
+      scene = k;
     else {
       std::fprintf(stderr, "luxel upload: unexpected argument '%s'\n", k.c_str());
       return kExitUsage;
@@ -122,8 +125,8 @@ int run_upload(const std::vector<std::string>& args) {
   } else {
     uint64_t bytes = files.main.size;
     for (const auto& r : files.resources) bytes += r.size;
-    std::printf("uploaded   %s + %zu resources, %llu bytes\n", scene.c_str(), files.resources.size(),
-                static_cast<unsigned long long>(bytes));
+    std::printf("uploaded   %s + %zu resources, %llu bytes\n", scene.c_str(),
+                files.resources.size(), static_cast<unsigned long long>(bytes));
     print_scene_info(info);
   }
   return kExitOk;

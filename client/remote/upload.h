@@ -16,8 +16,8 @@ inline constexpr size_t kUploadChunkBytes = 64 * 1024;
 grpc::Status upload_scene(Connection& conn, const SceneFiles& files, const std::string& name,
                           luxel::v1::SceneInfo& info);
 
-// Asks GetScene for the scene id of `files` (main file and resources) first and uploads only when the
-// daemon answers NOT_FOUND. `uploaded` says whether bytes were sent.
+// Asks GetScene for the scene id of `files` (main file and resources) first and uploads only when
+// the daemon answers NOT_FOUND. `uploaded` says whether bytes were sent.
 grpc::Status ensure_scene(Connection& conn, const SceneFiles& files, const std::string& name,
                           luxel::v1::SceneInfo& info, bool& uploaded);
 

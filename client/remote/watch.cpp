@@ -9,8 +9,8 @@
 #include <thread>
 
 #include "commands.h"
-#include "common/status.h"
 #include "common/atomic_file.h"
+#include "common/status.h"
 #include "remote/output.h"
 
 namespace luxel::cli::remote {
@@ -43,8 +43,8 @@ class EventPrinter {
     }
     // Snapshot events repeat the progress of the last progress event; in a
     // log (not a terminal) print a line only when something changed.
-    const std::string now = event.info().progress().SerializeAsString() +
-                            state_name(event.info().state());
+    const std::string now =
+        event.info().progress().SerializeAsString() + state_name(event.info().state());
     if (tty_ || now != last_drawn_) {
       draw_progress_bar(progress_view(event.info().progress()), tty_,
                         strprintf("%-9s", state_name(event.info().state()).c_str()));
@@ -116,8 +116,8 @@ grpc::Status watch_bake(Connection& conn, const std::string& bake_id, const Watc
     }
     grpc::Status st = reader->Finish();
     if (st.ok())
-      st = {grpc::StatusCode::ABORTED, "the watch stream of bake " + bake_id +
-                                           " ended before the bake finished"};
+      st = {grpc::StatusCode::ABORTED,
+            "the watch stream of bake " + bake_id + " ended before the bake finished"};
     // A daemon restart breaks the stream (UNAVAILABLE, or CANCELLED / an
     // early end while it shuts down); the daemon resumes the bake after it.
     const auto code = st.error_code();
@@ -175,12 +175,16 @@ int run_watch(const std::vector<std::string>& args) {
       std::printf("%s%s", kUsage, kConnectionUsage);
       return kExitOk;
     }
-    if (k == "--snapshots" && i + 1 < args.size()) wopt.snapshots_dir = args[++i];
-    else if (k == "--quiet") wopt.quiet = true;
+    if (k == "--snapshots" && i + 1 < args.size())
+      wopt.snapshots_dir = args[++i];
+    else if (k == "--quiet")
+      wopt.quiet = true;
     else if (!k.empty() && k[0] == '-') {
-      std::fprintf(stderr, "luxel watch: unknown option or missing value '%s'\n%s", k.c_str(), kUsage);
+      std::fprintf(stderr, "luxel watch: unknown option or missing value '%s'\n%s", k.c_str(),
+                   kUsage);
       return kExitUsage;
-    } else if (bake_id.empty()) bake_id = k;
+    } else if (bake_id.empty())
+      bake_id = k;
     else {
       std::fprintf(stderr, "luxel watch: unexpected argument '%s'\n", k.c_str());
       return kExitUsage;

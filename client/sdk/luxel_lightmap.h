@@ -65,7 +65,9 @@
 
 /* ------------------------------------------------------------------ helpers */
 
-LUXEL_FN float luxel_saturate(float x) { return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x); }
+LUXEL_FN float luxel_saturate(float x) {
+  return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
+}
 
 LUXEL_FN float luxel_dot(float ax, float ay, float az, float bx, float by, float bz) {
   return ax * bx + ay * by + az * bz;
@@ -78,21 +80,30 @@ LUXEL_FN float luxel_dot(float ax, float ay, float az, float bx, float by, float
 
 LUXEL_FN float luxel_sh_basis(int i, float x, float y, float z) {
   switch (i) {
-    case 0: return 0.282094792f;           /* 1 / (2 sqrt(pi)) */
-    case 1: return 0.488602512f * y;       /* sqrt(3 / (4 pi)) */
-    case 2: return 0.488602512f * z;
-    case 3: return 0.488602512f * x;
-    case 4: return 1.092548431f * x * y;   /* sqrt(15 / (4 pi)) */
-    case 5: return 1.092548431f * y * z;
-    case 6: return 0.315391565f * (3.0f * z * z - 1.0f); /* sqrt(5 / (16 pi)) */
-    case 7: return 1.092548431f * x * z;
-    default: return 0.546274215f * (x * x - y * y);      /* sqrt(15 / (16 pi)) */
+    case 0:
+      return 0.282094792f; /* 1 / (2 sqrt(pi)) */
+    case 1:
+      return 0.488602512f * y; /* sqrt(3 / (4 pi)) */
+    case 2:
+      return 0.488602512f * z;
+    case 3:
+      return 0.488602512f * x;
+    case 4:
+      return 1.092548431f * x * y; /* sqrt(15 / (4 pi)) */
+    case 5:
+      return 1.092548431f * y * z;
+    case 6:
+      return 0.315391565f * (3.0f * z * z - 1.0f); /* sqrt(5 / (16 pi)) */
+    case 7:
+      return 1.092548431f * x * z;
+    default:
+      return 0.546274215f * (x * x - y * y); /* sqrt(15 / (16 pi)) */
   }
 }
 
 /* Radiance in direction w. */
-LUXEL_FN float luxel_sh_radiance(LUXEL_PTR const float* coeffs, int stride, int count, float wx, float wy,
-                                 float wz) {
+LUXEL_FN float luxel_sh_radiance(LUXEL_PTR const float* coeffs, int stride, int count, float wx,
+                                 float wy, float wz) {
   float l = 0.0f;
   for (int i = 0; i < count; ++i) l += coeffs[i * stride] * luxel_sh_basis(i, wx, wy, wz);
   return l;
@@ -100,8 +111,8 @@ LUXEL_FN float luxel_sh_radiance(LUXEL_PTR const float* coeffs, int stride, int 
 
 /* E(n) = sum A_l c_lm Y_lm(n), A = (pi, 2pi/3, pi/4) (Ramamoorthi & Hanrahan
  * 2001): exact for radiance band-limited to the stored bands. */
-LUXEL_FN float luxel_sh_irradiance(LUXEL_PTR const float* coeffs, int stride, int count, float nx, float ny,
-                                   float nz) {
+LUXEL_FN float luxel_sh_irradiance(LUXEL_PTR const float* coeffs, int stride, int count, float nx,
+                                   float ny, float nz) {
   float e = LUXEL_PI * coeffs[0] * luxel_sh_basis(0, nx, ny, nz);
   for (int i = 1; i < count; ++i) {
     const float a = i < 4 ? 2.0f * LUXEL_PI / 3.0f : 0.25f * LUXEL_PI;
@@ -114,8 +125,9 @@ LUXEL_FN float luxel_sh_irradiance(LUXEL_PTR const float* coeffs, int stride, in
  * B_i(w) = exp(lambda (w.p_i - 1)) (Eq. 8.2, unit amplitude; the coefficient
  * is the amplitude). dirs: 3 floats per lobe; lambda from the manifest. */
 
-LUXEL_FN float luxel_sg_radiance(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                 float lambda, float wx, float wy, float wz) {
+LUXEL_FN float luxel_sg_radiance(LUXEL_PTR const float* coeffs, int stride,
+                                 LUXEL_PTR const float* dirs, int count, float lambda, float wx,
+                                 float wy, float wz) {
   float l = 0.0f;
   for (int i = 0; i < count; ++i) {
     const float c = luxel_dot(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2], wx, wy, wz);
@@ -144,8 +156,9 @@ LUXEL_FN float luxel_sg_lobe_irradiance(float mu_dot_n, float lambda) {
   return (scale * y + bias) * (2.0f * LUXEL_PI * rl);
 }
 
-LUXEL_FN float luxel_sg_irradiance(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                   float lambda, float nx, float ny, float nz) {
+LUXEL_FN float luxel_sg_irradiance(LUXEL_PTR const float* coeffs, int stride,
+                                   LUXEL_PTR const float* dirs, int count, float lambda, float nx,
+                                   float ny, float nz) {
   float e = 0.0f;
   for (int i = 0; i < count; ++i) {
     const float c = luxel_dot(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2], nx, ny, nz);
@@ -156,8 +169,8 @@ LUXEL_FN float luxel_sg_irradiance(LUXEL_PTR const float* coeffs, int stride, LU
 
 /* Integral over the sphere of the product of two SGs (amplitudes a1, a2,
  * sharpness l1, l2, axes p1, p2): exact (Pettineo part 2, SGInnerProduct). */
-LUXEL_FN float luxel_sg_inner_product(float a1, float l1, float p1x, float p1y, float p1z, float a2, float l2,
-                                      float p2x, float p2y, float p2z) {
+LUXEL_FN float luxel_sg_inner_product(float a1, float l1, float p1x, float p1y, float p1z, float a2,
+                                      float l2, float p2x, float p2y, float p2z) {
   const float ux = l1 * p1x + l2 * p2x, uy = l1 * p1y + l2 * p2y, uz = l1 * p1z + l2 * p2z;
   const float um = LUXEL_SQRT(ux * ux + uy * uy + uz * uz);
   const float expo = LUXEL_EXP(um - l1 - l2) * a1 * a2;
@@ -175,20 +188,23 @@ LUXEL_FN float luxel_sg_inner_product(float a1, float l1, float p1x, float p1y, 
  * reflection direction (sharpness / (4 n.v)), integrated exactly against each
  * radiance lobe; the separable Smith visibility, Fresnel and n.l are taken at
  * the warped lobe's axis. All lobe-independent terms are computed once. */
-LUXEL_FN float luxel_sg_specular(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                 float lambda, float nx, float ny, float nz, float vx, float vy, float vz,
-                                 float alpha, float f0, float f90) {
+LUXEL_FN float luxel_sg_specular(LUXEL_PTR const float* coeffs, int stride,
+                                 LUXEL_PTR const float* dirs, int count, float lambda, float nx,
+                                 float ny, float nz, float vx, float vy, float vz, float alpha,
+                                 float f0, float f90) {
   const float a = alpha > LUXEL_SG_MIN_ALPHA ? alpha : LUXEL_SG_MIN_ALPHA;
   const float m2 = a * a;
   const float ndf_amplitude = 1.0f / (LUXEL_PI * m2);
   const float ndv_raw = luxel_dot(nx, ny, nz, vx, vy, vz);
   const float warp_sharpness = 2.0f / m2 / (4.0f * (ndv_raw > 0.0001f ? ndv_raw : 0.0001f));
   /* Warped axis: reflect(-v, n). */
-  const float rx = 2.0f * ndv_raw * nx - vx, ry = 2.0f * ndv_raw * ny - vy, rz = 2.0f * ndv_raw * nz - vz;
+  const float rx = 2.0f * ndv_raw * nx - vx, ry = 2.0f * ndv_raw * ny - vy,
+              rz = 2.0f * ndv_raw * nz - vz;
   float sum = 0.0f;
   for (int i = 0; i < count; ++i)
-    sum += coeffs[i * stride] * luxel_sg_inner_product(ndf_amplitude, warp_sharpness, rx, ry, rz, 1.0f, lambda,
-                                                       dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2]);
+    sum += coeffs[i * stride] * luxel_sg_inner_product(ndf_amplitude, warp_sharpness, rx, ry, rz,
+                                                       1.0f, lambda, dirs[3 * i], dirs[3 * i + 1],
+                                                       dirs[3 * i + 2]);
   const float ndl = luxel_saturate(luxel_dot(nx, ny, nz, rx, ry, rz));
   const float ndv = luxel_saturate(ndv_raw);
   /* 1 / (n.x + sqrt(a^2 + (1 - a^2)(n.x)^2)) = G1(x) / (2 n.x) (Pettineo GGX_V1). */
@@ -237,18 +253,21 @@ LUXEL_TABLE float luxel_ad9_directions[3 * LUXEL_AD_HEMISPHERE_COUNT] = {
     -0.85067302f, -0.491084427f, -0.187594041f, 0.85067302f,   -0.491084427f, -0.187594041f,
     0.0f,         0.982243896f,  -0.187608391f};
 
-LUXEL_FN float luxel_ad_radiance(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                 float wx, float wy, float wz) {
+LUXEL_FN float luxel_ad_radiance(LUXEL_PTR const float* coeffs, int stride,
+                                 LUXEL_PTR const float* dirs, int count, float wx, float wy,
+                                 float wz) {
   float l = 0.0f;
   for (int i = 0; i < count; ++i)
-    l += coeffs[i * stride] * luxel_ad_lobe(luxel_dot(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2], wx, wy, wz));
+    l += coeffs[i * stride] *
+         luxel_ad_lobe(luxel_dot(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2], wx, wy, wz));
   return l;
 }
 
 /* E(n) = pi sum_i b_i (0.05981 + 0.12918 c + 0.07056 c^2), c = v_i.n
  * (Eq. 8.14/8.15; the thesis integrates against cos / pi, hence the pi). */
-LUXEL_FN float luxel_ad_irradiance(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                   float nx, float ny, float nz) {
+LUXEL_FN float luxel_ad_irradiance(LUXEL_PTR const float* coeffs, int stride,
+                                   LUXEL_PTR const float* dirs, int count, float nx, float ny,
+                                   float nz) {
   float e = 0.0f;
   for (int i = 0; i < count; ++i) {
     const float c = luxel_dot(dirs[3 * i], dirs[3 * i + 1], dirs[3 * i + 2], nx, ny, nz);
@@ -265,10 +284,12 @@ LUXEL_FN float luxel_ad_irradiance(LUXEL_PTR const float* coeffs, int stride, LU
  * so it is kept as published. */
 LUXEL_FN float luxel_ad_specular_lobe(float n_dot_lobe, float r_dot_lobe, float alpha) {
   const float s = LUXEL_SQRT(alpha);
-  const float focus = luxel_saturate(3.0498910522220495f * s - 6.983002509990005f * alpha +
-                                     7.388270435580356f * s * alpha - 2.662756921813306f * alpha * alpha);
-  const float blend = luxel_saturate(-0.4005429486854629f * s + 5.626699351644211f * alpha -
-                                     6.040098716506305f * s * alpha + 1.9006124935607012f * alpha * alpha);
+  const float focus =
+      luxel_saturate(3.0498910522220495f * s - 6.983002509990005f * alpha +
+                     7.388270435580356f * s * alpha - 2.662756921813306f * alpha * alpha);
+  const float blend =
+      luxel_saturate(-0.4005429486854629f * s + 5.626699351644211f * alpha -
+                     6.040098716506305f * s * alpha + 1.9006124935607012f * alpha * alpha);
   const float p = r_dot_lobe + (n_dot_lobe - r_dot_lobe) * focus;
   const float diffuse = 0.06f + 0.129f * p + 0.0697f * p * p;
   const float mirror = luxel_ad_lobe(r_dot_lobe);
@@ -281,16 +302,17 @@ LUXEL_FN float luxel_ad_specular_lobe(float n_dot_lobe, float r_dot_lobe, float 
  * at (n.v, alpha): sample it as a texture or with luxel_ad_lut_sample. The fit
  * assumes lobes over the whole sphere (§8.4); with the 9-vertex hemisphere set
  * the missing lobes' clipping is not compensated (as in the thesis). */
-LUXEL_FN float luxel_ad_specular(LUXEL_PTR const float* coeffs, int stride, LUXEL_PTR const float* dirs, int count,
-                                 float nx, float ny, float nz, float vx, float vy, float vz, float alpha,
-                                 float lut_f0, float lut_f90, float f0, float f90) {
+LUXEL_FN float luxel_ad_specular(LUXEL_PTR const float* coeffs, int stride,
+                                 LUXEL_PTR const float* dirs, int count, float nx, float ny,
+                                 float nz, float vx, float vy, float vz, float alpha, float lut_f0,
+                                 float lut_f90, float f0, float f90) {
   const float ndv = luxel_dot(nx, ny, nz, vx, vy, vz);
   const float rx = 2.0f * ndv * nx - vx, ry = 2.0f * ndv * ny - vy, rz = 2.0f * ndv * nz - vz;
   float sum = 0.0f;
   for (int i = 0; i < count; ++i) {
     const float dx = dirs[3 * i], dy = dirs[3 * i + 1], dz = dirs[3 * i + 2];
-    sum += coeffs[i * stride] *
-           luxel_ad_specular_lobe(luxel_dot(nx, ny, nz, dx, dy, dz), luxel_dot(rx, ry, rz, dx, dy, dz), alpha);
+    sum += coeffs[i * stride] * luxel_ad_specular_lobe(luxel_dot(nx, ny, nz, dx, dy, dz),
+                                                       luxel_dot(rx, ry, rz, dx, dy, dz), alpha);
   }
   return sum * (f0 * lut_f0 + f90 * lut_f90);
 }
@@ -300,8 +322,8 @@ LUXEL_FN float luxel_ad_specular(LUXEL_PTR const float* coeffs, int stride, LUXE
  * texel (i, j) holds cell centre n.v = (i + 0.5) / size_ndotv,
  * alpha = (j + 0.5) / size_alpha, channels (f0 scale, f90 scale) at
  * lut[2 * (j * size_ndotv + i) + channel]. Returns one channel. */
-LUXEL_FN float luxel_ad_lut_sample(LUXEL_PTR const float* lut, int size_ndotv, int size_alpha, float ndotv,
-                                   float alpha, int channel) {
+LUXEL_FN float luxel_ad_lut_sample(LUXEL_PTR const float* lut, int size_ndotv, int size_alpha,
+                                   float ndotv, float alpha, int channel) {
   float u = luxel_saturate(ndotv) * (float)size_ndotv - 0.5f;
   float w = luxel_saturate(alpha) * (float)size_alpha - 0.5f;
   u = u < 0.0f ? 0.0f : (u > (float)(size_ndotv - 1) ? (float)(size_ndotv - 1) : u);
@@ -310,8 +332,10 @@ LUXEL_FN float luxel_ad_lut_sample(LUXEL_PTR const float* lut, int size_ndotv, i
   const int i1 = i0 + 1 < size_ndotv ? i0 + 1 : i0;
   const int j1 = j0 + 1 < size_alpha ? j0 + 1 : j0;
   const float fu = u - (float)i0, fw = w - (float)j0;
-  const float a = lut[2 * (j0 * size_ndotv + i0) + channel], b = lut[2 * (j0 * size_ndotv + i1) + channel];
-  const float c = lut[2 * (j1 * size_ndotv + i0) + channel], d = lut[2 * (j1 * size_ndotv + i1) + channel];
+  const float a = lut[2 * (j0 * size_ndotv + i0) + channel],
+              b = lut[2 * (j0 * size_ndotv + i1) + channel];
+  const float c = lut[2 * (j1 * size_ndotv + i0) + channel],
+              d = lut[2 * (j1 * size_ndotv + i1) + channel];
   return (a + (b - a) * fu) + ((c + (d - c) * fu) - (a + (b - a) * fu)) * fw;
 }
 

@@ -69,12 +69,12 @@ inline int lux_path_sample(__global const LuxPath* paths,
 }
 
 #if LUX_BASIS
-#define LUX_BASIS_ADD(p, w)                                                                    \
-  do {                                                                                         \
-    const LuxBasisSample bs_ = basis_samples[p];                                               \
-    lux_basis_accumulate(basis_state + (size_t)texel * params.basis_stride, encodings,         \
-                         params.encoding_count, basis_dirs, &bs_, l, nee, (w),                 \
-                         params.acceleration);                                                 \
+#define LUX_BASIS_ADD(p, w)                                                            \
+  do {                                                                                 \
+    const LuxBasisSample bs_ = basis_samples[p];                                       \
+    lux_basis_accumulate(basis_state + (size_t)texel * params.basis_stride, encodings, \
+                         params.encoding_count, basis_dirs, &bs_, l, nee, (w),         \
+                         params.acceleration);                                         \
   } while (0)
 #else
 #define LUX_BASIS_ADD(p, w)
@@ -111,8 +111,8 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
       const int nx = tx + dx, ny = ty + dy;
       if (nx < 0 || ny < 0 || nx >= (int)params.width || ny >= (int)params.height) continue;
       uint nf, ne;
-      if (!lux_offset_range(offsets, (uint)(ny * (int)params.width + nx), params.texel_count,
-                            &nf, &ne))
+      if (!lux_offset_range(offsets, (uint)(ny * (int)params.width + nx), params.texel_count, &nf,
+                            &ne))
         continue;
       for (uint p = nf; p < ne; ++p) {
         const LuxPath path = paths[p];

@@ -42,8 +42,8 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
    * calculations ... to avoid invalid values"; kernels/shared/sample_info.h). */
   float w0, w1, w2;
   lux_texel_barycentrics((float2)(uvt.uv0.x, uvt.uv0.y), (float2)(uvt.uv1.x, uvt.uv1.y),
-                         (float2)(uvt.uv2.x, uvt.uv2.y), (float)params.width,
-                         (float)params.height, tx, ty, offset, &w0, &w1, &w2);
+                         (float2)(uvt.uv2.x, uvt.uv2.y), (float)params.width, (float)params.height,
+                         tx, ty, offset, &w0, &w1, &w2);
   const float2 bary = (float2)(w1, w2);
   const LuxSurface s = lux_surface_at(tris, tri, bary.x, bary.y);
 
@@ -63,10 +63,9 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   LuxRay shadow;
   float3 contribution;
   LuxBsdf unused_bsdf;
-  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
-                 &s, 1, &unused_bsdf, t, b, s.ns,
-                 (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index, dim, seed, &shadow,
-                 &contribution);
+  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &s,
+                 1, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index,
+                 dim, seed, &shadow, &contribution);
   shadow_rays[gid] = shadow;
   shadow_contrib[gid] = (float4)(contribution, 0.0f);
 

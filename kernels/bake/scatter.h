@@ -33,9 +33,13 @@ inline float lux_power_heuristic(float a, float b) {
   return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
-inline float lux_max3(float3 v) { return fmax(v.x, fmax(v.y, v.z)); }
+inline float lux_max3(float3 v) {
+  return fmax(v.x, fmax(v.y, v.z));
+}
 
-inline int lux_finite3(float3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+inline int lux_finite3(float3 v) {
+  return isfinite(v.x) && isfinite(v.y) && isfinite(v.z);
+}
 
 /* A shadow ray that intersect_any_indexed skips (empty interval). */
 inline LuxRay lux_no_ray(void) {
@@ -68,9 +72,9 @@ inline float3 lux_emission_at(const __global LuxMaterial* materials, int materia
  * Writes the shadow ray and its unoccluded contribution (throughput applied). */
 inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
                                LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
-                           const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t,
-                           float3 b, float3 n, float3 wo_local, float3 throughput, uint index,
-                           uint dim, uint seed, LuxRay* shadow_ray, float3* contribution) {
+                           const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t, float3 b,
+                           float3 n, float3 wo_local, float3 throughput, uint index, uint dim,
+                           uint seed, LuxRay* shadow_ray, float3* contribution) {
   *shadow_ray = lux_no_ray();
   *contribution = (float3)(0.0f);
 #if LUX_NEE

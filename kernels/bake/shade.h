@@ -32,8 +32,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     const float3 l = lux_sky_radiance(sky, sky_texels, dir);
     float w = 1.0f;
     if (prev_pdf > 0.0f && params.sky_light >= 0)
-      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_cdf, params.sky_light,
-                                                    sky_marginal, sky_conditional, dir));
+      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_cdf, params.sky_light, sky_marginal,
+                                                    sky_conditional, dir));
     path.radiance.xyz += throughput * l * w;
 #endif
     path.alive = 0u;
@@ -55,9 +55,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
 #endif
     float w = 1.0f;
     if (prev_pdf > 0.0f && s.light >= 0)
-      w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_cdf, s.light,
-                                                               path.prev_pos.xyz, s.p,
-                                                               s.ng_winding));
+      w = lux_power_heuristic(
+          prev_pdf,
+          lux_light_pdf_triangle(lights, light_cdf, s.light, path.prev_pos.xyz, s.p, s.ng_winding));
     path.radiance.xyz += throughput * le * w;
   }
 #endif
@@ -98,9 +98,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   const uint dim = LUX_DIM_VERTEX(path.depth);
   LuxRay shadow;
   float3 contribution;
-  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
-                 &sf, 0, &bsdf, t, b, sf.ns, wo_local,
-                 throughput, path.sample_index, dim, path.seed, &shadow, &contribution);
+  lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
+                 0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed,
+                 &shadow, &contribution);
   shadow_rays[slot] = shadow;
   shadow_contrib[slot] = (float4)(contribution, 0.0f);
 
@@ -117,16 +117,18 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   if (ok && path.depth >= params.rr_depth) {
     const float q = fmin(0.95f, lux_max3(throughput) / LUX_SENSOR_WEIGHT);
     const float u_rr = lux_independent_1d(path.sample_index, dim + LUX_DIM_ROULETTE, path.seed);
-    if (u_rr >= q) ok = 0;
-    else throughput /= q;
+    if (u_rr >= q)
+      ok = 0;
+    else
+      throughput /= q;
   }
   path.throughput = (float4)(throughput, pdf);
   path.prev_pos = (float4)(sf.p, 0.0f);
   path.alive = ok ? 1u : 0u;
   paths[slot] = path;
-  rays[slot] = ok ? lux_make_ray(lux_offset_origin(sf.p, sf.ng, wi, params.offset_scale), wi,
-                                INFINITY)
-                  : lux_no_ray();
+  rays[slot] =
+      ok ? lux_make_ray(lux_offset_origin(sf.p, sf.ng, wi, params.offset_scale), wi, INFINITY)
+         : lux_no_ray();
   alive[j] = path.alive;
 #if LUX_SORT_DIRECTIONS
   tagged[j] = lux_tag_slot(slot, wi);

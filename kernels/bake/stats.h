@@ -28,7 +28,8 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
       const float3 d2 = d * d;
       ref_err = (float2)((d2.x + d2.y + d2.z) / 3.0f,
                          (d2.x / (r.x * r.x + 1e-2f) + d2.y / (r.y * r.y + 1e-2f) +
-                          d2.z / (r.z * r.z + 1e-2f)) / 3.0f);
+                          d2.z / (r.z * r.z + 1e-2f)) /
+                             3.0f);
     }
     t_spp = spp[texel];
     const float2 w = weight[texel];

@@ -7,13 +7,13 @@
 #include "shared/ray_offset.h"
 
 typedef struct LuxSurface {
-  float3 p;      /* world position */
-  float3 ng;     /* unit geometric normal, on the shading normal's side */
+  float3 p;          /* world position */
+  float3 ng;         /* unit geometric normal, on the shading normal's side */
   float3 ng_winding; /* unit geometric normal from the winding (emitter front side) */
-  float3 ns;     /* unit shading normal, on the same side as ng */
-  float2 uv;     /* material UV (TEXCOORD_0) */
+  float3 ns;         /* unit shading normal, on the same side as ng */
+  float2 uv;         /* material UV (TEXCOORD_0) */
   int material;
-  int light;     /* emissive light index or -1 */
+  int light; /* emissive light index or -1 */
 } LuxSurface;
 
 /* Barycentrics (b1, b2) weight vertices 1 and 2, as in LuxHit.u/v. */

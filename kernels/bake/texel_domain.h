@@ -3,20 +3,38 @@
 #ifndef LUXEL_BAKE_TEXEL_DOMAIN_H
 #define LUXEL_BAKE_TEXEL_DOMAIN_H
 
-#include "shared/bake_args.h"
 #include "sampling/sequence.h"
+#include "shared/bake_args.h"
 
 /* Kensler's hash-based permutation of [0, n) (Correlated Multi-Jittered
  * Sampling, 2013, Listing "permute"): a bijection per pattern p, by cycle
  * walking inside the next power of two. */
 inline uint lux_permute(uint i, uint n, uint p) {
   uint w = n - 1u;
-  w |= w >> 1; w |= w >> 2; w |= w >> 4; w |= w >> 8; w |= w >> 16;
+  w |= w >> 1;
+  w |= w >> 2;
+  w |= w >> 4;
+  w |= w >> 8;
+  w |= w >> 16;
   do {
-    i ^= p; i *= 0xe170893du; i ^= p >> 16; i ^= (i & w) >> 4; i ^= p >> 8;
-    i *= 0x0929eb3fu; i ^= p >> 23; i ^= (i & w) >> 1; i *= 1u | p >> 27;
-    i *= 0x6935fa69u; i ^= (i & w) >> 11; i *= 0x74dcb303u; i ^= (i & w) >> 2;
-    i *= 0x9e501cc3u; i ^= (i & w) >> 2; i *= 0xc860a3dfu; i &= w; i ^= i >> 5;
+    i ^= p;
+    i *= 0xe170893du;
+    i ^= p >> 16;
+    i ^= (i & w) >> 4;
+    i ^= p >> 8;
+    i *= 0x0929eb3fu;
+    i ^= p >> 23;
+    i ^= (i & w) >> 1;
+    i *= 1u | p >> 27;
+    i *= 0x6935fa69u;
+    i ^= (i & w) >> 11;
+    i *= 0x74dcb303u;
+    i ^= (i & w) >> 2;
+    i *= 0x9e501cc3u;
+    i ^= (i & w) >> 2;
+    i *= 0xc860a3dfu;
+    i &= w;
+    i ^= i >> 5;
   } while (i >= n);
   return (i + p) % n;
 }

@@ -35,7 +35,8 @@ inline float3 lux_safe_inv_dir(float3 d) {
 
 /* Entry distance of the ray into box [lo, hi], or INFINITY when it misses
  * the box within [tmin, tmax]. */
-inline float lux_box_entry(float4 lo, float4 hi, float3 org, float3 inv_dir, float tmin, float tmax) {
+inline float lux_box_entry(float4 lo, float4 hi, float3 org, float3 inv_dir, float tmin,
+                           float tmax) {
   const float3 t0 = (lo.xyz - org) * inv_dir;
   const float3 t1 = (hi.xyz - org) * inv_dir;
   const float3 tn = fmin(t0, t1);

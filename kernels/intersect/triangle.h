@@ -47,16 +47,19 @@ inline LuxRayShear lux_ray_shear(float3 org, float3 dir) {
   return s;
 }
 
-inline float lux_component(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+inline float lux_component(float3 v, int k) {
+  return k == 0 ? v.x : (k == 1 ? v.y : v.z);
+}
 
 /* Tests one triangle; on a hit with t in (tmin, *t_best) updates *t_best,
  * *u, *v and returns 1. u, v are the barycentrics of v1 and v2. */
-inline int lux_intersect_triangle(const LuxRayShear* r, float3 v0, float3 v1, float3 v2,
-                                  float tmin, float* t_best, float* u_out, float* v_out) {
+inline int lux_intersect_triangle(const LuxRayShear* r, float3 v0, float3 v1, float3 v2, float tmin,
+                                  float* t_best, float* u_out, float* v_out) {
   const float3 A3 = v0 - r->org;
   const float3 B3 = v1 - r->org;
   const float3 C3 = v2 - r->org;
-  const float Az = lux_component(A3, r->kz), Bz = lux_component(B3, r->kz), Cz = lux_component(C3, r->kz);
+  const float Az = lux_component(A3, r->kz), Bz = lux_component(B3, r->kz),
+              Cz = lux_component(C3, r->kz);
   const float Ax = lux_component(A3, r->kx) - r->sx * Az;
   const float Ay = lux_component(A3, r->ky) - r->sy * Az;
   const float Bx = lux_component(B3, r->kx) - r->sx * Bz;

@@ -40,7 +40,9 @@ inline uint lux_live_count(__global const int* count, uint capacity) {
   return n <= 0 ? 0u : min((uint)n, capacity);
 }
 
-inline uint lux_tiles_for(uint n) { return (n + LUX_PRIM_TILE - 1u) / LUX_PRIM_TILE; }
+inline uint lux_tiles_for(uint n) {
+  return (n + LUX_PRIM_TILE - 1u) / LUX_PRIM_TILE;
+}
 
 /* Exclusive prefix sum of one value per work-item across the work-group
  * (Hillis-Steele in local memory: OpenCL 1.2 has no work_group_scan and no

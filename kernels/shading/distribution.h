@@ -22,7 +22,10 @@ inline uint lux_sample_cdf(const __global float* cdf, uint n, float u, float* pm
   uint lo = 0, hi = n; /* invariant: cdf[lo] <= u, answer in [lo, hi) */
   while (hi - lo > 1u) {
     const uint mid = (lo + hi) >> 1;
-    if (cdf[mid] <= u) lo = mid; else hi = mid;
+    if (cdf[mid] <= u)
+      lo = mid;
+    else
+      hi = mid;
   }
   *pmf = cdf[lo + 1] - cdf[lo];
   return lo;
@@ -37,18 +40,21 @@ inline float lux_cdf_remap(const __global float* cdf, uint i, float u) {
 }
 
 /* Probability of cell i. */
-inline float lux_cdf_pmf(const __global float* cdf, uint i) { return cdf[i + 1] - cdf[i]; }
+inline float lux_cdf_pmf(const __global float* cdf, uint i) {
+  return cdf[i + 1] - cdf[i];
+}
 
 /* 2D sampling over a width x height grid (row-major): picks a row from the
  * marginal with u.y, a column from that row's conditional with u.x. Returns
  * continuous (s, t) in [0,1)^2 (s along a row, t down the rows) and the
  * density with respect to (s, t). */
 inline float2 lux_sample_grid_2d(const __global float* marginal, const __global float* conditional,
-                            uint width, uint height, float2 u, float* pdf_st) {
+                                 uint width, uint height, float2 u, float* pdf_st) {
   float pm, pc;
   const uint row = lux_sample_cdf(marginal, height, u.y, &pm);
-  const float t = ((float)row + lux_cdf_remap(marginal, row, clamp(u.y, 0.0f, LUX_ONE_MINUS_EPSILON))) /
-                  (float)height;
+  const float t =
+      ((float)row + lux_cdf_remap(marginal, row, clamp(u.y, 0.0f, LUX_ONE_MINUS_EPSILON))) /
+      (float)height;
   const __global float* cond = conditional + (size_t)row * (width + 1u);
   const uint col = lux_sample_cdf(cond, width, u.x, &pc);
   const float s = ((float)col + lux_cdf_remap(cond, col, clamp(u.x, 0.0f, LUX_ONE_MINUS_EPSILON))) /
@@ -58,8 +64,8 @@ inline float2 lux_sample_grid_2d(const __global float* marginal, const __global 
 }
 
 /* The density lux_sample_grid_2d has at (s, t). */
-inline float lux_pdf_2d(const __global float* marginal, const __global float* conditional, uint width,
-                        uint height, float2 st) {
+inline float lux_pdf_2d(const __global float* marginal, const __global float* conditional,
+                        uint width, uint height, float2 st) {
   const uint col = min((uint)max(st.x * (float)width, 0.0f), width - 1u);
   const uint row = min((uint)max(st.y * (float)height, 0.0f), height - 1u);
   const __global float* cond = conditional + (size_t)row * (width + 1u);

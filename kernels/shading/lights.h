@@ -22,9 +22,9 @@
 #ifndef LUXEL_SHADING_LIGHTS_H
 #define LUXEL_SHADING_LIGHTS_H
 
-#include "shared/light.h"
 #include "sampling/warp.h"
 #include "shading/distribution.h"
+#include "shared/light.h"
 
 typedef struct LuxLightSample {
   float3 wi;       /* unit direction from p towards the light */
@@ -49,7 +49,8 @@ inline float3 lux_lights_uniform_cone(float2 u, float one_minus_cos, float3 axis
   const float phi = 2.0f * M_PI_F * u.y;
   float3 t, b;
   lux_onb(axis, &t, &b);
-  return normalize(lux_to_world((float3)(cos(phi) * sin_t, sin(phi) * sin_t, 1.0f - h), t, b, axis));
+  return normalize(
+      lux_to_world((float3)(cos(phi) * sin_t, sin(phi) * sin_t, 1.0f - h), t, b, axis));
 }
 
 /* ---- Sky mapping (shared/light.h, EQUIRECT MAPPING). ---- */
@@ -67,7 +68,8 @@ inline float3 lux_sky_to_world(const LuxSky sky, float3 l) {
 /* Image coordinates (s along a row, t down the rows) of a unit local
  * direction. */
 inline float2 lux_sky_local_to_st(float3 l) {
-  return (float2)(0.5f + atan2(l.x, -l.z) * (0.5f / M_PI_F), acos(clamp(l.y, -1.0f, 1.0f)) / M_PI_F);
+  return (float2)(0.5f + atan2(l.x, -l.z) * (0.5f / M_PI_F),
+                  acos(clamp(l.y, -1.0f, 1.0f)) / M_PI_F);
 }
 
 #if LUX_SKY_IMAGE
@@ -83,7 +85,8 @@ inline float3 lux_sky_texel(const LuxSky sky, const __global float* texels, floa
 inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, float3 dir) {
 #if LUX_SKY_IMAGE
   if (sky.kind == LUX_SKY_KIND_IMAGE) {
-    return lux_sky_texel(sky, sky_texels, lux_sky_local_to_st(lux_sky_to_local(sky, normalize(dir))));
+    return lux_sky_texel(sky, sky_texels,
+                         lux_sky_local_to_st(lux_sky_to_local(sky, normalize(dir))));
   }
 #endif
 #if LUX_SKY
@@ -109,8 +112,8 @@ inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_l
     const float sin_t = sqrt(max(1.0f - l.y * l.y, 0.0f));
     if (!(sin_t > 0.0f)) return 0.0f;
     /* d(omega) = sin(theta) d(theta) d(phi) = 2 pi^2 sin(theta) ds dt */
-    const float pdf_st = lux_pdf_2d(sky_marginal, sky_conditional, (uint)sky.width, (uint)sky.height,
-                                    lux_sky_local_to_st(l));
+    const float pdf_st = lux_pdf_2d(sky_marginal, sky_conditional, (uint)sky.width,
+                                    (uint)sky.height, lux_sky_local_to_st(l));
     return select * pdf_st / (2.0f * M_PI_F * M_PI_F * sin_t);
   }
 #endif
@@ -128,7 +131,8 @@ inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_l
 
 #if LUX_LIGHT_POINT || LUX_LIGHT_SPOT
 /* Direction and inverse-square falloff towards a point source. */
-inline int lux_lights_towards_point(const LuxLight* light, float3 p, LuxLightSample* s, float* inv_d2) {
+inline int lux_lights_towards_point(const LuxLight* light, float3 p, LuxLightSample* s,
+                                    float* inv_d2) {
   const float3 to = light->origin.xyz - p;
   const float d2 = dot(to, to);
   if (!(d2 > 0.0f)) return 0;
@@ -186,7 +190,8 @@ inline int lux_lights_sample_directional(const LuxLight* light, float2 u, LuxLig
 
 #if LUX_LIGHT_EMISSIVE
 /* Uniform by area, converted to solid angle: pdf = d^2 / (A |cos theta_l|). */
-inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u, LuxLightSample* s) {
+inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u,
+                                      LuxLightSample* s) {
   const float2 bary = lux_uniform_triangle(u); /* area-uniform (b1, b2) */
   const float3 x = light->origin.xyz + bary.x * light->axis.xyz + bary.y * light->edge2.xyz;
   const float3 to = x - p;
@@ -208,15 +213,16 @@ inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u,
 
 #if LUX_SKY || LUX_SKY_IMAGE
 inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_texels,
-                                 const __global float* sky_marginal, const __global float* sky_conditional,
-                                 float2 u, LuxLightSample* s) {
+                                 const __global float* sky_marginal,
+                                 const __global float* sky_conditional, float2 u,
+                                 LuxLightSample* s) {
   s->dist = INFINITY;
   s->mis = 1;
 #if LUX_SKY_IMAGE
   if (sky.kind == LUX_SKY_KIND_IMAGE) {
     float pdf_st;
-    const float2 st =
-        lux_sample_grid_2d(sky_marginal, sky_conditional, (uint)sky.width, (uint)sky.height, u, &pdf_st);
+    const float2 st = lux_sample_grid_2d(sky_marginal, sky_conditional, (uint)sky.width,
+                                         (uint)sky.height, u, &pdf_st);
     const float theta = M_PI_F * st.y, phi = 2.0f * M_PI_F * (st.x - 0.5f);
     const float sin_t = sin(theta);
     if (!(pdf_st > 0.0f) || !(sin_t > 0.0f)) return 0;
@@ -245,10 +251,11 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
  * u from shading point p. Returns 0 when the sample carries nothing (no
  * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
  * light type). */
-inline int lux_sample_light(const __global LuxLight* lights, const __global float* select_cdf, uint light_count,
-                            LuxSky sky, const __global float* sky_texels, const __global float* sky_marginal,
-                            const __global float* sky_conditional, float3 p, float u_select, float2 u,
-                            LuxLightSample* out) {
+inline int lux_sample_light(const __global LuxLight* lights, const __global float* select_cdf,
+                            uint light_count, LuxSky sky, const __global float* sky_texels,
+                            const __global float* sky_marginal,
+                            const __global float* sky_conditional, float3 p, float u_select,
+                            float2 u, LuxLightSample* out) {
   out->wi = (float3)(0.0f, 1.0f, 0.0f);
   out->dist = 0.0f;
   out->radiance = (float3)(0.0f);
@@ -267,23 +274,32 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
   int ok = 0;
   switch (LUX_LIGHT_TYPE(light)) {
 #if LUX_LIGHT_POINT
-    case LUX_LIGHT_TYPE_POINT: ok = lux_lights_sample_point(&light, p, out); break;
+    case LUX_LIGHT_TYPE_POINT:
+      ok = lux_lights_sample_point(&light, p, out);
+      break;
 #endif
 #if LUX_LIGHT_SPOT
-    case LUX_LIGHT_TYPE_SPOT: ok = lux_lights_sample_spot(&light, p, out); break;
+    case LUX_LIGHT_TYPE_SPOT:
+      ok = lux_lights_sample_spot(&light, p, out);
+      break;
 #endif
 #if LUX_LIGHT_DIRECTIONAL
-    case LUX_LIGHT_TYPE_DIRECTIONAL: ok = lux_lights_sample_directional(&light, u, out); break;
+    case LUX_LIGHT_TYPE_DIRECTIONAL:
+      ok = lux_lights_sample_directional(&light, u, out);
+      break;
 #endif
 #if LUX_LIGHT_EMISSIVE
-    case LUX_LIGHT_TYPE_TRIANGLE: ok = lux_lights_sample_triangle(&light, p, u, out); break;
+    case LUX_LIGHT_TYPE_TRIANGLE:
+      ok = lux_lights_sample_triangle(&light, p, u, out);
+      break;
 #endif
 #if LUX_SKY || LUX_SKY_IMAGE
     case LUX_LIGHT_TYPE_SKY:
       ok = lux_lights_sample_sky(sky, sky_texels, sky_marginal, sky_conditional, u, out);
       break;
 #endif
-    default: break;
+    default:
+      break;
   }
   (void)p;
   (void)u;
@@ -301,8 +317,9 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
  * (for MIS when a BSDF ray hits an emitter; triangle_light maps the hit
  * triangle to `light`). light_normal: the hit triangle's geometric normal
  * (any length, either sign). 0 for the back of a one-sided emitter. */
-inline float lux_light_pdf_triangle(const __global LuxLight* lights, const __global float* select_cdf, int light,
-                                    float3 p, float3 hit_point, float3 light_normal) {
+inline float lux_light_pdf_triangle(const __global LuxLight* lights,
+                                    const __global float* select_cdf, int light, float3 p,
+                                    float3 hit_point, float3 light_normal) {
 #if LUX_LIGHT_EMISSIVE
   if (light < 0) return 0.0f;
   const LuxLight l = lights[light];
@@ -311,7 +328,8 @@ inline float lux_light_pdf_triangle(const __global LuxLight* lights, const __glo
   const float d2 = dot(to, to);
   if (!(d2 > 0.0f)) return 0.0f;
   const float3 wi = to * rsqrt(d2);
-  if (!(LUX_LIGHT_FLAGS(l) & LUX_LIGHT_FLAG_DOUBLE_SIDED) && !(dot(l.shape.xyz, wi) < 0.0f)) return 0.0f;
+  if (!(LUX_LIGHT_FLAGS(l) & LUX_LIGHT_FLAG_DOUBLE_SIDED) && !(dot(l.shape.xyz, wi) < 0.0f))
+    return 0.0f;
   const float cos_l = fabs(dot(normalize(light_normal), wi));
   if (!(cos_l > 0.0f)) return 0.0f;
   return lux_cdf_pmf(select_cdf, (uint)light) * d2 / (LUX_LIGHT_AREA(l) * cos_l);

@@ -37,8 +37,8 @@ typedef struct LuxSurfaceTri {
 /* Device material, 64 bytes. Texture indices are -1 when absent.
  *   flags bit 0: double-sided; bit 1: emits light. */
 typedef struct LuxMaterial {
-  float4 base_color;   /* linear rgb, a = alpha factor */
-  float4 emission;     /* rgb = emissiveFactor * strength (radiance), w unused */
+  float4 base_color; /* linear rgb, a = alpha factor */
+  float4 emission;   /* rgb = emissiveFactor * strength (radiance), w unused */
   float metallic;
   float roughness;
   int base_color_tex;
@@ -77,19 +77,19 @@ typedef struct LuxBakeParams {
   uint texel_count;   /* width * height */
   uint covered_count; /* texels with >= 1 valid sample */
   uint bake_seed;
-  uint max_bounces;   /* indirect bounces after the texel point */
-  uint rr_depth;      /* Russian roulette from this depth on */
+  uint max_bounces; /* indirect bounces after the texel point */
+  uint rr_depth;    /* Russian roulette from this depth on */
   uint light_count;
-  int sky_light;      /* index of the sky entry in the light table, or -1 */
+  int sky_light;         /* index of the sky entry in the light table, or -1 */
   float clamp_luminance; /* 0 = off */
-  uint paths;          /* paths in this iteration */
-  float offset_scale;  /* ray-offset scale: min(1, scene extent) (bake/surface.h) */
-  ulong first_path;    /* paths traced before this iteration (texel domain, §3.4) */
-  uint capacity;       /* path slots of the batch buffers */
-  uint encoding_count; /* directional encodings (entries of the encodings table) */
-  uint basis_stride;   /* float4 of encoding state per texel */
-  float acceleration;  /* alpha of Eq. 7.14 (progressive solvers) */
-  uint has_reference;  /* 1: the reference buffer holds a lightmap (benchmark mode) */
+  uint paths;            /* paths in this iteration */
+  float offset_scale;    /* ray-offset scale: min(1, scene extent) (bake/surface.h) */
+  ulong first_path;      /* paths traced before this iteration (texel domain, §3.4) */
+  uint capacity;         /* path slots of the batch buffers */
+  uint encoding_count;   /* directional encodings (entries of the encodings table) */
+  uint basis_stride;     /* float4 of encoding state per texel */
+  float acceleration;    /* alpha of Eq. 7.14 (progressive solvers) */
+  uint has_reference;    /* 1: the reference buffer holds a lightmap (benchmark mode) */
   uint pad;
 } LuxBakeParams;
 

@@ -29,85 +29,84 @@
 /* ---- Groups ------------------------------------------------------------- */
 
 /* Scene: sized by the scene and the atlas, uploaded once. */
-#define LUX_GROUP_scene(X)                                                  \
-  X(buffer, LuxSurfaceTri, tris, "surface triangles")                       \
-  X(buffer, LuxMaterial, materials, "materials")                            \
-  X(buffer, LuxTriangleUV, atlas_uvs, "atlas uvs")                          \
-  X(buffer, uint, instance_first, "instance table")                         \
-  X(buffer, uint, covered, "covered texels")                                \
-  X(buffer, uint, sample_offsets, "sample-info offsets") /* §4.2 */         \
+#define LUX_GROUP_scene(X)                                           \
+  X(buffer, LuxSurfaceTri, tris, "surface triangles")                \
+  X(buffer, LuxMaterial, materials, "materials")                     \
+  X(buffer, LuxTriangleUV, atlas_uvs, "atlas uvs")                   \
+  X(buffer, uint, instance_first, "instance table")                  \
+  X(buffer, uint, covered, "covered texels")                         \
+  X(buffer, uint, sample_offsets, "sample-info offsets") /* §4.2 */ \
   X(buffer, uint, sample_words, "sample-info words")
 
 /* Lights (§6.1): the light table with its selection cdf, and the sky. */
-#define LUX_GROUP_lights(X)                                                 \
-  X(buffer, LuxLight, lights, "lights")                                     \
-  X(buffer, float, light_cdf, "light cdf")                                  \
-  X(value, LuxSky, sky, "sky")                                              \
-  X(buffer, float, sky_texels, "sky texels")                                \
-  X(buffer, float, sky_marginal, "sky marginal cdf")                        \
+#define LUX_GROUP_lights(X)                          \
+  X(buffer, LuxLight, lights, "lights")              \
+  X(buffer, float, light_cdf, "light cdf")           \
+  X(value, LuxSky, sky, "sky")                       \
+  X(buffer, float, sky_texels, "sky texels")         \
+  X(buffer, float, sky_marginal, "sky marginal cdf") \
   X(buffer, float, sky_conditional, "sky conditional cdf")
 
 /* Material textures (kernels/shared/texture.h). */
-#define LUX_GROUP_textures(X)                                               \
-  X(buffer, LuxTexture, textures, "textures")                               \
+#define LUX_GROUP_textures(X)                 \
+  X(buffer, LuxTexture, textures, "textures") \
   X(buffer, uint, texels, "texture texels")
 
 /* Path state: sized by the batch (paths per iteration). keys = the texel of
  * each path slot, sorted; offsets = the offset buffer (Listing 3.1). */
-#define LUX_GROUP_paths(X)                                                  \
-  X(buffer, uint, keys, "path texel keys")                                  \
-  X(buffer, uint, offsets, "offset buffer")                                 \
-  X(buffer, LuxPath, paths, "paths")                                        \
-  X(buffer, LuxRay, rays, "rays")                                           \
-  X(buffer, LuxHit, hits, "hits")                                           \
-  X(buffer, LuxRay, shadow_rays, "shadow rays")                             \
-  X(buffer, float4, shadow_contrib, "shadow contributions")                 \
-  X(buffer, int, occluded, "occlusion flags")                               \
-  X(buffer, uint, alive, "alive flags")                                     \
+#define LUX_GROUP_paths(X)                                  \
+  X(buffer, uint, keys, "path texel keys")                  \
+  X(buffer, uint, offsets, "offset buffer")                 \
+  X(buffer, LuxPath, paths, "paths")                        \
+  X(buffer, LuxRay, rays, "rays")                           \
+  X(buffer, LuxHit, hits, "hits")                           \
+  X(buffer, LuxRay, shadow_rays, "shadow rays")             \
+  X(buffer, float4, shadow_contrib, "shadow contributions") \
+  X(buffer, int, occluded, "occlusion flags")               \
+  X(buffer, uint, alive, "alive flags")                     \
   X(buffer, uint, tagged, "tagged slots")
 
 /* The active list of a launch: slot ids (with the octant tag of §5.4 in the
  * top bits) and the live count, which stays on the device. */
-#define LUX_GROUP_live(X)                                                   \
-  X(live, uint, active, "active paths")                                     \
+#define LUX_GROUP_live(X)               \
+  X(live, uint, active, "active paths") \
   X(live, int, count, "live count")
 
 /* Accumulation: sized by the lightmap (weighted Welford per texel, §3.2.2),
  * the statistics partials and the benchmark-mode reference. */
-#define LUX_GROUP_accum(X)                                                  \
-  X(buffer, float4, mean, "accumulated mean")                               \
-  X(buffer, float4, m2, "accumulated M2")                                   \
-  X(buffer, float2, weight, "accumulated weight")                           \
-  X(buffer, uint, spp, "samples per texel")                                 \
-  X(buffer, uint, nonfinite, "non-finite counter")                          \
-  X(buffer, LuxAccumStats, stats, "stats partials")                         \
+#define LUX_GROUP_accum(X)                          \
+  X(buffer, float4, mean, "accumulated mean")       \
+  X(buffer, float4, m2, "accumulated M2")           \
+  X(buffer, float2, weight, "accumulated weight")   \
+  X(buffer, uint, spp, "samples per texel")         \
+  X(buffer, uint, nonfinite, "non-finite counter")  \
+  X(buffer, LuxAccumStats, stats, "stats partials") \
   X(buffer, float4, reference, "reference lightmap")
 
 /* Directional encodings (Ch. 7-8): one sample record per path slot, the
  * encoding table, lobe directions and the per-texel solver state. */
-#define LUX_GROUP_encodings(X)                                              \
-  X(buffer, LuxBasisSample, basis_samples, "basis samples")                 \
-  X(buffer, LuxEncoding, encodings, "encodings")                            \
-  X(buffer, float4, basis_dirs, "basis directions")                         \
+#define LUX_GROUP_encodings(X)                              \
+  X(buffer, LuxBasisSample, basis_samples, "basis samples") \
+  X(buffer, LuxEncoding, encodings, "encodings")            \
+  X(buffer, float4, basis_dirs, "basis directions")         \
   X(buffer, float4, basis_state, "basis state")
 
 /* ---- Kernels: the groups each one takes, in order ------------------------ */
 
 #define LUX_KERNEL_texel_domain(G) G(in, scene) G(out, paths)
-#define LUX_KERNEL_raygen(G)                                                \
-  G(in, scene) G(in, textures) G(in, lights) G(in, accum) G(out, paths)     \
-  G(out, live) G(out, encodings)
-#define LUX_KERNEL_shade(G)                                                 \
-  G(in, scene) G(in, textures) G(in, lights) G(out, paths) G(in, live)
+#define LUX_KERNEL_raygen(G) \
+  G(in, scene)               \
+  G(in, textures) G(in, lights) G(in, accum) G(out, paths) G(out, live) G(out, encodings)
+#define LUX_KERNEL_shade(G) G(in, scene) G(in, textures) G(in, lights) G(out, paths) G(in, live)
 #define LUX_KERNEL_resolve_shadows(G) G(out, paths) G(in, live)
 #define LUX_KERNEL_resolve_texel_shadows(G) G(in, paths) G(in, live) G(out, encodings)
 #define LUX_KERNEL_accumulate(G) G(in, scene) G(in, paths) G(out, accum) G(out, encodings)
 #define LUX_KERNEL_accum_stats(G) G(in, scene) G(out, accum)
 
 /* Every bake kernel, for the host's kernel table. */
-#define LUX_BAKE_KERNELS(K)                                                 \
-  K(texel_domain) K(raygen) K(shade) K(resolve_shadows) K(resolve_texel_shadows) \
-  K(accumulate) K(accum_stats)
+#define LUX_BAKE_KERNELS(K) \
+  K(texel_domain)           \
+  K(raygen) K(shade) K(resolve_shadows) K(resolve_texel_shadows) K(accumulate) K(accum_stats)
 
 /* Work-group size of accum_stats (its local reduction arrays). */
 #define LUX_STATS_GROUP 256

@@ -40,10 +40,26 @@ struct alignas(16) uint4 {
 };
 typedef uint32_t uint;
 typedef uint64_t ulong;
-inline float as_float(int32_t v) { float f; std::memcpy(&f, &v, 4); return f; }
-inline float as_float(uint32_t v) { float f; std::memcpy(&f, &v, 4); return f; }
-inline int32_t as_int(float v) { int32_t i; std::memcpy(&i, &v, 4); return i; }
-inline uint32_t as_uint(float v) { uint32_t i; std::memcpy(&i, &v, 4); return i; }
+inline float as_float(int32_t v) {
+  float f;
+  std::memcpy(&f, &v, 4);
+  return f;
+}
+inline float as_float(uint32_t v) {
+  float f;
+  std::memcpy(&f, &v, 4);
+  return f;
+}
+inline int32_t as_int(float v) {
+  int32_t i;
+  std::memcpy(&i, &v, 4);
+  return i;
+}
+inline uint32_t as_uint(float v) {
+  uint32_t i;
+  std::memcpy(&i, &v, 4);
+  return i;
+}
 }  // namespace luxel::cl
 #define lux_as_float(x) ::luxel::cl::as_float(x)
 #define lux_as_int(x) ::luxel::cl::as_int(x)

@@ -70,8 +70,9 @@
 
 /* LuxLight flags (b.w). */
 #define LUX_LIGHT_FLAG_DOUBLE_SIDED 1 /* emits from both faces (glTF doubleSided) */
-#define LUX_LIGHT_FLAG_TEXTURED 2     /* material has an emissiveTexture: the caller
-                                         multiplies radiance by it */
+#define LUX_LIGHT_FLAG_TEXTURED                    \
+  2 /* material has an emissiveTexture: the caller \
+       multiplies radiance by it */
 
 #define LUX_SKY_KIND_NONE 0
 #define LUX_SKY_KIND_CONSTANT 1
@@ -95,9 +96,9 @@ typedef struct LuxLight {
 #define LUX_LIGHT_FLAGS(l) lux_as_int((l).axis.w)
 #define LUX_LIGHT_TRIANGLE(l) lux_as_int((l).edge2.w) /* world triangle id */
 #define LUX_LIGHT_AREA(l) ((l).emission.w)
-#define LUX_LIGHT_COS_INNER(l) ((l).shape.x)         /* spot */
-#define LUX_LIGHT_COS_OUTER(l) ((l).shape.y)         /* spot */
-#define LUX_LIGHT_ONE_MINUS_COS(l) ((l).shape.z)     /* directional disc: 1 - cos(a) */
+#define LUX_LIGHT_COS_INNER(l) ((l).shape.x)          /* spot */
+#define LUX_LIGHT_COS_OUTER(l) ((l).shape.y)          /* spot */
+#define LUX_LIGHT_ONE_MINUS_COS(l) ((l).shape.z)      /* directional disc: 1 - cos(a) */
 #define LUX_LIGHT_MATERIAL(l) lux_as_int((l).shape.w) /* triangle */
 
 /* The sky (environment), passed to kernels by value. 48 bytes.

@@ -9,12 +9,12 @@
  * out_wi_pdf: wi, pdf (pdf 0 when nothing was sampled).
  * out_radiance_dist: radiance, dist. out_info: light, triangle,
  * is_delta | mis << 1, returned value. */
-__kernel void probe_sample_lights(__global const LuxLight* lights, __global const float* select_cdf,
-                                  const uint light_count, const LuxSky sky, __global const float* sky_texels,
-                                  __global const float* sky_marginal, __global const float* sky_conditional,
-                                  __global const float4* points, __global const float4* randoms, const int count,
-                                  __global float4* out_wi_pdf, __global float4* out_radiance_dist,
-                                  __global int4* out_info, __global float2* out_bary) {
+__kernel void probe_sample_lights(
+    __global const LuxLight* lights, __global const float* select_cdf, const uint light_count,
+    const LuxSky sky, __global const float* sky_texels, __global const float* sky_marginal,
+    __global const float* sky_conditional, __global const float4* points,
+    __global const float4* randoms, const int count, __global float4* out_wi_pdf,
+    __global float4* out_radiance_dist, __global int4* out_info, __global float2* out_bary) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   const float4 r = randoms[i];
@@ -29,18 +29,20 @@ __kernel void probe_sample_lights(__global const LuxLight* lights, __global cons
 
 /* lux_light_pdf_triangle for (light[i], p[i], hit[i], normal[i]). */
 __kernel void probe_triangle_pdf(__global const LuxLight* lights, __global const float* select_cdf,
-                                 __global const int* light, __global const float4* p, __global const float4* hit,
-                                 __global const float4* normal, const int count, __global float* out) {
+                                 __global const int* light, __global const float4* p,
+                                 __global const float4* hit, __global const float4* normal,
+                                 const int count, __global float* out) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
-  out[i] = lux_light_pdf_triangle(lights, select_cdf, light[i], p[i].xyz, hit[i].xyz, normal[i].xyz);
+  out[i] =
+      lux_light_pdf_triangle(lights, select_cdf, light[i], p[i].xyz, hit[i].xyz, normal[i].xyz);
 }
 
 /* lux_sky_radiance and lux_sky_pdf along dirs[i]: out = radiance, pdf. */
-__kernel void probe_sky(const LuxSky sky, __global const float* sky_texels, __global const float* select_cdf,
-                        const int sky_light, __global const float* sky_marginal,
-                        __global const float* sky_conditional, __global const float4* dirs, const int count,
-                        __global float4* out) {
+__kernel void probe_sky(const LuxSky sky, __global const float* sky_texels,
+                        __global const float* select_cdf, const int sky_light,
+                        __global const float* sky_marginal, __global const float* sky_conditional,
+                        __global const float4* dirs, const int count, __global float4* out) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   const float3 d = dirs[i].xyz;
@@ -49,8 +51,8 @@ __kernel void probe_sky(const LuxSky sky, __global const float* sky_texels, __gl
 }
 
 /* lux_sample_cdf over n cells for u[i]. */
-__kernel void probe_sample_cdf(__global const float* cdf, const uint n, __global const float* u, const int count,
-                               __global int* index, __global float* pmf) {
+__kernel void probe_sample_cdf(__global const float* cdf, const uint n, __global const float* u,
+                               const int count, __global int* index, __global float* pmf) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   float p;
@@ -59,8 +61,9 @@ __kernel void probe_sample_cdf(__global const float* cdf, const uint n, __global
 }
 
 /* lux_texture_sample of textures[texture] at uv[i]. */
-__kernel void probe_texture(__global const uint* texels, __global const LuxTexture* textures, const int texture,
-                            __global const float2* uv, const int count, __global float4* out) {
+__kernel void probe_texture(__global const uint* texels, __global const LuxTexture* textures,
+                            const int texture, __global const float2* uv, const int count,
+                            __global float4* out) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   out[i] = lux_texture_sample(texels, textures[texture], uv[i]);

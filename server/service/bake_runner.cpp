@@ -3,8 +3,8 @@
 #include <chrono>
 #include <filesystem>
 
-#include "pipeline/bake.h"
 #include "output/reference_exr.h"
+#include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
 #include "service/files.h"
 #include "service/log.h"
@@ -16,28 +16,34 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 
-const char* kArtifacts[] = {"irradiance.exr", "preview.png", "samples.exr",
-                            "rel_error.exr", "error_series.csv", "manifest.json"};
+const char* kArtifacts[] = {"irradiance.exr", "preview.png",      "samples.exr",
+                            "rel_error.exr",  "error_series.csv", "manifest.json"};
 
 }  // namespace
 
 BakeRunner::BakeRunner(SceneStore& scenes, BakeStore& bakes, JobQueue& queue, RunnerOptions options)
     : scenes_(scenes), bakes_(bakes), queue_(queue), options_(std::move(options)) {}
 
-BakeRunner::~BakeRunner() { shutdown(); }
+BakeRunner::~BakeRunner() {
+  shutdown();
+}
 
 Status BakeRunner::recover() {
   for (const v1::BakeInfo& info : bakes_.list({})) {
     const std::string& id = info.bake_id();
     if (info.state() == v1::BAKE_STATE_RUNNING) {
-      LUXEL_RETURN_IF_ERROR(bakes_.update(id, [](v1::BakeInfo& b) {
-        b.set_state(v1::BAKE_STATE_INTERRUPTED);
-        b.add_notes("interrupted: the daemon stopped while the bake ran");
-      }, /*persist=*/true));
+      LUXEL_RETURN_IF_ERROR(bakes_.update(
+          id,
+          [](v1::BakeInfo& b) {
+            b.set_state(v1::BAKE_STATE_INTERRUPTED);
+            b.add_notes("interrupted: the daemon stopped while the bake ran");
+          },
+          /*persist=*/true));
       log_event("bake_interrupted", {{"bake", id}, {"scene", info.scene_id()}});
     }
     if (!is_terminal(info.state())) {
-      LUXEL_RETURN_IF_ERROR(queue_.push(id, info.settings().priority(), bakes_.sequence(id), /*force=*/true));
+      LUXEL_RETURN_IF_ERROR(
+          queue_.push(id, info.settings().priority(), bakes_.sequence(id), /*force=*/true));
       log_event("bake_requeued", {{"bake", id}, {"scene", info.scene_id()}});
     }
   }
@@ -81,12 +87,16 @@ Result<v1::BakeInfo> BakeRunner::cancel(const std::string& bake_id) {
       // Queued (or popped by a worker that has not registered it yet: the
       // worker checks the state under mu_ before it starts).
       queue_.remove(bake_id);
-      LUXEL_RETURN_IF_ERROR(bakes_.update(bake_id, [](v1::BakeInfo& b) {
-        b.set_state(v1::BAKE_STATE_CANCELLED);
-        b.set_termination("cancelled");
-        b.set_finished_at(unix_now());
-      }, true));
-      log_event("bake_cancelled", {{"bake", bake_id}, {"scene", info->scene_id()}, {"while", "queued"}});
+      LUXEL_RETURN_IF_ERROR(bakes_.update(
+          bake_id,
+          [](v1::BakeInfo& b) {
+            b.set_state(v1::BAKE_STATE_CANCELLED);
+            b.set_termination("cancelled");
+            b.set_finished_at(unix_now());
+          },
+          true));
+      log_event("bake_cancelled",
+                {{"bake", bake_id}, {"scene", info->scene_id()}, {"while", "queued"}});
       return bakes_.get(bake_id);
     }
   }
@@ -120,11 +130,14 @@ void BakeRunner::worker_loop() {
 }
 
 void BakeRunner::finish_failed(const std::string& bake_id, const Status& why) {
-  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
-    b.set_state(v1::BAKE_STATE_FAILED);
-    b.set_error_message(why.to_string());
-    b.set_finished_at(unix_now());
-  }, true);
+  (void)bakes_.update(
+      bake_id,
+      [&](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_FAILED);
+        b.set_error_message(why.to_string());
+        b.set_finished_at(unix_now());
+      },
+      true);
   log_event("bake_failed", {{"bake", bake_id}, {"error", why.to_string()}});
 }
 
@@ -140,9 +153,10 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     // Benchmark mode: the reference bake's irradiance.exr (RGBA).
     auto image = output::read_reference_exr(bakes_.results_dir(ref) + "/irradiance.exr");
     if (!image)
-      return finish_failed(bake_id, invalid_argument(strprintf(
-          "settings.reference_bake_id: cannot use the result of bake %s: %s", ref.c_str(),
-          image.status().message().c_str())));
+      return finish_failed(
+          bake_id, invalid_argument(
+                       strprintf("settings.reference_bake_id: cannot use the result of bake %s: %s",
+                                 ref.c_str(), image.status().message().c_str())));
     settings->reference = std::make_shared<const std::vector<float>>(std::move(image->pixels));
   }
   auto scene_info = scenes_.get(info->scene_id());
@@ -174,14 +188,19 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     }
     if (!resume) std::remove(ckpt_path.c_str());
   }
-  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
-    b.set_state(v1::BAKE_STATE_RUNNING);
-    if (b.started_at() == 0) b.set_started_at(unix_now());
-    if (resume) b.set_resumed(b.resumed() + 1);
-    if (!note.empty()) b.add_notes(note);
-  }, true);
-  log_event("bake_started", {{"bake", bake_id}, {"scene", info->scene_id()},
-                             {"resume", resume ? "yes" : "no"}, {"note", note}});
+  (void)bakes_.update(
+      bake_id,
+      [&](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_RUNNING);
+        if (b.started_at() == 0) b.set_started_at(unix_now());
+        if (resume) b.set_resumed(b.resumed() + 1);
+        if (!note.empty()) b.add_notes(note);
+      },
+      true);
+  log_event("bake_started", {{"bake", bake_id},
+                             {"scene", info->scene_id()},
+                             {"resume", resume ? "yes" : "no"},
+                             {"note", note}});
 
   uint64_t last_paths = resume ? resume->paths_done : 0;
   pipeline::BakeHooks hooks;
@@ -192,16 +211,18 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   hooks.on_progress = [&](const pipeline::BakeProgress& p) {
     paths_traced_ += p.paths - std::min(p.paths, last_paths);
     last_paths = std::max(last_paths, p.paths);
-    (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
+    (void)bakes_.update(
+        bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
     return true;
   };
   if (opts.snapshot_format != pipeline::SnapshotFormat::kNone) {
     hooks.snapshot_interval_s = opts.snapshot_interval_s;
     hooks.on_snapshot = [&](const pipeline::BakeSnapshot& s) {
       output::Image image{s.width, s.height, 4, s.irradiance};
-      bakes_.publish_snapshot(bake_id, std::make_shared<SnapshotFrame>(
-          std::move(image), to_proto(s.progress), to_proto(opts.snapshot_format), opts.snapshot_max_side,
-          bakes_.bake_dir(bake_id)));
+      bakes_.publish_snapshot(
+          bake_id, std::make_shared<SnapshotFrame>(
+                       std::move(image), to_proto(s.progress), to_proto(opts.snapshot_format),
+                       opts.snapshot_max_side, bakes_.bake_dir(bake_id)));
     };
   }
   if (options_.checkpoint_interval_s > 0) {
@@ -212,8 +233,10 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
       if (Status st = pipeline::write_checkpoint(ckpt_path, c); !st.is_ok()) {
         log_event("checkpoint_failed", {{"bake", bake_id}, {"error", st.to_string()}});
       } else {
-        (void)bakes_.update(bake_id, [](v1::BakeInfo&) {}, true);  // progress on disk too
-        log_event("checkpoint_written", {{"bake", bake_id}, {"paths", std::to_string(c.paths_done)}});
+        (void)bakes_.update(
+            bake_id, [](v1::BakeInfo&) {}, true);  // progress on disk too
+        log_event("checkpoint_written",
+                  {{"bake", bake_id}, {"paths", std::to_string(c.paths_done)}});
       }
       if (stopping) running.cancel = true;
     };
@@ -232,15 +255,18 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     // Logged before the record changes, so whoever sees the new state finds the line.
     log_event(by_user ? "bake_cancelled" : "bake_interrupted",
               {{"bake", bake_id}, {"scene", info->scene_id()}, {"paths", std::to_string(r.paths)}});
-    (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
-      b.set_state(by_user ? v1::BAKE_STATE_CANCELLED : v1::BAKE_STATE_INTERRUPTED);
-      if (by_user) {
-        b.set_termination("cancelled");
-        b.set_finished_at(unix_now());
-      } else {
-        b.add_notes("interrupted: the daemon shut down; resumes from its checkpoint");
-      }
-    }, true);
+    (void)bakes_.update(
+        bake_id,
+        [&](v1::BakeInfo& b) {
+          b.set_state(by_user ? v1::BAKE_STATE_CANCELLED : v1::BAKE_STATE_INTERRUPTED);
+          if (by_user) {
+            b.set_termination("cancelled");
+            b.set_finished_at(unix_now());
+          } else {
+            b.add_notes("interrupted: the daemon shut down; resumes from its checkpoint");
+          }
+        },
+        true);
     if (by_user) std::remove(ckpt_path.c_str());
     return;
   }
@@ -250,34 +276,39 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   const std::string final_dir = bakes_.results_dir(bake_id);
   remove_tree(partial);
   remove_tree(final_dir);
-  auto written = pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r,
-                                              info->scene_id());
+  auto written =
+      pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r, info->scene_id());
   if (!written) return finish_failed(bake_id, written.status());
   if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
-  if (Status st = rename_durable(partial, final_dir); !st.is_ok()) return finish_failed(bake_id, st);
+  if (Status st = rename_durable(partial, final_dir); !st.is_ok())
+    return finish_failed(bake_id, st);
 
-  log_event("bake_finished", {{"bake", bake_id}, {"scene", info->scene_id()},
+  log_event("bake_finished", {{"bake", bake_id},
+                              {"scene", info->scene_id()},
                               {"termination", pipeline::termination_name(r.termination)},
                               {"seconds", strprintf("%.3f", r.seconds)},
                               {"paths", std::to_string(r.paths)}});
-  (void)bakes_.update(bake_id, [&](v1::BakeInfo& b) {
-    b.set_state(v1::BAKE_STATE_SUCCEEDED);
-    b.set_finished_at(unix_now());
-    b.set_features(r.features);
-    b.set_termination(pipeline::termination_name(r.termination));
-    b.set_nonfinite_dropped(r.nonfinite_dropped);
-    v1::BakeProgress* p = b.mutable_progress();
-    p->set_elapsed_s(r.seconds);
-    p->set_paths(r.paths);
-    p->set_mean_spp(r.mean_spp);
-    p->set_min_spp(r.min_spp);
-    p->set_error(r.error);
-    p->set_eta_s(0);
-    p->set_fraction(1);
-    b.clear_artifacts();
-    for (const char* a : kArtifacts) b.add_artifacts(a);
-    for (const auto& e : r.encodings) b.add_artifacts(e.name + ".exr");
-  }, true);
+  (void)bakes_.update(
+      bake_id,
+      [&](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_SUCCEEDED);
+        b.set_finished_at(unix_now());
+        b.set_features(r.features);
+        b.set_termination(pipeline::termination_name(r.termination));
+        b.set_nonfinite_dropped(r.nonfinite_dropped);
+        v1::BakeProgress* p = b.mutable_progress();
+        p->set_elapsed_s(r.seconds);
+        p->set_paths(r.paths);
+        p->set_mean_spp(r.mean_spp);
+        p->set_min_spp(r.min_spp);
+        p->set_error(r.error);
+        p->set_eta_s(0);
+        p->set_fraction(1);
+        b.clear_artifacts();
+        for (const char* a : kArtifacts) b.add_artifacts(a);
+        for (const auto& e : r.encodings) b.add_artifacts(e.name + ".exr");
+      },
+      true);
   // Only once the record says SUCCEEDED: a crash before this line re-runs
   // the bake from the checkpoint rather than from zero.
   std::remove(ckpt_path.c_str());

@@ -38,8 +38,8 @@ namespace luxel::service {
 
 struct RunnerOptions {
   int max_concurrent_bakes = 1;
-  std::string device_spec;             // device::choose_device spec ("" = default)
-  double checkpoint_interval_s = 10;   // 0: no checkpoints
+  std::string device_spec;            // device::choose_device spec ("" = default)
+  double checkpoint_interval_s = 10;  // 0: no checkpoints
   SettingsLimits limits;
 };
 

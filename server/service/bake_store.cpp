@@ -55,8 +55,10 @@ void upgrade_settings(json& info) {
     if (!s.contains(key) || !s[key].is_string()) continue;
     const std::string v = s[key].get<std::string>();
     if (v.rfind(prefix, 0) == 0) continue;  // already an enum name
-    if (v.empty()) s.erase(key);
-    else s[key] = enum_name(prefix, v);
+    if (v.empty())
+      s.erase(key);
+    else
+      s[key] = enum_name(prefix, v);
   }
 }
 
@@ -202,10 +204,12 @@ std::vector<v1::BakeInfo> BakeStore::list(const std::vector<v1::BakeState>& stat
   {
     std::lock_guard<std::mutex> lock(mu_);
     for (const auto& [id, e] : bakes_)
-      if (states.empty() || std::find(states.begin(), states.end(), e->info.state()) != states.end())
+      if (states.empty() ||
+          std::find(states.begin(), states.end(), e->info.state()) != states.end())
         found.emplace_back(e->seq, e->info);
   }
-  std::sort(found.begin(), found.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::sort(found.begin(), found.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<v1::BakeInfo> out;
   for (auto& [seq, info] : found) out.push_back(std::move(info));
   return out;

@@ -35,7 +35,7 @@ struct BakeView {
   v1::BakeInfo info;
   uint64_t version = 0;
   std::shared_ptr<const SnapshotFrame> snapshot;  // newest, may be null
-  uint64_t snapshot_seq = 0;                       // 0: none yet
+  uint64_t snapshot_seq = 0;                      // 0: none yet
 };
 
 bool is_terminal(v1::BakeState state);
@@ -84,8 +84,12 @@ class BakeStore {
   std::map<std::string, uint64_t> count_by_state() const;
 
   std::string bake_dir(const std::string& bake_id) const { return bakes_dir_ + "/" + bake_id; }
-  std::string checkpoint_path(const std::string& bake_id) const { return bake_dir(bake_id) + "/checkpoint.bin"; }
-  std::string results_dir(const std::string& bake_id) const { return bake_dir(bake_id) + "/results"; }
+  std::string checkpoint_path(const std::string& bake_id) const {
+    return bake_dir(bake_id) + "/checkpoint.bin";
+  }
+  std::string results_dir(const std::string& bake_id) const {
+    return bake_dir(bake_id) + "/results";
+  }
 
  private:
   struct Entry {

@@ -40,35 +40,66 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args) {
       errno = 0;
       const double x = std::strtod(v.c_str(), &end);
       if (v.empty() || *end != '\0' || errno != 0 || !std::isfinite(x) || x < lo || x > hi)
-        return invalid_argument(strprintf("%s: expected a number in [%g, %g], got '%s'", k.c_str(), lo, hi, v.c_str()));
+        return invalid_argument(
+            strprintf("%s: expected a number in [%g, %g], got '%s'", k.c_str(), lo, hi, v.c_str()));
       *out = x;
       return Status::ok();
     };
     double x = 0;
-    if (k == "--help" || k == "-h") c.help = true;
-    else if (k == "--listen") { LUXEL_RETURN_IF_ERROR(value()); c.listen = v; }
-    else if (k == "--data-dir") { LUXEL_RETURN_IF_ERROR(value()); c.data_dir = v; }
-    else if (k == "--device") { LUXEL_RETURN_IF_ERROR(value()); c.device = v; }
-    else if (k == "--token") { LUXEL_RETURN_IF_ERROR(value()); c.token = v; }
-    else if (k == "--token-file") { LUXEL_RETURN_IF_ERROR(value()); token_file = v; }
-    else if (k == "--tls-cert") { LUXEL_RETURN_IF_ERROR(value()); c.tls_cert = v; }
-    else if (k == "--tls-key") { LUXEL_RETURN_IF_ERROR(value()); c.tls_key = v; }
-    else if (k == "--max-concurrent-bakes") { LUXEL_RETURN_IF_ERROR(number(1, 64, &x)); c.max_concurrent_bakes = int(x); }
-    else if (k == "--max-upload-bytes") { LUXEL_RETURN_IF_ERROR(number(1, 1e15, &x)); c.max_upload_bytes = uint64_t(x); }
-    else if (k == "--max-resolution") { LUXEL_RETURN_IF_ERROR(number(1, 65536, &x)); c.max_resolution = int(x); }
-    else if (k == "--max-queued") { LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x)); c.max_queued = size_t(x); }
-    else if (k == "--checkpoint-interval") { LUXEL_RETURN_IF_ERROR(number(0, 1e6, &x)); c.checkpoint_interval_s = x; }
-    else if (k == "--max-message-bytes") { LUXEL_RETURN_IF_ERROR(number(1024, 2147483647.0, &x)); c.max_message_bytes = int(x); }
-    else return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
+    if (k == "--help" || k == "-h")
+      c.help = true;
+    else if (k == "--listen") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.listen = v;
+    } else if (k == "--data-dir") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.data_dir = v;
+    } else if (k == "--device") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.device = v;
+    } else if (k == "--token") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.token = v;
+    } else if (k == "--token-file") {
+      LUXEL_RETURN_IF_ERROR(value());
+      token_file = v;
+    } else if (k == "--tls-cert") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.tls_cert = v;
+    } else if (k == "--tls-key") {
+      LUXEL_RETURN_IF_ERROR(value());
+      c.tls_key = v;
+    } else if (k == "--max-concurrent-bakes") {
+      LUXEL_RETURN_IF_ERROR(number(1, 64, &x));
+      c.max_concurrent_bakes = int(x);
+    } else if (k == "--max-upload-bytes") {
+      LUXEL_RETURN_IF_ERROR(number(1, 1e15, &x));
+      c.max_upload_bytes = uint64_t(x);
+    } else if (k == "--max-resolution") {
+      LUXEL_RETURN_IF_ERROR(number(1, 65536, &x));
+      c.max_resolution = int(x);
+    } else if (k == "--max-queued") {
+      LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x));
+      c.max_queued = size_t(x);
+    } else if (k == "--checkpoint-interval") {
+      LUXEL_RETURN_IF_ERROR(number(0, 1e6, &x));
+      c.checkpoint_interval_s = x;
+    } else if (k == "--max-message-bytes") {
+      LUXEL_RETURN_IF_ERROR(number(1024, 2147483647.0, &x));
+      c.max_message_bytes = int(x);
+    } else
+      return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
   }
   if (c.help) return c;
   if (c.data_dir.empty()) return invalid_argument("--data-dir: required");
-  if (c.tls_cert.empty() != c.tls_key.empty()) return invalid_argument("--tls-cert and --tls-key go together");
+  if (c.tls_cert.empty() != c.tls_key.empty())
+    return invalid_argument("--tls-cert and --tls-key go together");
   if (!token_file.empty()) {
     auto t = read_whole_file(token_file);
     if (!t) return invalid_argument("--token-file: " + t.status().message());
     c.token = t.value();
-    while (!c.token.empty() && (c.token.back() == '\n' || c.token.back() == '\r')) c.token.pop_back();
+    while (!c.token.empty() && (c.token.back() == '\n' || c.token.back() == '\r'))
+      c.token.pop_back();
     if (c.token.empty()) return invalid_argument("--token-file: " + token_file + " is empty");
   }
   return c;

@@ -11,17 +11,17 @@
 namespace luxel::service {
 
 struct DaemonConfig {
-  std::string listen = "127.0.0.1:50051";   // loopback unless told otherwise
-  std::string data_dir;                     // required
+  std::string listen = "127.0.0.1:50051";  // loopback unless told otherwise
+  std::string data_dir;                    // required
   int max_concurrent_bakes = 1;
-  std::string device;                       // OpenCL device spec ("" = LUXEL_DEVICE, then default)
-  std::string token;                        // bearer token ("" = no authentication)
-  std::string tls_cert, tls_key;            // PEM files; both or neither
+  std::string device;             // OpenCL device spec ("" = LUXEL_DEVICE, then default)
+  std::string token;              // bearer token ("" = no authentication)
+  std::string tls_cert, tls_key;  // PEM files; both or neither
   uint64_t max_upload_bytes = uint64_t{1} << 30;
   int max_resolution = 4096;
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;
-  int max_message_bytes = 16 << 20;         // largest request message accepted
+  int max_message_bytes = 16 << 20;  // largest request message accepted
   bool help = false;
 };
 

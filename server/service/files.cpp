@@ -4,13 +4,12 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
-
-#include <chrono>
 
 #include "common/atomic_file.h"
 #include "service/log.h"
@@ -30,15 +29,16 @@ Result<std::string> read_whole_file(const std::string& path) {
 
 Status rename_durable(const std::string& from, const std::string& to) {
   if (::rename(from.c_str(), to.c_str()) != 0)
-    return internal_error(strprintf("rename %s -> %s: %s", from.c_str(), to.c_str(),
-                                    std::strerror(errno)));
+    return internal_error(
+        strprintf("rename %s -> %s: %s", from.c_str(), to.c_str(), std::strerror(errno)));
   return fsync_directory(fs::path(to).parent_path().string());
 }
 
 Status make_directories(const std::string& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
-  if (ec) return internal_error(strprintf("%s: cannot create: %s", dir.c_str(), ec.message().c_str()));
+  if (ec)
+    return internal_error(strprintf("%s: cannot create: %s", dir.c_str(), ec.message().c_str()));
   return Status::ok();
 }
 

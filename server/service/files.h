@@ -6,8 +6,8 @@
 
 #include <string>
 
-#include "common/status.h"
 #include "common/atomic_file.h"
+#include "common/status.h"
 
 namespace luxel::service {
 

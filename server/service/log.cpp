@@ -1,9 +1,10 @@
 #include "service/log.h"
 
+#include <sys/time.h>
+
 #include <cstdio>
 #include <ctime>
 #include <mutex>
-#include <sys/time.h>
 
 namespace luxel::service {
 namespace {
@@ -37,7 +38,8 @@ std::string utc_timestamp() {
 
 void log_event(const char* event, std::initializer_list<LogField> fields) {
   std::string line = "ts=" + utc_timestamp() + " event=" + event;
-  for (const auto& [key, value] : fields) line += std::string(" ") + key + "=" + quote_if_needed(value);
+  for (const auto& [key, value] : fields)
+    line += std::string(" ") + key + "=" + quote_if_needed(value);
   line += '\n';
   static std::mutex mu;
   std::lock_guard<std::mutex> lock(mu);

@@ -5,10 +5,10 @@
 #include <algorithm>
 #include <fstream>
 
+#include "common/sha256.h"
 #include "luxel_version.h"
 #include "service/files.h"
 #include "service/log.h"
-#include "common/sha256.h"
 
 namespace luxel::service {
 
@@ -37,21 +37,32 @@ grpc::Status check_id(const std::string& id, const char* field, size_t length) {
 
 grpc::Status to_grpc(const Status& status) {
   switch (status.code()) {
-    case StatusCode::kOk: return grpc::Status::OK;
-    case StatusCode::kInvalidArgument: return {grpc::StatusCode::INVALID_ARGUMENT, status.message()};
-    case StatusCode::kNotFound: return {grpc::StatusCode::NOT_FOUND, status.message()};
-    case StatusCode::kDataLoss: return {grpc::StatusCode::DATA_LOSS, status.message()};
-    case StatusCode::kResourceExhausted: return {grpc::StatusCode::RESOURCE_EXHAUSTED, status.message()};
-    case StatusCode::kUnavailable: return {grpc::StatusCode::UNAVAILABLE, status.message()};
-    case StatusCode::kInternal: return {grpc::StatusCode::INTERNAL, status.message()};
+    case StatusCode::kOk:
+      return grpc::Status::OK;
+    case StatusCode::kInvalidArgument:
+      return {grpc::StatusCode::INVALID_ARGUMENT, status.message()};
+    case StatusCode::kNotFound:
+      return {grpc::StatusCode::NOT_FOUND, status.message()};
+    case StatusCode::kDataLoss:
+      return {grpc::StatusCode::DATA_LOSS, status.message()};
+    case StatusCode::kResourceExhausted:
+      return {grpc::StatusCode::RESOURCE_EXHAUSTED, status.message()};
+    case StatusCode::kUnavailable:
+      return {grpc::StatusCode::UNAVAILABLE, status.message()};
+    case StatusCode::kInternal:
+      return {grpc::StatusCode::INTERNAL, status.message()};
   }
   return {grpc::StatusCode::UNKNOWN, status.message()};
 }
 
 LuxelService::LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue,
                            BakeRunner& runner, ServiceOptions options)
-    : scenes_(scenes), bakes_(bakes), queue_(queue), runner_(runner),
-      options_(std::move(options)), started_at_(unix_now()) {}
+    : scenes_(scenes),
+      bakes_(bakes),
+      queue_(queue),
+      runner_(runner),
+      options_(std::move(options)),
+      started_at_(unix_now()) {}
 
 grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rpc) const {
   if (options_.token.empty()) return grpc::Status::OK;
@@ -62,9 +73,9 @@ grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rp
       CRYPTO_memcmp(it->second.data(), expected.data(), expected.size()) == 0)
     return grpc::Status::OK;
   log_event("unauthenticated", {{"rpc", rpc}, {"peer", ctx->peer()}});
-  return {grpc::StatusCode::UNAUTHENTICATED,
-          it == md.end() ? "missing \"authorization: Bearer <token>\" metadata"
-                         : "wrong bearer token"};
+  return {
+      grpc::StatusCode::UNAUTHENTICATED,
+      it == md.end() ? "missing \"authorization: Bearer <token>\" metadata" : "wrong bearer token"};
 }
 
 grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
@@ -73,15 +84,18 @@ grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
   if (auto st = authenticate(ctx, "UploadScene"); !st.ok()) return st;
   if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
   v1::UploadSceneRequest msg;
-  if (!reader->Read(&msg)) return {grpc::StatusCode::DATA_LOSS, "upload: stream ended before the header"};
+  if (!reader->Read(&msg))
+    return {grpc::StatusCode::DATA_LOSS, "upload: stream ended before the header"};
   if (!msg.has_header()) return invalid("upload: the first message must carry a header");
   auto upload = SceneUpload::begin(scenes_, msg.header(), options_.upload);
   if (!upload) {
-    log_event("upload_refused", {{"name", msg.header().name()}, {"error", upload.status().to_string()}});
+    log_event("upload_refused",
+              {{"name", msg.header().name()}, {"error", upload.status().to_string()}});
     return to_grpc(upload.status());
   }
   SceneUpload& up = *upload.value();
-  log_event("upload_started", {{"scene", scene_id_of(msg.header())}, {"name", msg.header().name()}});
+  log_event("upload_started",
+            {{"scene", scene_id_of(msg.header())}, {"name", msg.header().name()}});
   while (reader->Read(&msg)) {
     if (msg.has_header()) return invalid("upload: a header may only be the first message");
     const uint64_t before = up.received();
@@ -98,11 +112,13 @@ grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
   }
   auto info = up.finish();
   if (!info) {
-    log_event("upload_failed", {{"scene", scene_id_of(up.header())}, {"error", info.status().to_string()}});
+    log_event("upload_failed",
+              {{"scene", scene_id_of(up.header())}, {"error", info.status().to_string()}});
     return to_grpc(info.status());
   }
   *response = info.value();
-  log_event("scene_stored", {{"scene", info->scene_id()}, {"name", info->name()},
+  log_event("scene_stored", {{"scene", info->scene_id()},
+                             {"name", info->name()},
                              {"bytes", std::to_string(info->size())},
                              {"already_stored", info->already_stored() ? "true" : "false"}});
   return grpc::Status::OK;
@@ -158,29 +174,34 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
       return invalid(strprintf("idempotency_key '%s' was used for bake %s of another scene",
                                req->idempotency_key().c_str(), existing->bake_id().c_str()));
     *response = *existing;
-    log_event("bake_submit_retried", {{"bake", existing->bake_id()}, {"key", req->idempotency_key()}});
+    log_event("bake_submit_retried",
+              {{"bake", existing->bake_id()}, {"key", req->idempotency_key()}});
     return grpc::Status::OK;
   }
   if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
   if (!scenes_.contains(req->scene_id()))
-    return {grpc::StatusCode::NOT_FOUND, strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
+    return {grpc::StatusCode::NOT_FOUND,
+            strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
   if (const std::string& ref = req->settings().reference_bake_id(); !ref.empty()) {
     if (auto st = check_id(ref, "settings.reference_bake_id", 32); !st.ok()) return st;
     auto ref_info = bakes_.get(ref);
     if (!ref_info)
       return invalid(strprintf("settings.reference_bake_id: no bake '%s'", ref.c_str()));
     if (ref_info->state() != v1::BAKE_STATE_SUCCEEDED)
-      return invalid(strprintf("settings.reference_bake_id: bake %s is %s; a reference must have SUCCEEDED",
-                               ref.c_str(), v1::BakeState_Name(ref_info->state()).c_str()));
+      return invalid(
+          strprintf("settings.reference_bake_id: bake %s is %s; a reference must have SUCCEEDED",
+                    ref.c_str(), v1::BakeState_Name(ref_info->state()).c_str()));
   }
   if (Status st = queue_.check_room(); !st.is_ok()) return to_grpc(st);
   auto created = bakes_.create(req->scene_id(), req->settings(), req->idempotency_key());
   if (!created) return to_grpc(created.status());
   const v1::BakeInfo& info = created->info;
   if (Status st = queue_.push(info.bake_id(), info.settings().priority(),
-                              bakes_.sequence(info.bake_id()), /*force=*/true); !st.is_ok())
+                              bakes_.sequence(info.bake_id()), /*force=*/true);
+      !st.is_ok())
     return to_grpc(st);
-  log_event("bake_submitted", {{"bake", info.bake_id()}, {"scene", info.scene_id()},
+  log_event("bake_submitted", {{"bake", info.bake_id()},
+                               {"scene", info.scene_id()},
                                {"priority", std::to_string(info.settings().priority())}});
   *response = info;
   return grpc::Status::OK;
@@ -240,8 +261,11 @@ grpc::Status LuxelService::WatchBake(grpc::ServerContext* ctx, const v1::WatchBa
     *event.mutable_info() = v.info;
     if (v.snapshot && v.snapshot_seq != sent_snapshot) {
       auto encoded = v.snapshot->encoded();
-      if (encoded) *event.mutable_snapshot() = std::move(encoded.value());
-      else log_event("snapshot_encode_failed", {{"bake", req->bake_id()}, {"error", encoded.status().to_string()}});
+      if (encoded)
+        *event.mutable_snapshot() = std::move(encoded.value());
+      else
+        log_event("snapshot_encode_failed",
+                  {{"bake", req->bake_id()}, {"error", encoded.status().to_string()}});
       sent_snapshot = v.snapshot_seq;
     }
     event.set_final(final);
@@ -289,12 +313,14 @@ grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
     std::string list;
     for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
     return {grpc::StatusCode::NOT_FOUND,
-            strprintf("artifact: no artifact '%s' (have: %s)", req->artifact().substr(0, 80).c_str(),
-                      list.c_str())};
+            strprintf("artifact: no artifact '%s' (have: %s)",
+                      req->artifact().substr(0, 80).c_str(), list.c_str())};
   }
   const std::string path = bakes_.results_dir(req->bake_id()) + "/" + req->artifact();
   std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) return {grpc::StatusCode::DATA_LOSS, strprintf("artifact %s is missing on disk", req->artifact().c_str())};
+  if (!in)
+    return {grpc::StatusCode::DATA_LOSS,
+            strprintf("artifact %s is missing on disk", req->artifact().c_str())};
   const uint64_t total = static_cast<uint64_t>(in.tellg());
   in.seekg(0);
   Sha256 hash;
@@ -320,18 +346,21 @@ grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
     if (last) break;
     current = std::move(next);
   }
-  log_event("artifact_downloaded", {{"bake", req->bake_id()}, {"artifact", req->artifact()},
-                                    {"bytes", std::to_string(total)}});
+  log_event(
+      "artifact_downloaded",
+      {{"bake", req->bake_id()}, {"artifact", req->artifact()}, {"bytes", std::to_string(total)}});
   return grpc::Status::OK;
 }
 
-grpc::Status LuxelService::GetServerStatus(grpc::ServerContext* ctx, const v1::GetServerStatusRequest*,
+grpc::Status LuxelService::GetServerStatus(grpc::ServerContext* ctx,
+                                           const v1::GetServerStatusRequest*,
                                            v1::ServerStatus* response) {
   if (auto st = authenticate(ctx, "GetServerStatus"); !st.ok()) return st;
   response->set_version(std::string(LUXEL_VERSION) + " (" + LUXEL_GIT_REVISION + ")");
   response->set_device(options_.device_description);
   response->set_started_at(started_at_);
-  for (const auto& [state, n] : bakes_.count_by_state()) (*response->mutable_bakes_by_state())[state] = n;
+  for (const auto& [state, n] : bakes_.count_by_state())
+    (*response->mutable_bakes_by_state())[state] = n;
   response->set_paths_traced(runner_.paths_traced());
   response->set_upload_bytes(upload_bytes_.load());
   response->set_scenes(static_cast<uint32_t>(scenes_.size()));

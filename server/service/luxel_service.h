@@ -38,7 +38,8 @@ class LuxelService final : public v1::Luxel::Service {
   // Refuse new uploads and bakes; end open WatchBake streams.
   void begin_shutdown() { shutting_down_ = true; }
 
-  grpc::Status UploadScene(grpc::ServerContext* ctx, grpc::ServerReader<v1::UploadSceneRequest>* reader,
+  grpc::Status UploadScene(grpc::ServerContext* ctx,
+                           grpc::ServerReader<v1::UploadSceneRequest>* reader,
                            v1::SceneInfo* response) override;
   grpc::Status GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
                         v1::SceneInfo* response) override;

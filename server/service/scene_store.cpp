@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "common/scene_id.h"
+#include "common/sha256.h"
 #include "scene/scene_stats.h"
 #include "service/files.h"
 #include "service/log.h"
-#include "common/scene_id.h"
-#include "common/sha256.h"
 
 namespace luxel::service {
 
@@ -29,8 +29,10 @@ void fill_statistics(const scene::SceneStats& s, v1::SceneStatistics* out) {
   out->set_directional_lights(static_cast<uint32_t>(s.directional_lights));
   out->set_emissive_triangles(s.emissive_triangles);
   if (!s.world_bounds.empty()) {
-    for (float v : {s.world_bounds.lo.x, s.world_bounds.lo.y, s.world_bounds.lo.z}) out->add_bounds_min(v);
-    for (float v : {s.world_bounds.hi.x, s.world_bounds.hi.y, s.world_bounds.hi.z}) out->add_bounds_max(v);
+    for (float v : {s.world_bounds.lo.x, s.world_bounds.lo.y, s.world_bounds.lo.z})
+      out->add_bounds_min(v);
+    for (float v : {s.world_bounds.hi.x, s.world_bounds.hi.y, s.world_bounds.hi.z})
+      out->add_bounds_max(v);
   }
   out->set_lightmap_uv_coverage(s.lightmap_coverage);
 }
@@ -52,8 +54,7 @@ std::string scene_id_of(const v1::SceneUploadHeader& header) {
   return scene_id(header.sha256(), std::move(resources));
 }
 
-SceneStore::SceneStore(std::string data_dir, SceneCacheLimits cache,
-                       SceneCache::Importer importer)
+SceneStore::SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer)
     : scenes_dir_(data_dir + "/scenes"),
       staging_dir_(data_dir + "/staging"),
       cache_(cache, std::move(importer)) {}
@@ -76,8 +77,9 @@ Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& data_dir
     if (!is_sha256_hex(id) || !info) {
       // Cannot come from commit() (info.json is written before the rename);
       // left alone for an operator rather than deleted.
-      log_event("scene_unreadable", {{"path", entry.path().string()},
-                                     {"error", info ? "not a scene id" : info.status().to_string()}});
+      log_event("scene_unreadable",
+                {{"path", entry.path().string()},
+                 {"error", info ? "not a scene id" : info.status().to_string()}});
       continue;
     }
     info->set_already_stored(false);
@@ -110,7 +112,9 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
                                          uint64_t stored_bytes) {
   struct Cleanup {
     std::string dir;
-    ~Cleanup() { if (!dir.empty()) remove_tree(dir); }
+    ~Cleanup() {
+      if (!dir.empty()) remove_tree(dir);
+    }
   } cleanup{staging_dir};
 
   const std::string id = scene_id_of(header);
@@ -123,8 +127,8 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   if (!imported) {
     const Status& st = imported.status();
     // Whatever the importer says, the upload is what is wrong.
-    const StatusCode code = st.code() == StatusCode::kResourceExhausted ? st.code()
-                                                                        : StatusCode::kInvalidArgument;
+    const StatusCode code =
+        st.code() == StatusCode::kResourceExhausted ? st.code() : StatusCode::kInvalidArgument;
     return Status(code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
                                   st.message().c_str()));
   }
@@ -188,7 +192,8 @@ bool SceneStore::contains(const std::string& scene_id) const {
 
 Status SceneStore::remove(const std::string& scene_id) {
   std::lock_guard<std::mutex> lock(mu_);
-  if (!scenes_.count(scene_id)) return not_found(strprintf("scene_id: no scene '%s'", scene_id.c_str()));
+  if (!scenes_.count(scene_id))
+    return not_found(strprintf("scene_id: no scene '%s'", scene_id.c_str()));
   // Rename out of scenes/ first (atomic), then delete at leisure: a crash in
   // between leaves a staging folder, which the next start removes.
   const std::string doomed = staging_dir_ + "/deleted-" + random_hex_id();

@@ -21,7 +21,8 @@ Status check_resource_uri(const std::string& uri) {
   if (uri.size() > 1024) return bad("longer than 1024 characters");
   if (uri[0] == '/') return bad("absolute paths are not allowed");
   if (uri.find('\\') != std::string::npos) return bad("backslashes are not allowed");
-  if (uri.find(':') != std::string::npos) return bad("schemes (data:, file:, ...) are not uploaded");
+  if (uri.find(':') != std::string::npos)
+    return bad("schemes (data:, file:, ...) are not uploaded");
   if (uri.find('\0') != std::string::npos) return bad("NUL byte");
   size_t start = 0;
   while (start <= uri.size()) {
@@ -56,22 +57,25 @@ Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
     // (common/uri.h, as the importer reads it). Decoding first also means
     // "%2e%2e" cannot slip past the path checks below.
     auto decoded = percent_decode_uri(r.uri());
-    if (!decoded)
-      return invalid_argument("header.resources.uri: " + decoded.status().message());
+    if (!decoded) return invalid_argument("header.resources.uri: " + decoded.status().message());
     LUXEL_RETURN_IF_ERROR(check_resource_uri(decoded.value()));
     paths.push_back(decoded.value());
     if (!uris.insert(decoded.value()).second)
-      return invalid_argument(strprintf("header.resources.uri '%s': listed twice", r.uri().c_str()));
+      return invalid_argument(
+          strprintf("header.resources.uri '%s': listed twice", r.uri().c_str()));
     if (!is_sha256_hex(r.sha256()))
-      return invalid_argument(strprintf("header.resources.sha256 of '%s': expected 64 lowercase hex digits",
-                                        r.uri().c_str()));
-    if (r.size() > limits.max_upload_bytes) total = limits.max_upload_bytes + 1;
-    else total += r.size();
+      return invalid_argument(strprintf(
+          "header.resources.sha256 of '%s': expected 64 lowercase hex digits", r.uri().c_str()));
+    if (r.size() > limits.max_upload_bytes)
+      total = limits.max_upload_bytes + 1;
+    else
+      total += r.size();
   }
   if (total > limits.max_upload_bytes || header.total_size() > limits.max_upload_bytes)
-    return resource_exhausted(strprintf(
-        "upload of %llu bytes exceeds the daemon's limit --max-upload-bytes=%llu",
-        static_cast<unsigned long long>(total), static_cast<unsigned long long>(limits.max_upload_bytes)));
+    return resource_exhausted(
+        strprintf("upload of %llu bytes exceeds the daemon's limit --max-upload-bytes=%llu",
+                  static_cast<unsigned long long>(total),
+                  static_cast<unsigned long long>(limits.max_upload_bytes)));
 
   auto staging = store.new_staging_dir();
   if (!staging) return staging.status();
@@ -137,7 +141,8 @@ Status SceneUpload::write(const std::string& chunk) {
       return data_loss(strprintf("upload: more bytes than the %llu the header declares",
                                  static_cast<unsigned long long>(expected_)));
     const FileSlot& f = files_[current_];
-    const size_t n = static_cast<size_t>(std::min<uint64_t>(chunk.size() - pos, f.size - written_in_current_));
+    const size_t n =
+        static_cast<size_t>(std::min<uint64_t>(chunk.size() - pos, f.size - written_in_current_));
     out_.write(chunk.data() + pos, static_cast<std::streamsize>(n));
     hash_->update(chunk.data() + pos, n);
     pos += n;

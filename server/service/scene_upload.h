@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
+#include "common/sha256.h"
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
 #include "service/scene_store.h"
-#include "common/sha256.h"
 
 namespace luxel::service {
 
@@ -59,7 +59,7 @@ class SceneUpload {
   v1::SceneUploadHeader header_;
   std::string staging_;
   std::vector<FileSlot> files_;
-  size_t current_ = 0;           // index of the file being written
+  size_t current_ = 0;  // index of the file being written
   uint64_t written_in_current_ = 0;
   uint64_t received_ = 0, expected_ = 0;
   std::ofstream out_;

@@ -18,8 +18,9 @@ Result<v1::Snapshot> SnapshotFrame::encoded() const {
   *snap.mutable_progress() = progress_;
   if (format_ == v1::SNAPSHOT_FORMAT_EXR) {
     const std::string path = scratch_dir_ + "/snapshot-" + random_hex_id() + ".exr";
-    Status st = output::write_exr(path, image_, output::kRgbaChannels,
-                                  {{"luxel/encoding", "irradiance"}, {"luxel/snapshot", "progressive"}});
+    Status st =
+        output::write_exr(path, image_, output::kRgbaChannels,
+                          {{"luxel/encoding", "irradiance"}, {"luxel/snapshot", "progressive"}});
     auto bytes = st.is_ok() ? read_whole_file(path) : Result<std::string>(st);
     std::remove(path.c_str());
     if (!bytes) {

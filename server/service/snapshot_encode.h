@@ -22,8 +22,11 @@ class SnapshotFrame {
   // `scratch_dir` is where EXR bytes are assembled (OpenImageIO writes files).
   SnapshotFrame(output::Image image, v1::BakeProgress progress, v1::SnapshotFormat format,
                 int max_side, std::string scratch_dir)
-      : image_(std::move(image)), progress_(std::move(progress)), format_(format),
-        max_side_(max_side), scratch_dir_(std::move(scratch_dir)) {}
+      : image_(std::move(image)),
+        progress_(std::move(progress)),
+        format_(format),
+        max_side_(max_side),
+        scratch_dir_(std::move(scratch_dir)) {}
 
   // The encoded snapshot; computed once, thread-safe.
   Result<v1::Snapshot> encoded() const;

@@ -8,6 +8,8 @@
 //  3. ablations at 4 bounces: stream compaction off, ray-direction sorting on
 //     (time for the same number of paths, as a ratio to the default).
 // Scenes get a constant sky and a sun so outdoor scenes have light.
+#include "pipeline/bake.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -15,7 +17,6 @@
 #include <vector>
 
 #include "device/context.h"
-#include "pipeline/bake.h"
 #include "scene/gltf_import.h"
 
 using namespace luxel;
@@ -61,10 +62,14 @@ int main(int argc, char** argv) {
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--spp" && i + 1 < argc) spp = static_cast<uint32_t>(std::atoi(argv[++i]));
-    else if (a == "--resolution" && i + 1 < argc) resolution = std::atoi(argv[++i]);
-    else if (a == "--quick") quick = true;
-    else scenes.push_back(a);
+    if (a == "--spp" && i + 1 < argc)
+      spp = static_cast<uint32_t>(std::atoi(argv[++i]));
+    else if (a == "--resolution" && i + 1 < argc)
+      resolution = std::atoi(argv[++i]);
+    else if (a == "--quick")
+      quick = true;
+    else
+      scenes.push_back(a);
   }
   if (scenes.empty())
     scenes = {LUXEL_SCENES_DIR "/cornell_box.gltf", LUXEL_SCENES_DIR "/foliage_instanced.glb",

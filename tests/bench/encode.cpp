@@ -92,7 +92,8 @@ void check_coefficients(const std::vector<double>& b, bool non_negative, const s
 
 // The solution's coefficients, checked; NaNs (and a recorded failure) when
 // the solver returned an error.
-std::vector<double> checked(const Result<enc::Solution>& r, int n, bool non_negative, const std::string& what) {
+std::vector<double> checked(const Result<enc::Solution>& r, int n, bool non_negative,
+                            const std::string& what) {
   if (!r.is_ok()) {
     g_checks.fail(what + ": " + r.status().to_string());
     return std::vector<double>(size_t(n), NAN);
@@ -109,8 +110,8 @@ double check_value(double v, const std::string& what) {
 
 // ---- Bases.
 
-enc::SphericalBasis make_basis(enc::BasisKind kind, int lobes, float sharpness, enc::BasisDomain layout,
-                               enc::BasisDomain fit) {
+enc::SphericalBasis make_basis(enc::BasisKind kind, int lobes, float sharpness,
+                               enc::BasisDomain layout, enc::BasisDomain fit) {
   enc::BasisSpec spec;
   spec.kind = kind;
   spec.lobe_count = lobes;
@@ -132,10 +133,12 @@ enc::SphericalBasis sg_basis(int lobes, float sharpness, bool hemisphere) {
 
 // The engine's basis as the solvers' abstract basis (solvers.h), optionally
 // with the exact Gram matrix.
-enc::Basis solver_basis(const enc::SphericalBasis& basis, const std::vector<double>* gram = nullptr) {
+enc::Basis solver_basis(const enc::SphericalBasis& basis,
+                        const std::vector<double>* gram = nullptr) {
   enc::Basis s;
   s.count = basis.size();
-  s.domain = basis.spec().fit_domain == enc::BasisDomain::kSphere ? enc::Domain::kSphere : enc::Domain::kHemisphere;
+  s.domain = basis.spec().fit_domain == enc::BasisDomain::kSphere ? enc::Domain::kSphere
+                                                                  : enc::Domain::kHemisphere;
   s.evaluate = [basis](const double d[3], double* values) {
     float f[16];
     basis.evaluate(Vec3{float(d[0]), float(d[1]), float(d[2])}, f);
@@ -211,7 +214,8 @@ std::vector<double> exact_moments(const enc::SphericalBasis& basis, const EnvQua
 }
 
 // Best least-squares fit: G^-1 m with the exact Gram matrix (Eq. 7.3).
-std::vector<double> exact_least_squares(const std::vector<double>& gram, const std::vector<double>& moments,
+std::vector<double> exact_least_squares(const std::vector<double>& gram,
+                                        const std::vector<double>& moments,
                                         const std::string& what) {
   Result<std::vector<double>> x = enc::solve_spd(gram, moments);
   if (!x.is_ok()) {
@@ -251,7 +255,8 @@ double condition_number(std::vector<double> a, int n) {
         const double apr = a[size_t(p * n + r)];
         if (std::abs(apr) < 1e-300) continue;
         const double theta = (a[size_t(r * n + r)] - a[size_t(p * n + p)]) / (2.0 * apr);
-        const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+        const double t =
+            (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
         const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
         for (int k = 0; k < n; ++k) {  // columns p, r
           const double akp = a[size_t(k * n + p)], akr = a[size_t(k * n + r)];
@@ -289,7 +294,9 @@ std::string fmt(double v) {
   if (a >= 10) return strprintf("%.2f", v);
   return strprintf("%.4f", v);
 }
-std::string pct(double v) { return std::isfinite(v) ? strprintf("%.2f", 100.0 * v) : "nan"; }
+std::string pct(double v) {
+  return std::isfinite(v) ? strprintf("%.2f", 100.0 * v) : "nan";
+}
 
 struct MapData {
   EnvMap map;
@@ -299,23 +306,32 @@ struct MapData {
 // ---------------------------------------------------------------- Table A
 
 void table_a(const Config& cfg, const std::vector<MapData>& maps) {
-  std::printf("#### Table A: solvers vs sample count (Figs. 7.5 / 7.8), 12 spherical Gaussians, lambda = %.1f\n\n",
-              double(kDefaultSharpness));
   std::printf(
-      "RMSE of the reconstructed luminance against the map over the fit domain, mean over %d independent sets of\n"
-      "uniform random directions per count (the Halton column: %d Cranley-Patterson rotations of the Halton (2, 3)\n"
-      "sequence). naive = raw moments (b = c, §7.2 footnote 2); LS = discrete least squares (Gram matrix from the\n"
-      "samples); LS exact G = Eq. 7.3 with the exact Gram matrix and Monte Carlo moments; prog. = Listing 7.1 with\n"
-      "Eq. 7.15, alpha = 3, Gauss-Seidel, fp32; NNLS = Lawson-Hanson on the sample Gram matrix; prog. NNLS = §7.3.1\n"
+      "#### Table A: solvers vs sample count (Figs. 7.5 / 7.8), 12 spherical Gaussians, lambda = "
+      "%.1f\n\n",
+      double(kDefaultSharpness));
+  std::printf(
+      "RMSE of the reconstructed luminance against the map over the fit domain, mean over %d "
+      "independent sets of\n"
+      "uniform random directions per count (the Halton column: %d Cranley-Patterson rotations of "
+      "the Halton (2, 3)\n"
+      "sequence). naive = raw moments (b = c, §7.2 footnote 2); LS = discrete least squares (Gram "
+      "matrix from the\n"
+      "samples); LS exact G = Eq. 7.3 with the exact Gram matrix and Monte Carlo moments; prog. = "
+      "Listing 7.1 with\n"
+      "Eq. 7.15, alpha = 3, Gauss-Seidel, fp32; NNLS = Lawson-Hanson on the sample Gram matrix; "
+      "prog. NNLS = §7.3.1\n"
       "clamping. Floor: best fit with exact Gram matrix and exact moments.\n\n",
       cfg.trials_a, cfg.trials_a);
   for (bool hemi : {false, true}) {
     const enc::SphericalBasis basis = sg_basis(12, kDefaultSharpness, hemi);
     const std::vector<double> g_exact = enc::gram(basis);
     std::printf("**A.%d** %s\n\n", hemi ? 2 : 1,
-                hemi ? "hemisphere (§7.2.1): lobes on the hemispherical Fibonacci layout, samples, fit and RMSE over "
+                hemi ? "hemisphere (§7.2.1): lobes on the hemispherical Fibonacci layout, samples, "
+                       "fit and RMSE over "
                        "z >= 0"
-                     : "sphere: lobes on the spherical Fibonacci layout, samples, fit and RMSE over the sphere");
+                     : "sphere: lobes on the spherical Fibonacci layout, samples, fit and RMSE "
+                       "over the sphere");
     std::printf("cond(G) = %.3g (exact Gram matrix, %s)\n\n", condition_number(g_exact, 12),
                 hemi ? "quadrature" : "closed form");
     std::vector<std::string> floor_rows, rows;
@@ -327,13 +343,17 @@ void table_a(const Config& cfg, const std::vector<MapData>& maps) {
       // texel quadrature's: both must be the integral of B_i B_j.
       double max_diff = 0.0, max_diag = 0.0;
       for (int i = 0; i < 12; ++i) max_diag = std::max(max_diag, g_exact[size_t(i * 12 + i)]);
-      for (size_t k = 0; k < g_exact.size(); ++k) max_diff = std::max(max_diff, std::abs(g_exact[k] - truth.gram[k]));
+      for (size_t k = 0; k < g_exact.size(); ++k)
+        max_diff = std::max(max_diff, std::abs(g_exact[k] - truth.gram[k]));
       if (!(max_diff <= 1e-5 * max_diag))
-        g_checks.fail(strprintf("Gram matrix: gram.h and the texel quadrature differ by %.3g", max_diff));
+        g_checks.fail(
+            strprintf("Gram matrix: gram.h and the texel quadrature differ by %.3g", max_diff));
       const std::string tag = strprintf("A %s %s", md.map.name(), hemi ? "hemisphere" : "sphere");
-      const std::vector<double> best_ls = exact_least_squares(g_exact, truth.moments, tag + " best LS");
+      const std::vector<double> best_ls =
+          exact_least_squares(g_exact, truth.moments, tag + " best LS");
       const std::vector<double> best_nnls = exact_nnls(basis, g_exact, q, tag + " best NNLS");
-      floor_rows.push_back(strprintf("| %s | %s | %s | %s |", md.map.name(), fmt(truth.signal_rms()).c_str(),
+      floor_rows.push_back(strprintf("| %s | %s | %s | %s |", md.map.name(),
+                                     fmt(truth.signal_rms()).c_str(),
                                      fmt(check_value(truth.rmse(best_ls), tag)).c_str(),
                                      fmt(check_value(truth.rmse(best_nnls), tag)).c_str()));
 
@@ -343,7 +363,8 @@ void table_a(const Config& cfg, const std::vector<MapData>& maps) {
       for (int n : cfg.counts_a) {
         double sum[7] = {};
         for (int t = 0; t < cfg.trials_a; ++t) {
-          const uint64_t seed = mix_seed(cfg.seed, 0xA0 + mi, uint64_t(hemi), uint64_t(n) * 1000 + uint64_t(t));
+          const uint64_t seed =
+              mix_seed(cfg.seed, 0xA0 + mi, uint64_t(hemi), uint64_t(n) * 1000 + uint64_t(t));
           const std::vector<enc::Sample> s = sample_map(md.map, random_directions(n, seed, hemi));
           Rng rot(seed ^ 0x5bd1e995u);
           const double ou = rot.next_double(), ov = rot.next_double();
@@ -356,19 +377,23 @@ void table_a(const Config& cfg, const std::vector<MapData>& maps) {
               checked(enc::solve_progressive(plain, s, prog_ls), 12, false, w + " progressive LS"),
               checked(enc::solve_nnls(plain, s), 12, true, w + " NNLS"),
               checked(enc::solve_progressive(plain, s, prog_nn), 12, true, w + " progressive NNLS"),
-              checked(enc::solve_progressive(plain, h, prog_ls), 12, false, w + " progressive LS Halton"),
+              checked(enc::solve_progressive(plain, h, prog_ls), 12, false,
+                      w + " progressive LS Halton"),
           };
           for (int k = 0; k < 7; ++k) sum[k] += check_value(truth.rmse(b[k]), w) / cfg.trials_a;
         }
         rows.push_back(strprintf("| %s | %d | %s | %s | %s | %s | %s | %s | %s |", md.map.name(), n,
-                                 fmt(sum[0]).c_str(), fmt(sum[1]).c_str(), fmt(sum[2]).c_str(), fmt(sum[3]).c_str(),
-                                 fmt(sum[4]).c_str(), fmt(sum[5]).c_str(), fmt(sum[6]).c_str()));
+                                 fmt(sum[0]).c_str(), fmt(sum[1]).c_str(), fmt(sum[2]).c_str(),
+                                 fmt(sum[3]).c_str(), fmt(sum[4]).c_str(), fmt(sum[5]).c_str(),
+                                 fmt(sum[6]).c_str()));
       }
     }
-    std::printf("| map | signal RMS | floor: best LS fit | floor: best NNLS fit |\n|---|---:|---:|---:|\n");
+    std::printf(
+        "| map | signal RMS | floor: best LS fit | floor: best NNLS fit |\n|---|---:|---:|---:|\n");
     for (const std::string& r : floor_rows) std::printf("%s\n", r.c_str());
     std::printf(
-        "\n| map | samples | naive | LS | LS exact G | prog. LS | NNLS | prog. NNLS | prog. LS Halton |\n"
+        "\n| map | samples | naive | LS | LS exact G | prog. LS | NNLS | prog. NNLS | prog. LS "
+        "Halton |\n"
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
     for (const std::string& r : rows) std::printf("%s\n", r.c_str());
     std::printf("\n");
@@ -386,13 +411,18 @@ struct BasisCase {
 void table_b(const Config& cfg, const std::vector<MapData>& maps) {
   std::printf("#### Table B: diffuse irradiance from radiance coefficients (§7.4, §8.4.1)\n\n");
   std::printf(
-      "Relative RMSE (%%) of E(n) over %d Fibonacci normals: sqrt(mean (E_rec - E)^2) / mean E, E by quadrature of\n"
-      "the map. exact = best fit with the exact Gram matrix and moments (LS rows: least squares, SH: exact projection;\n"
+      "Relative RMSE (%%) of E(n) over %d Fibonacci normals: sqrt(mean (E_rec - E)^2) / mean E, E "
+      "by quadrature of\n"
+      "the map. exact = best fit with the exact Gram matrix and moments (LS rows: least squares, "
+      "SH: exact projection;\n"
       "NNLS row: non-negative least squares). Sampled columns:\n"
-      "mean over %d sets of %d and %d sets of %d uniform directions. SH: projection (G = I); SG / Ambient Dice: full\n"
-      "LS (sample Gram matrix), progressive LS and progressive NNLS (alpha = 3). SG lambda = %.1f, irradiance by Hill's fit; Ambient Dice by\n"
+      "mean over %d sets of %d and %d sets of %d uniform directions. SH: projection (G = I); SG / "
+      "Ambient Dice: full\n"
+      "LS (sample Gram matrix), progressive LS and progressive NNLS (alpha = 3). SG lambda = %.1f, "
+      "irradiance by Hill's fit; Ambient Dice by\n"
       "Eq. 8.14/8.15. Coefficients per colour channel in brackets.\n\n",
-      cfg.normals, cfg.b_low_trials, cfg.b_low, cfg.b_high_trials, cfg.b_high, double(kDefaultSharpness));
+      cfg.normals, cfg.b_low_trials, cfg.b_low, cfg.b_high_trials, cfg.b_high,
+      double(kDefaultSharpness));
   using enc::BasisDomain;
   using enc::BasisKind;
   const BasisDomain S = BasisDomain::kSphere, H = BasisDomain::kHemisphere;
@@ -411,13 +441,17 @@ void table_b(const Config& cfg, const std::vector<MapData>& maps) {
                {"SG 9 hemi", sg_basis(9, kDefaultSharpness, true), false},
                {"Ambient Dice 9", make_basis(BasisKind::kAmbientDice, 9, 0, S, H), false}};
     }
-    std::printf("**B.%d** %s\n\n", upper ? 2 : 1,
-                upper ? "a texel facing +z: radiance below the horizon is zero, normals on the hemisphere z >= 0 "
-                        "only, samples uniform on z >= 0. Sphere-domain bases add a zero sample opposite each sample "
-                        "(end of §7.3.1); SG 9 hemi and Ambient Dice 9 (§8.3.1) fit over the hemisphere."
-                      : "whole map: normals and samples over the whole sphere");
+    std::printf(
+        "**B.%d** %s\n\n", upper ? 2 : 1,
+        upper ? "a texel facing +z: radiance below the horizon is zero, normals on the hemisphere "
+                "z >= 0 "
+                "only, samples uniform on z >= 0. Sphere-domain bases add a zero sample opposite "
+                "each sample "
+                "(end of §7.3.1); SG 9 hemi and Ambient Dice 9 (§8.3.1) fit over the hemisphere."
+              : "whole map: normals and samples over the whole sphere");
     std::printf("| basis | solver |");
-    for (const MapData& md : maps) std::printf(" %s exact | %d | %d |", md.map.name(), cfg.b_low, cfg.b_high);
+    for (const MapData& md : maps)
+      std::printf(" %s exact | %d | %d |", md.map.name(), cfg.b_low, cfg.b_high);
     std::printf("\n|---|---|");
     for (size_t i = 0; i < maps.size(); ++i) std::printf("---:|---:|---:|");
     std::printf("\n");
@@ -458,9 +492,8 @@ void table_b(const Config& cfg, const std::vector<MapData>& maps) {
       }
       return std::sqrt(sum / double(ns.size())) / (mean / double(ns.size()));
     };
-    auto diffuse_error = [&](const enc::SphericalBasis& basis, const std::vector<double>& b, size_t mi) {
-      return relative_error(basis, b, normals, truth[mi]);
-    };
+    auto diffuse_error = [&](const enc::SphericalBasis& basis, const std::vector<double>& b,
+                             size_t mi) { return relative_error(basis, b, normals, truth[mi]); };
     std::vector<std::string> rows45;
 
     for (const BasisCase& bc : cases) {
@@ -470,27 +503,33 @@ void table_b(const Config& cfg, const std::vector<MapData>& maps) {
       const bool mirror = upper && sphere_fit;  // zero samples below the horizon
       const int solvers = bc.sh ? 1 : 3;
       for (int sv = 0; sv < solvers; ++sv) {
-        const char* solver_name = bc.sh ? "projection" : (sv == 0 ? "LS" : (sv == 1 ? "prog. LS" : "prog. NNLS"));
+        const char* solver_name =
+            bc.sh ? "projection" : (sv == 0 ? "LS" : (sv == 1 ? "prog. LS" : "prog. NNLS"));
         std::printf("| %s [%d] | %s |", bc.label.c_str(), bc.basis.size(), solver_name);
         for (size_t mi = 0; mi < maps.size(); ++mi) {
           const MapData& md = maps[mi];
-          const std::string tag = strprintf("B %s %s %s", md.map.name(), bc.label.c_str(), solver_name);
+          const std::string tag =
+              strprintf("B %s %s %s", md.map.name(), bc.label.c_str(), solver_name);
           const std::vector<double> m = exact_moments(bc.basis, upper ? md.upper : md.sphere);
           const EnvQuadrature& q = upper ? md.upper : md.sphere;
-          const std::vector<double> best = bc.sh    ? m
-                                           : sv < 2 ? exact_least_squares(g_exact, m, tag + " exact")
-                                                    : exact_nnls(bc.basis, g_exact, q, tag + " exact");
+          const std::vector<double> best = bc.sh ? m
+                                           : sv < 2
+                                               ? exact_least_squares(g_exact, m, tag + " exact")
+                                               : exact_nnls(bc.basis, g_exact, q, tag + " exact");
           std::printf(" %s |", pct(check_value(diffuse_error(bc.basis, best, mi), tag)).c_str());
           if (upper && sv == 0) {
-            if (mi == 0) rows45.push_back(strprintf("| %s [%d] |", bc.label.c_str(), bc.basis.size()));
-            rows45.back() += strprintf(" %s |", pct(relative_error(bc.basis, best, normals45, truth45[mi])).c_str());
+            if (mi == 0)
+              rows45.push_back(strprintf("| %s [%d] |", bc.label.c_str(), bc.basis.size()));
+            rows45.back() += strprintf(
+                " %s |", pct(relative_error(bc.basis, best, normals45, truth45[mi])).c_str());
           }
           for (int which = 0; which < 2; ++which) {
             const int n = which == 0 ? cfg.b_low : cfg.b_high;
             const int trials = which == 0 ? cfg.b_low_trials : cfg.b_high_trials;
             double err = 0.0;
             for (int t = 0; t < trials; ++t) {
-              const uint64_t seed = mix_seed(cfg.seed, 0xB0 + mi, uint64_t(upper), uint64_t(n) * 1000 + uint64_t(t));
+              const uint64_t seed =
+                  mix_seed(cfg.seed, 0xB0 + mi, uint64_t(upper), uint64_t(n) * 1000 + uint64_t(t));
               std::vector<enc::Sample> s = sample_map(md.map, random_directions(n, seed, upper));
               if (mirror) {
                 // A zero sample right after each true one (interleaved: the
@@ -510,9 +549,11 @@ void table_b(const Config& cfg, const std::vector<MapData>& maps) {
               } else if (sv == 0) {
                 b = checked(enc::solve_least_squares(sb, s), bc.basis.size(), false, w);
               } else if (sv == 1) {
-                b = checked(enc::solve_progressive(sb, s, {3.0f, false, true}), bc.basis.size(), false, w);
+                b = checked(enc::solve_progressive(sb, s, {3.0f, false, true}), bc.basis.size(),
+                            false, w);
               } else {
-                b = checked(enc::solve_progressive(sb, s, {3.0f, true, true}), bc.basis.size(), true, w);
+                b = checked(enc::solve_progressive(sb, s, {3.0f, true, true}), bc.basis.size(),
+                            true, w);
               }
               err += check_value(diffuse_error(bc.basis, b, mi), w) / trials;
             }
@@ -525,7 +566,8 @@ void table_b(const Config& cfg, const std::vector<MapData>& maps) {
     std::printf("\n");
     if (upper) {
       std::printf(
-          "**B.3** the same texel, best fits only, %zu normals within 45 degrees of +z (the range normal maps\n"
+          "**B.3** the same texel, best fits only, %zu normals within 45 degrees of +z (the range "
+          "normal maps\n"
           "usually perturb a normal in)\n\n| basis |",
           normals45.size());
       for (const MapData& md : maps) std::printf(" %s exact |", md.map.name());
@@ -550,10 +592,13 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
     const enc::Basis sb = solver_basis(basis);
     std::printf(
         "**C.1** sample order (Fig. 7.6): 12 SG (lambda %.1f) over the sphere, %d samples\n\n"
-        "Progressive LS against the full LS solve on the same samples; distance = function-space RMS of the\n"
-        "difference / signal RMS. Hammersley: the set in index order (u1 = (i + 0.5) / N sweeps pole to pole);\n"
+        "Progressive LS against the full LS solve on the same samples; distance = function-space "
+        "RMS of the\n"
+        "difference / signal RMS. Hammersley: the set in index order (u1 = (i + 0.5) / N sweeps "
+        "pole to pole);\n"
         "random: one uniform random stream; Halton: the plain (2, 3) sequence.\n\n"
-        "| map | order | full LS RMSE | prog. LS RMSE | prog. vs full (rel.) | prog. running residual |\n"
+        "| map | order | full LS RMSE | prog. LS RMSE | prog. vs full (rel.) | prog. running "
+        "residual |\n"
         "|---|---|---:|---:|---:|---:|\n",
         double(kDefaultSharpness), cfg.c_count);
     for (size_t mi = 0; mi < maps.size(); ++mi) {
@@ -562,24 +607,29 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
       for (int order = 0; order < 3; ++order) {
         const char* name = order == 0 ? "Hammersley" : (order == 1 ? "random" : "Halton");
         const std::vector<Vec3> dirs =
-            order == 0 ? hammersley_directions(cfg.c_count, false)
-                       : (order == 1 ? random_directions(cfg.c_count, mix_seed(cfg.seed, 0xC1, mi), false)
-                                     : halton_directions(cfg.c_count, false));
+            order == 0
+                ? hammersley_directions(cfg.c_count, false)
+                : (order == 1 ? random_directions(cfg.c_count, mix_seed(cfg.seed, 0xC1, mi), false)
+                              : halton_directions(cfg.c_count, false));
         const std::vector<enc::Sample> s = sample_map(md.map, dirs);
         const std::string w = strprintf("C.1 %s %s", md.map.name(), name);
-        const std::vector<double> ls = checked(enc::solve_least_squares(sb, s), 12, false, w + " LS");
+        const std::vector<double> ls =
+            checked(enc::solve_least_squares(sb, s), 12, false, w + " LS");
         // Through the encoder itself for its running residual.
         enc::ProgressiveEncoder encoder(12, prog_ls);
         std::vector<float> v(12);
         for (const enc::Sample& x : s) {
-          basis.evaluate(Vec3{float(x.direction[0]), float(x.direction[1]), float(x.direction[2])}, v.data());
+          basis.evaluate(Vec3{float(x.direction[0]), float(x.direction[1]), float(x.direction[2])},
+                         v.data());
           encoder.add_sample(v, float(x.value));
         }
         const std::vector<double> prog(encoder.amplitudes().begin(), encoder.amplitudes().end());
         check_coefficients(prog, false, w + " progressive LS");
-        std::printf("| %s | %s | %s | %s | %s | %s |\n", md.map.name(), name, fmt(truth.rmse(ls)).c_str(),
-                    fmt(truth.rmse(prog)).c_str(), fmt(truth.distance(prog, ls) / truth.signal_rms()).c_str(),
-                    fmt(check_value(encoder.running_residual_rms(), w + " running residual")).c_str());
+        std::printf(
+            "| %s | %s | %s | %s | %s | %s |\n", md.map.name(), name, fmt(truth.rmse(ls)).c_str(),
+            fmt(truth.rmse(prog)).c_str(),
+            fmt(truth.distance(prog, ls) / truth.signal_rms()).c_str(),
+            fmt(check_value(encoder.running_residual_rms(), w + " running residual")).c_str());
       }
     }
     std::printf("\n");
@@ -589,9 +639,12 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
   {
     std::printf(
         "**C.2** wide lobes: 12 SG over the sphere, %d uniform random samples\n\n"
-        "cond(G) of the exact (closed-form) Gram matrix; ridge = regularisation the full LS needed (relative to\n"
-        "mean diag G, 0 = none); distance = function-space RMS of prog. LS - full LS over the signal RMS.\n\n"
-        "| lambda | cond(G) | map | floor | LS RMSE | ridge | prog. LS RMSE | prog. vs LS (rel.) | NNLS RMSE | "
+        "cond(G) of the exact (closed-form) Gram matrix; ridge = regularisation the full LS needed "
+        "(relative to\n"
+        "mean diag G, 0 = none); distance = function-space RMS of prog. LS - full LS over the "
+        "signal RMS.\n\n"
+        "| lambda | cond(G) | map | floor | LS RMSE | ridge | prog. LS RMSE | prog. vs LS (rel.) | "
+        "NNLS RMSE | "
         "prog. NNLS RMSE |\n|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|\n",
         cfg.c_count);
     for (float lambda : {0.5f, 1.0f, kDefaultSharpness}) {
@@ -610,15 +663,18 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
             sample_map(md.map, random_directions(cfg.c_count, mix_seed(cfg.seed, 0xC2, mi), false));
         const Result<enc::Solution> ls_r = enc::solve_least_squares(sb, s);
         const std::vector<double> ls = checked(ls_r, 12, false, w + " LS");
-        const std::vector<double> prog = checked(enc::solve_progressive(sb, s, prog_ls), 12, false, w + " prog LS");
+        const std::vector<double> prog =
+            checked(enc::solve_progressive(sb, s, prog_ls), 12, false, w + " prog LS");
         const std::vector<double> nnls = checked(enc::solve_nnls(sb, s), 12, true, w + " NNLS");
-        const std::vector<double> prog_n = checked(enc::solve_progressive(sb, s, prog_nn), 12, true, w + " prog NNLS");
+        const std::vector<double> prog_n =
+            checked(enc::solve_progressive(sb, s, prog_nn), 12, true, w + " prog NNLS");
         const double ridge = ls_r.is_ok() ? ls_r->regularization / mean_diag : NAN;
-        std::printf("| %.1f | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", double(lambda), fmt(cond).c_str(),
-                    md.map.name(), fmt(truth.rmse(best)).c_str(), fmt(truth.rmse(ls)).c_str(),
-                    ridge == 0.0 ? "0" : fmt(ridge).c_str(), fmt(truth.rmse(prog)).c_str(),
-                    fmt(truth.distance(prog, ls) / truth.signal_rms()).c_str(), fmt(truth.rmse(nnls)).c_str(),
-                    fmt(truth.rmse(prog_n)).c_str());
+        std::printf("| %.1f | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", double(lambda),
+                    fmt(cond).c_str(), md.map.name(), fmt(truth.rmse(best)).c_str(),
+                    fmt(truth.rmse(ls)).c_str(), ridge == 0.0 ? "0" : fmt(ridge).c_str(),
+                    fmt(truth.rmse(prog)).c_str(),
+                    fmt(truth.distance(prog, ls) / truth.signal_rms()).c_str(),
+                    fmt(truth.rmse(nnls)).c_str(), fmt(truth.rmse(prog_n)).c_str());
       }
     }
     std::printf("\n");
@@ -631,11 +687,16 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
       if (md.map.kind() == EnvMapKind::kSunny) sunny = &md;
     if (!sunny) return;
     std::printf(
-        "**C.3** high dynamic range: the sunny map, 12 SG (lambda %.1f), one uniform random stream\n\n"
-        "The progressive encoders (fp32) see the samples once, in order; the full solves use the same prefix.\n"
-        "sun = samples that hit the sun disc (luminance > 1000); running = ProgressiveEncoder::running_residual_rms;\n"
-        "sample residual = the full solve's RMS residual on the samples; distance = function-space RMS of\n"
-        "progressive - full over the domain (absolute; the signal RMS is in the caption of each block).\n\n",
+        "**C.3** high dynamic range: the sunny map, 12 SG (lambda %.1f), one uniform random "
+        "stream\n\n"
+        "The progressive encoders (fp32) see the samples once, in order; the full solves use the "
+        "same prefix.\n"
+        "sun = samples that hit the sun disc (luminance > 1000); running = "
+        "ProgressiveEncoder::running_residual_rms;\n"
+        "sample residual = the full solve's RMS residual on the samples; distance = function-space "
+        "RMS of\n"
+        "progressive - full over the domain (absolute; the signal RMS is in the caption of each "
+        "block).\n\n",
         double(kDefaultSharpness));
     for (bool hemi : {true, false}) {
       const enc::SphericalBasis basis = sg_basis(12, kDefaultSharpness, hemi);
@@ -643,21 +704,25 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
       const Truth truth = make_truth(basis, hemi ? sunny->upper : sunny->sphere);
       std::printf("%s (signal RMS %s, floor %s):\n\n", hemi ? "hemisphere z >= 0" : "sphere",
                   fmt(truth.signal_rms()).c_str(),
-                  fmt(truth.rmse(exact_least_squares(enc::gram(basis), truth.moments, "C.3 best"))).c_str());
+                  fmt(truth.rmse(exact_least_squares(enc::gram(basis), truth.moments, "C.3 best")))
+                      .c_str());
       std::printf(
-          "| samples | sun | prog. LS running | LS sample residual | prog. LS vs LS | prog. LS RMSE | LS RMSE | "
-          "prog. NNLS running | NNLS sample residual | prog. NNLS vs NNLS | prog. NNLS RMSE | NNLS RMSE |\n"
+          "| samples | sun | prog. LS running | LS sample residual | prog. LS vs LS | prog. LS "
+          "RMSE | LS RMSE | "
+          "prog. NNLS running | NNLS sample residual | prog. NNLS vs NNLS | prog. NNLS RMSE | NNLS "
+          "RMSE |\n"
           "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
       const int total = cfg.c_snapshots.back();
-      const std::vector<enc::Sample> s =
-          sample_map(sunny->map, random_directions(total, mix_seed(cfg.seed, 0xC3, uint64_t(hemi)), hemi));
+      const std::vector<enc::Sample> s = sample_map(
+          sunny->map, random_directions(total, mix_seed(cfg.seed, 0xC3, uint64_t(hemi)), hemi));
       enc::ProgressiveEncoder enc_ls(12, prog_ls), enc_nn(12, prog_nn);
       std::vector<float> v(12);
       int sun_hits = 0;
       size_t next = 0;
       for (int k = 0; k < total; ++k) {
         const enc::Sample& x = s[size_t(k)];
-        basis.evaluate(Vec3{float(x.direction[0]), float(x.direction[1]), float(x.direction[2])}, v.data());
+        basis.evaluate(Vec3{float(x.direction[0]), float(x.direction[1]), float(x.direction[2])},
+                       v.data());
         enc_ls.add_sample(v, float(x.value));
         enc_nn.add_sample(v, float(x.value));
         if (x.value > 1000.0) ++sun_hits;
@@ -673,13 +738,15 @@ void table_c(const Config& cfg, const std::vector<MapData>& maps) {
           const Result<enc::Solution> nn_r = enc::solve_nnls(sb, prefix);
           const std::vector<double> ls = checked(ls_r, 12, false, w + " LS");
           const std::vector<double> nn = checked(nn_r, 12, true, w + " NNLS");
-          std::printf("| %d | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", n, sun_hits,
-                      fmt(check_value(enc_ls.running_residual_rms(), w)).c_str(),
-                      fmt(ls_r.is_ok() ? ls_r->residual_rms : NAN).c_str(), fmt(truth.distance(pl, ls)).c_str(),
-                      fmt(truth.rmse(pl)).c_str(), fmt(truth.rmse(ls)).c_str(),
+          std::printf("| %d | %d | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", n,
+                      sun_hits, fmt(check_value(enc_ls.running_residual_rms(), w)).c_str(),
+                      fmt(ls_r.is_ok() ? ls_r->residual_rms : NAN).c_str(),
+                      fmt(truth.distance(pl, ls)).c_str(), fmt(truth.rmse(pl)).c_str(),
+                      fmt(truth.rmse(ls)).c_str(),
                       fmt(check_value(enc_nn.running_residual_rms(), w)).c_str(),
-                      fmt(nn_r.is_ok() ? nn_r->residual_rms : NAN).c_str(), fmt(truth.distance(pn, nn)).c_str(),
-                      fmt(truth.rmse(pn)).c_str(), fmt(truth.rmse(nn)).c_str());
+                      fmt(nn_r.is_ok() ? nn_r->residual_rms : NAN).c_str(),
+                      fmt(truth.distance(pn, nn)).c_str(), fmt(truth.rmse(pn)).c_str(),
+                      fmt(truth.rmse(nn)).c_str());
           ++next;
         }
       }
@@ -721,12 +788,15 @@ int main(int argc, char** argv) {
   }
   const auto t0 = std::chrono::steady_clock::now();
 
-  std::printf("bench_encode%s, seed %llu\n\n", cfg.quick ? " --quick" : "", (unsigned long long)cfg.seed);
+  std::printf("bench_encode%s, seed %llu\n\n", cfg.quick ? " --quick" : "",
+              (unsigned long long)cfg.seed);
   std::printf("machine: %s\n\n", describe(machine_info()).c_str());
   std::vector<MapData> maps;
   std::printf(
-      "Environment maps: %d x %d equirectangular texels (area averages of %d x %d analytic samples), nearest lookup;\n"
-      "quadrature %d x %d Gauss-Legendre points per texel.\n\n| map | min luminance | max luminance | dynamic range | "
+      "Environment maps: %d x %d equirectangular texels (area averages of %d x %d analytic "
+      "samples), nearest lookup;\n"
+      "quadrature %d x %d Gauss-Legendre points per texel.\n\n| map | min luminance | max "
+      "luminance | dynamic range | "
       "mean luminance (sphere) |\n|---|---:|---:|---:|---:|\n",
       cfg.width, cfg.height, cfg.supersample, cfg.supersample, cfg.quad_q, cfg.quad_q);
   for (EnvMapKind kind : EnvMap::all_kinds()) {
@@ -734,14 +804,16 @@ int main(int argc, char** argv) {
     md.sphere = EnvQuadrature::build(md.map, false, cfg.quad_q);
     md.upper = EnvQuadrature::build(md.map, true, cfg.quad_q);
     double mean = 0.0;
-    for (size_t k = 0; k < md.sphere.weights.size(); ++k) mean += md.sphere.weights[k] * md.sphere.values[k];
+    for (size_t k = 0; k < md.sphere.weights.size(); ++k)
+      mean += md.sphere.weights[k] * md.sphere.values[k];
     mean /= md.sphere.area;
     if (std::abs(md.sphere.area - 4.0 * kPi) > 1e-9 || std::abs(md.upper.area - 2.0 * kPi) > 1e-9)
-      g_checks.fail(strprintf("%s: quadrature weights sum to %.12g / %.12g", md.map.name(), md.sphere.area,
-                              md.upper.area));
+      g_checks.fail(strprintf("%s: quadrature weights sum to %.12g / %.12g", md.map.name(),
+                              md.sphere.area, md.upper.area));
     std::printf("| %s | %s | %s | %s | %s |\n", md.map.name(), fmt(md.map.min_luminance()).c_str(),
                 fmt(md.map.max_luminance()).c_str(),
-                fmt(double(md.map.max_luminance()) / double(md.map.min_luminance())).c_str(), fmt(mean).c_str());
+                fmt(double(md.map.max_luminance()) / double(md.map.min_luminance())).c_str(),
+                fmt(mean).c_str());
     maps.push_back(std::move(md));
   }
   std::printf("\n");
@@ -750,8 +822,11 @@ int main(int argc, char** argv) {
   table_b(cfg, maps);
   table_c(cfg, maps);
 
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("checks: %ld solutions, %ld failures; %.1f s\n", g_checks.solutions, g_checks.failures, seconds);
-  for (const std::string& m : g_checks.messages) std::fprintf(stderr, "bench_encode: FAILED %s\n", m.c_str());
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("checks: %ld solutions, %ld failures; %.1f s\n", g_checks.solutions,
+              g_checks.failures, seconds);
+  for (const std::string& m : g_checks.messages)
+    std::fprintf(stderr, "bench_encode: FAILED %s\n", m.c_str());
   return g_checks.failures == 0 ? 0 : 1;
 }

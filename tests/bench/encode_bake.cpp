@@ -45,13 +45,16 @@ std::vector<Vec3> texel_normals(const scene::Scene& s, const atlas::SampleInfo& 
     const scene::Mesh& m = s.meshes[size_t(inst.mesh)];
     Vec3 v[3];
     for (int k = 0; k < 3; ++k)
-      v[k] = transform_point(inst.object_to_world, m.positions[m.indices[p.triangle * 3 + uint32_t(k)]]);
+      v[k] = transform_point(inst.object_to_world,
+                             m.positions[m.indices[p.triangle * 3 + uint32_t(k)]]);
     n[t] = normalize(cross(v[1] - v[0], v[2] - v[0]));
   }
   return n;
 }
 
-double luminance(const float* rgb) { return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]; }
+double luminance(const float* rgb) {
+  return 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+}
 
 struct Error {
   double rel_rmse = 0;  // sqrt(mean (x - ref)^2) / mean ref, luminance
@@ -83,11 +86,16 @@ int main(int argc, char** argv) {
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--spp" && i + 1 < argc) spp = uint32_t(std::atoi(argv[++i]));
-    else if (a == "--reference-spp" && i + 1 < argc) ref_spp = uint32_t(std::atoi(argv[++i]));
-    else if (a == "--resolution" && i + 1 < argc) resolution = std::atoi(argv[++i]);
-    else if (a == "--quick") quick = true;
-    else scenes.push_back(a);
+    if (a == "--spp" && i + 1 < argc)
+      spp = uint32_t(std::atoi(argv[++i]));
+    else if (a == "--reference-spp" && i + 1 < argc)
+      ref_spp = uint32_t(std::atoi(argv[++i]));
+    else if (a == "--resolution" && i + 1 < argc)
+      resolution = std::atoi(argv[++i]);
+    else if (a == "--quick")
+      quick = true;
+    else
+      scenes.push_back(a);
   }
   if (quick) {
     spp = 16;
@@ -105,7 +113,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("device: %s\n", ctx.value()->info().describe().c_str());
-  const std::vector<std::string> names = {"sh1", "sh2", "sg9", "sg12", "sg12-hemi", "ambient-dice9", "ambient-dice12"};
+  const std::vector<std::string> names = {"sh1",       "sh2",           "sg9",           "sg12",
+                                          "sg12-hemi", "ambient-dice9", "ambient-dice12"};
   int failures = 0;
 
   for (const auto& path : scenes) {
@@ -136,16 +145,20 @@ int main(int argc, char** argv) {
     all.encodings.names = names;
     const pipeline::BakeResult enc = must(pipeline::bake(s, all, *ctx.value()));
     auto atlas = atlas::build_atlas(s, all.atlas);
-    auto info = atlas ? atlas::build_sample_info(s, atlas.value()) : Result<atlas::SampleInfo>(atlas.status());
+    auto info = atlas ? atlas::build_sample_info(s, atlas.value())
+                      : Result<atlas::SampleInfo>(atlas.status());
     if (!info) return 1;
     const std::vector<Vec3> normals = texel_normals(s, info.value());
 
-    std::printf("\n%s, %dx%d, %zu covered texels, 3 bounces, sky + sun; reference: irradiance "
-                "only, %u spp (its own error estimate %.4f)\n\n",
-                path.substr(path.find_last_of('/') + 1).c_str(), enc.width, enc.height,
-                enc.covered_texels, ref_spp, ref.error);
-    std::printf("| encoding (%u spp) | diffuse rel. RMSE vs reference | device state bytes/texel | "
-                "file floats/texel | running residual |\n|---|---:|---:|---:|---:|\n", spp);
+    std::printf(
+        "\n%s, %dx%d, %zu covered texels, 3 bounces, sky + sun; reference: irradiance "
+        "only, %u spp (its own error estimate %.4f)\n\n",
+        path.substr(path.find_last_of('/') + 1).c_str(), enc.width, enc.height, enc.covered_texels,
+        ref_spp, ref.error);
+    std::printf(
+        "| encoding (%u spp) | diffuse rel. RMSE vs reference | device state bytes/texel | "
+        "file floats/texel | running residual |\n|---|---:|---:|---:|---:|\n",
+        spp);
     const Error own = compare(ref, [&](size_t t) { return luminance(&enc.irradiance[t * 4]); });
     std::printf("| irradiance channel of the same bake | %.4f | 44 | 4 | - |\n", own.rel_rmse);
     for (const auto& e : enc.encodings) {
@@ -162,9 +175,10 @@ int main(int argc, char** argv) {
         return luminance(rgb);
       });
       if (!std::isfinite(err.rel_rmse)) ++failures;
-      const std::string residual = e.name.rfind("sh", 0) == 0 ? "- (projection)" : strprintf("%.4g", e.residual_rms);
-      std::printf("| %s | %.4f | %d | %d | %s |\n", e.name.c_str(), err.rel_rmse, (e.count + 1) * 16,
-                  e.count * 3, residual.c_str());
+      const std::string residual =
+          e.name.rfind("sh", 0) == 0 ? "- (projection)" : strprintf("%.4g", e.residual_rms);
+      std::printf("| %s | %.4f | %d | %d | %s |\n", e.name.c_str(), err.rel_rmse,
+                  (e.count + 1) * 16, e.count * 3, residual.c_str());
     }
 
     // Bake-time overhead of each encoding on its own: every configuration
@@ -193,12 +207,16 @@ int main(int argc, char** argv) {
         best[i] = std::min(best[i], r.seconds);
         best_acc[i] = std::min(best_acc[i], accumulate_ms(r));
       }
-    std::printf("\n| configuration (%u spp, fastest of %d) | seconds | ratio to irradiance only | "
-                "accumulate ms |\n|---|---:|---:|---:|\n", spp, quick ? 1 : 3);
+    std::printf(
+        "\n| configuration (%u spp, fastest of %d) | seconds | ratio to irradiance only | "
+        "accumulate ms |\n|---|---:|---:|---:|\n",
+        spp, quick ? 1 : 3);
     for (size_t i = 0; i < configs.size(); ++i) {
-      const std::string label = configs[i].empty() ? "irradiance only"
-                                : configs[i].size() == 1 ? "+ " + configs[i][0] : "+ all seven";
-      std::printf("| %s | %.2f | %.2f | %.1f |\n", label.c_str(), best[i], best[i] / best[0], best_acc[i]);
+      const std::string label = configs[i].empty()       ? "irradiance only"
+                                : configs[i].size() == 1 ? "+ " + configs[i][0]
+                                                         : "+ all seven";
+      std::printf("| %s | %.2f | %.2f | %.1f |\n", label.c_str(), best[i], best[i] / best[0],
+                  best_acc[i]);
     }
   }
   return failures == 0 ? 0 : 1;

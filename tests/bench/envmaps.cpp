@@ -15,11 +15,19 @@ Vec3 from_elevation_azimuth(double elevation_deg, double azimuth_deg) {
   return {float(std::cos(e) * std::cos(a)), float(std::cos(e) * std::sin(a)), float(std::sin(e))};
 }
 
-Rgb scale(Rgb c, double s) { return {float(c.r * s), float(c.g * s), float(c.b * s)}; }
-Rgb add(Rgb a, Rgb b) { return {a.r + b.r, a.g + b.g, a.b + b.b}; }
-Rgb mix(Rgb a, Rgb b, double t) { return add(scale(a, 1.0 - t), scale(b, t)); }
+Rgb scale(Rgb c, double s) {
+  return {float(c.r * s), float(c.g * s), float(c.b * s)};
+}
+Rgb add(Rgb a, Rgb b) {
+  return {a.r + b.r, a.g + b.g, a.b + b.b};
+}
+Rgb mix(Rgb a, Rgb b, double t) {
+  return add(scale(a, 1.0 - t), scale(b, t));
+}
 // Colour c rescaled to luminance y.
-Rgb with_luminance(Rgb c, double y) { return scale(c, y / double(luminance(c))); }
+Rgb with_luminance(Rgb c, double y) {
+  return scale(c, y / double(luminance(c)));
+}
 
 double smoothstep(double e0, double e1, double x) {
   const double t = std::clamp((x - e0) / (e1 - e0), 0.0, 1.0);
@@ -47,11 +55,16 @@ constexpr double kSunElevationDeg = 40.0, kSunAzimuthDeg = 30.0;
 
 const char* EnvMap::name() const {
   switch (kind_) {
-    case EnvMapKind::kOvercast: return "overcast";
-    case EnvMapKind::kSunny: return "sunny";
-    case EnvMapKind::kClearSky: return "clear-sky";
-    case EnvMapKind::kStudio: return "studio";
-    case EnvMapKind::kWindow: return "window";
+    case EnvMapKind::kOvercast:
+      return "overcast";
+    case EnvMapKind::kSunny:
+      return "sunny";
+    case EnvMapKind::kClearSky:
+      return "clear-sky";
+    case EnvMapKind::kStudio:
+      return "studio";
+    case EnvMapKind::kWindow:
+      return "window";
   }
   return "?";
 }
@@ -69,7 +82,8 @@ Rgb EnvMap::analytic(Vec3 d) const {
     case EnvMapKind::kClearSky: {
       const double cos_gamma = std::clamp(double(dot(d, sun_)), -1.0, 1.0);
       if (z >= 0.0) {
-        if (kind_ == EnvMapKind::kSunny && cos_gamma >= std::cos(kSunRadius)) return with_luminance({1.0f, 0.96f, 0.90f}, kSunLuminance);
+        if (kind_ == EnvMapKind::kSunny && cos_gamma >= std::cos(kSunRadius))
+          return with_luminance({1.0f, 0.96f, 0.90f}, kSunLuminance);
         const double gamma = std::acos(cos_gamma);
         // Horizon brightening and a blue zenith (luminance ~0.83 -> ~0.28),
         // plus a circumsolar glow (Preetham-like in spirit, not in detail).
@@ -81,7 +95,8 @@ Rgb EnvMap::analytic(Vec3 d) const {
       // Ground, albedo 0.2, lit by the sun (1e5 x its solid angle x sin of
       // its elevation) and the sky (about pi x 0.55).
       const double sun_solid_angle = 2.0 * kPi * (1.0 - std::cos(kSunRadius));
-      const double e = kSunLuminance * sun_solid_angle * std::sin(kSunElevationDeg * kPi / 180.0) + kPi * 0.55;
+      const double e =
+          kSunLuminance * sun_solid_angle * std::sin(kSunElevationDeg * kPi / 180.0) + kPi * 0.55;
       return with_luminance({0.9f, 0.8f, 0.65f}, 0.2 / kPi * e);
     }
     case EnvMapKind::kStudio: {
@@ -96,7 +111,8 @@ Rgb EnvMap::analytic(Vec3 d) const {
           {90, 0, 0.12, 0.12, {60.0f, 60.0f, 60.0f}},    // small white top light
       };
       for (const Light& l : kLights) {
-        if (in_rectangle(d, from_elevation_azimuth(l.elevation, l.azimuth), l.a, l.b)) return l.colour;
+        if (in_rectangle(d, from_elevation_azimuth(l.elevation, l.azimuth), l.a, l.b))
+          return l.colour;
       }
       return z >= 0.0 ? Rgb{0.02f, 0.02f, 0.02f} : Rgb{0.03f, 0.029f, 0.028f};
     }
@@ -147,7 +163,9 @@ Rgb EnvMap::radiance(Vec3 d) const {
   return texel(x, y);
 }
 
-float EnvMap::luminance(Vec3 d) const { return bench::luminance(radiance(d)); }
+float EnvMap::luminance(Vec3 d) const {
+  return bench::luminance(radiance(d));
+}
 
 EnvMap EnvMap::generate(EnvMapKind kind, int width, int height, int supersample) {
   EnvMap m;
@@ -170,10 +188,12 @@ EnvMap EnvMap::generate(EnvMapKind kind, int width, int height, int supersample)
       double r = 0, g = 0, b = 0;
       for (int i = 0; i < s; ++i) {
         // Uniform in cos theta and phi = uniform in solid angle.
-        const double z = c0 + (c1 - c0) * (i + 0.5) / s, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double z = c0 + (c1 - c0) * (i + 0.5) / s,
+                     rho = std::sqrt(std::max(0.0, 1.0 - z * z));
         for (int j = 0; j < s; ++j) {
           const double phi = 2.0 * kPi * (x + (j + 0.5) / s) / width;
-          const Rgb c = m.analytic({float(rho * std::cos(phi)), float(rho * std::sin(phi)), float(z)});
+          const Rgb c =
+              m.analytic({float(rho * std::cos(phi)), float(rho * std::sin(phi)), float(z)});
           r += c.r;
           g += c.g;
           b += c.b;
@@ -190,9 +210,11 @@ EnvMap EnvMap::generate(EnvMapKind kind, int width, int height, int supersample)
 
 EnvQuadrature EnvQuadrature::build(const EnvMap& map, bool upper_only, int q) {
   // Gauss-Legendre nodes and weights on [-1, 1] for q = 1, 2, 3.
-  static const double kNodes[3][3] = {{0.0, 0, 0}, {-0.5773502691896258, 0.5773502691896258, 0},
+  static const double kNodes[3][3] = {{0.0, 0, 0},
+                                      {-0.5773502691896258, 0.5773502691896258, 0},
                                       {-0.7745966692414834, 0.0, 0.7745966692414834}};
-  static const double kWeights[3][3] = {{2.0, 0, 0}, {1.0, 1.0, 0}, {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0}};
+  static const double kWeights[3][3] = {
+      {2.0, 0, 0}, {1.0, 1.0, 0}, {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0}};
   q = std::clamp(q, 1, 3);
   const double* nodes = kNodes[q - 1];
   const double* weights = kWeights[q - 1];
@@ -211,7 +233,8 @@ EnvQuadrature EnvQuadrature::build(const EnvMap& map, bool upper_only, int q) {
         const double rho = std::sqrt(std::max(0.0, 1.0 - z * z));
         for (int j = 0; j < q; ++j) {
           const double phi = dphi * (x + 0.5 + 0.5 * nodes[j]);
-          quad.directions.push_back({float(rho * std::cos(phi)), float(rho * std::sin(phi)), float(z)});
+          quad.directions.push_back(
+              {float(rho * std::cos(phi)), float(rho * std::sin(phi)), float(z)});
           // (c0 - c1) / 2 * w_i  x  dphi / 2 * w_j
           quad.weights.push_back(0.25 * (c0 - c1) * dphi * weights[i] * weights[j]);
           quad.values.push_back(value);

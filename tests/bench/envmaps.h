@@ -48,7 +48,9 @@ struct Rgb {
   float r = 0, g = 0, b = 0;
 };
 
-inline float luminance(Rgb c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
+inline float luminance(Rgb c) {
+  return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b;
+}
 
 enum class EnvMapKind { kOvercast, kSunny, kClearSky, kStudio, kWindow };
 
@@ -137,7 +139,8 @@ std::vector<Vec3> random_directions(int n, uint64_t seed, bool hemisphere);
 // low-discrepancy sequence (Fig. 7.6a). offset_u/offset_v apply a
 // Cranley-Patterson rotation (0 for the plain sequence) so several
 // independent randomised copies can be averaged.
-std::vector<Vec3> halton_directions(int n, bool hemisphere, double offset_u = 0.0, double offset_v = 0.0);
+std::vector<Vec3> halton_directions(int n, bool hemisphere, double offset_u = 0.0,
+                                    double offset_v = 0.0);
 // The Hammersley SET in index order (Fig. 7.6b): u1 = (i + 0.5) / n sweeps
 // from pole to pole, so consecutive samples are strongly correlated.
 std::vector<Vec3> hammersley_directions(int n, bool hemisphere);

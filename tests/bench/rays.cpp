@@ -57,16 +57,25 @@ int main(int argc, char** argv) {
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--rays" && i + 1 < argc) rays = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--repeats" && i + 1 < argc) repeats = std::atoi(argv[++i]);
-    else if (a == "--device" && i + 1 < argc) device_spec = argv[++i];
-    else if (a == "--work-group" && i + 1 < argc) work_group = std::strtoull(argv[++i], nullptr, 10);
-    else if (a == "--leaf-size" && i + 1 < argc) bvh_options.max_leaf_size = static_cast<unsigned>(std::atoi(argv[++i]));
-    else if (a == "--intersection-cost" && i + 1 < argc) bvh_options.intersection_cost = std::strtof(argv[++i], nullptr);
+    if (a == "--rays" && i + 1 < argc)
+      rays = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--repeats" && i + 1 < argc)
+      repeats = std::atoi(argv[++i]);
+    else if (a == "--device" && i + 1 < argc)
+      device_spec = argv[++i];
+    else if (a == "--work-group" && i + 1 < argc)
+      work_group = std::strtoull(argv[++i], nullptr, 10);
+    else if (a == "--leaf-size" && i + 1 < argc)
+      bvh_options.max_leaf_size = static_cast<unsigned>(std::atoi(argv[++i]));
+    else if (a == "--intersection-cost" && i + 1 < argc)
+      bvh_options.intersection_cost = std::strtof(argv[++i], nullptr);
     else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr, "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] [--leaf-size L] [--intersection-cost C] [SCENE...]\n");
+      std::fprintf(stderr,
+                   "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] "
+                   "[--leaf-size L] [--intersection-cost C] [SCENE...]\n");
       return 2;
-    } else scenes.push_back(a);
+    } else
+      scenes.push_back(a);
   }
   if (scenes.empty()) scenes = default_scenes();
 
@@ -74,10 +83,13 @@ int main(int argc, char** argv) {
   if (!ctx) return fail(ctx.status());
   std::printf("machine: %s\n", describe(machine_info()).c_str());
   std::printf("OpenCL device: %s\n", ctx.value()->info().describe().c_str());
-  std::printf("rays per set: %zu, best of %d passes; OpenCL = kernel time from profiling events, "
-              "Embree = wall time of rtcIntersect1M/rtcOccluded1M on all hardware threads\n\n",
-              rays, repeats);
-  std::printf("| scene | triangles | BVH nodes | rays | query | OpenCL Mrays/s | Embree Mrays/s | OpenCL / Embree |\n");
+  std::printf(
+      "rays per set: %zu, best of %d passes; OpenCL = kernel time from profiling events, "
+      "Embree = wall time of rtcIntersect1M/rtcOccluded1M on all hardware threads\n\n",
+      rays, repeats);
+  std::printf(
+      "| scene | triangles | BVH nodes | rays | query | OpenCL Mrays/s | Embree Mrays/s | OpenCL / "
+      "Embree |\n");
   std::printf("|---|---:|---:|---|---|---:|---:|---:|\n");
   for (const auto& path : scenes) {
     auto scene = scene::import_gltf_file(path);
@@ -92,16 +104,18 @@ int main(int argc, char** argv) {
     auto embree = accel::EmbreeTracer::create(bvh.value());
     if (!embree) return fail(embree.status());
     const std::string name = fs::path(path).stem().string();
-    for (auto kind : {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow}) {
+    for (auto kind :
+         {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow}) {
       const auto set = accel::make_rays(soup.value(), kind, rays, 99);
-      const auto query = kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
+      const auto query =
+          kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
       auto tp = accel::measure_throughput(*ctx.value(), *cl.value(), *embree.value(), set, query,
                                           kind == accel::RayKind::kCoherent, repeats);
       if (!tp) return fail(tp.status());
       std::printf("| %s | %zu | %zu | %s | %s | %.2f | %.2f | %.2f |\n", name.c_str(), soup->size(),
                   bvh->stats.nodes, accel::ray_kind_name(kind),
-                  query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(), tp->embree_mrays(),
-                  tp->ratio());
+                  query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(),
+                  tp->embree_mrays(), tp->ratio());
       std::fflush(stdout);
     }
   }

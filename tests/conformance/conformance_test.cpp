@@ -34,7 +34,9 @@ constexpr double kRequiredAgreement = 0.9999;
 
 // Smallest barycentric coordinate of a hit (distance to the nearest edge, in
 // barycentric units).
-float edge_distance(const cl::LuxHit& h) { return std::min({h.u, h.v, 1.0f - h.u - h.v}); }
+float edge_distance(const cl::LuxHit& h) {
+  return std::min({h.u, h.v, 1.0f - h.u - h.v});
+}
 
 // Distance tolerance: 1e-4 relative, plus a few ULPs of the coordinates
 // involved divided by the cosine between ray and surface. Rays leaving a
@@ -42,12 +44,14 @@ float edge_distance(const cl::LuxHit& h) { return std::min({h.u, h.v, 1.0f - h.u
 // there the position along the surface normal is accurate to a few ULPs of
 // the coordinates, and the distance along the ray is that error / cos(theta).
 float t_tolerance(const cl::LuxRay& r, float t, const TriangleSoup& soup, int prim) {
-  const float mag = std::max({std::fabs(r.org_tmin.x), std::fabs(r.org_tmin.y), std::fabs(r.org_tmin.z),
-                              std::fabs(r.org_tmin.x + r.dir_tmax.x * t), std::fabs(r.org_tmin.y + r.dir_tmax.y * t),
+  const float mag = std::max({std::fabs(r.org_tmin.x), std::fabs(r.org_tmin.y),
+                              std::fabs(r.org_tmin.z), std::fabs(r.org_tmin.x + r.dir_tmax.x * t),
+                              std::fabs(r.org_tmin.y + r.dir_tmax.y * t),
                               std::fabs(r.org_tmin.z + r.dir_tmax.z * t), 1e-3f});
   const Vec3 d{r.dir_tmax.x, r.dir_tmax.y, r.dir_tmax.z};
-  const Vec3 n = normalize(cross(soup.v(static_cast<size_t>(prim), 1) - soup.v(static_cast<size_t>(prim), 0),
-                                 soup.v(static_cast<size_t>(prim), 2) - soup.v(static_cast<size_t>(prim), 0)));
+  const Vec3 n =
+      normalize(cross(soup.v(static_cast<size_t>(prim), 1) - soup.v(static_cast<size_t>(prim), 0),
+                      soup.v(static_cast<size_t>(prim), 2) - soup.v(static_cast<size_t>(prim), 0)));
   const float len = length(d);
   const float cos_theta = std::max(std::fabs(dot(n, d)) / len, 1e-3f);
   return 1e-4f * t + 8.0f * mag * 0x1p-23f / (len * cos_theta);
@@ -61,8 +65,13 @@ struct Tally {
   size_t tie_coplanar = 0;  // different triangles, same distance, interior: coincident faces
   size_t far_t = 0;         // same triangle, distance beyond tolerance
   void add(const Tally& o) {
-    rays += o.rays; hits += o.hits; mismatch += o.mismatch; hit_miss += o.hit_miss;
-    tie_edge += o.tie_edge; tie_coplanar += o.tie_coplanar; far_t += o.far_t;
+    rays += o.rays;
+    hits += o.hits;
+    mismatch += o.mismatch;
+    hit_miss += o.hit_miss;
+    tie_edge += o.tie_edge;
+    tie_coplanar += o.tie_coplanar;
+    far_t += o.far_t;
   }
 };
 
@@ -88,7 +97,8 @@ TEST(Conformance, OpenClAgreesWithEmbree) {
     RayKind kind;
     size_t count;
   };
-  const Set closest_sets[] = {{RayKind::kCoherent, 400000}, {RayKind::kIncoherent, 400000}, {RayKind::kRandom, 250000}};
+  const Set closest_sets[] = {
+      {RayKind::kCoherent, 400000}, {RayKind::kIncoherent, 400000}, {RayKind::kRandom, 250000}};
   Tally total;
   for (const Set& set : closest_sets) {
     const auto rays = make_rays(soup.value(), set.kind, set.count, 2024);
@@ -104,35 +114,45 @@ TEST(Conformance, OpenClAgreesWithEmbree) {
       const auto& b = e[i];
       t.hits += b.prim >= 0;
       if (a.prim == b.prim) {
-        if (a.prim >= 0 && std::fabs(a.t - b.t) > t_tolerance(rays[i], b.t, soup.value(), b.prim)) ++t.far_t;
+        if (a.prim >= 0 && std::fabs(a.t - b.t) > t_tolerance(rays[i], b.t, soup.value(), b.prim))
+          ++t.far_t;
         continue;
       }
       const bool both_hit = a.prim >= 0 && b.prim >= 0;
-      if (both_hit && std::fabs(a.t - b.t) <= std::max(t_tolerance(rays[i], b.t, soup.value(), a.prim),
-                                                         t_tolerance(rays[i], b.t, soup.value(), b.prim))) {
+      if (both_hit &&
+          std::fabs(a.t - b.t) <= std::max(t_tolerance(rays[i], b.t, soup.value(), a.prim),
+                                           t_tolerance(rays[i], b.t, soup.value(), b.prim))) {
         // An equidistant tie: both answers are correct.
         (std::min(edge_distance(a), edge_distance(b)) < 1e-3f ? t.tie_edge : t.tie_coplanar)++;
         continue;
       }
       if (verbose && t.mismatch < 8)
-        std::printf("    ray %zu: OpenCL prim %d t %.7g uv (%.4g %.4g) | Embree prim %d t %.7g uv (%.4g %.4g)\n",
-                    i, a.prim, a.t, a.u, a.v, b.prim, b.t, b.u, b.v);
+        std::printf(
+            "    ray %zu: OpenCL prim %d t %.7g uv (%.4g %.4g) | Embree prim %d t %.7g uv (%.4g "
+            "%.4g)\n",
+            i, a.prim, a.t, a.u, a.v, b.prim, b.t, b.u, b.v);
       ++t.mismatch;
       t.hit_miss += !both_hit;
     }
-    std::printf("  closest %-10s %8zu rays, %5.1f%% hit: %zu mismatches (%zu hit-vs-miss); ties at equal distance: "
-                "%zu at shared edges, %zu on coincident faces; %zu same-triangle distances beyond tolerance\n",
-                ray_kind_name(set.kind), t.rays, 100.0 * t.hits / t.rays, t.mismatch, t.hit_miss, t.tie_edge,
-                t.tie_coplanar, t.far_t);
+    std::printf(
+        "  closest %-10s %8zu rays, %5.1f%% hit: %zu mismatches (%zu hit-vs-miss); ties at equal "
+        "distance: "
+        "%zu at shared edges, %zu on coincident faces; %zu same-triangle distances beyond "
+        "tolerance\n",
+        ray_kind_name(set.kind), t.rays, 100.0 * t.hits / t.rays, t.mismatch, t.hit_miss,
+        t.tie_edge, t.tie_coplanar, t.far_t);
     total.add(t);
   }
   // Agreement on hit/miss and triangle, where a tie at equal distance between
   // coincident or edge-sharing triangles counts as agreement.
   const double agreement = 1.0 - static_cast<double>(total.mismatch + total.far_t) / total.rays;
-  std::printf("  closest total: %zu rays, agreement %.5f%%, %zu ties (%.3f%%)\n", total.rays, 100.0 * agreement,
-              total.tie_edge + total.tie_coplanar, 100.0 * (total.tie_edge + total.tie_coplanar) / total.rays);
-  EXPECT_GE(agreement, kRequiredAgreement) << total.mismatch << " mismatches of " << total.rays << " rays";
-  EXPECT_LE(total.far_t, total.rays / 10000) << "hits on the same triangle at distances beyond 1e-4 relative";
+  std::printf("  closest total: %zu rays, agreement %.5f%%, %zu ties (%.3f%%)\n", total.rays,
+              100.0 * agreement, total.tie_edge + total.tie_coplanar,
+              100.0 * (total.tie_edge + total.tie_coplanar) / total.rays);
+  EXPECT_GE(agreement, kRequiredAgreement)
+      << total.mismatch << " mismatches of " << total.rays << " rays";
+  EXPECT_LE(total.far_t, total.rays / 10000)
+      << "hits on the same triangle at distances beyond 1e-4 relative";
   EXPECT_GE(total.rays, 1000000u);
 
   // Any-hit: shadow segments plus the incoherent rays (unbounded).

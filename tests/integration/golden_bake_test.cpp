@@ -35,7 +35,9 @@
 namespace luxel {
 namespace {
 
-std::string scene_path(const char* name) { return std::string(LUXEL_SCENES_DIR) + "/" + name; }
+std::string scene_path(const char* name) {
+  return std::string(LUXEL_SCENES_DIR) + "/" + name;
+}
 
 // Hash of everything a bake returns that depends on the traced bits.
 std::string result_hash(const pipeline::BakeResult& r) {
@@ -134,8 +136,8 @@ std::vector<GoldenCase> golden_cases(const std::string& sky_path) {
        }},
       {"cornell_encodings_auto", "cornell_box.gltf",
        [](S& s) {
-         s.encodings.names = {"sh1", "sh2", "sg6", "sg9-hemi", "sg12", "ambient-dice9",
-                              "ambient-dice12"};
+         s.encodings.names = {"sh1",  "sh2",           "sg6",           "sg9-hemi",
+                              "sg12", "ambient-dice9", "ambient-dice12"};
        }},
       {"cornell_encodings_projection", "cornell_box.gltf",
        [](S& s) {
@@ -156,7 +158,10 @@ std::vector<GoldenCase> golden_cases(const std::string& sky_path) {
          s.max_bounces = 1;
        }},
       {"cornell_resumed", "cornell_box.gltf",
-       [](S& s) { s.encodings.names = {"sh2", "ambient-dice9"}; }, 1},
+       [](S& s) {
+         s.encodings.names = {"sh2", "ambient-dice9"};
+       },
+       1},
   };
 }
 
@@ -225,8 +230,8 @@ TEST(GoldenBake, SameSeedsGiveTheRecordedBits) {
     } else {
       auto again = run_case(c, *ctx.value());
       ASSERT_TRUE(again) << again.status().to_string();
-      EXPECT_EQ(hash, result_hash(again.value())) << "two bakes of case " << c.name
-                                                  << " differ: the bake is not deterministic";
+      EXPECT_EQ(hash, result_hash(again.value()))
+          << "two bakes of case " << c.name << " differ: the bake is not deterministic";
     }
   }
   if (const char* record = std::getenv("LUXEL_GOLDEN_RECORD")) {

@@ -2,6 +2,8 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
+#include <grpcpp/generic/generic_stub.h>
+#include <grpcpp/grpcpp.h>
 #include <netinet/in.h>
 #include <openssl/evp.h>
 #include <signal.h>
@@ -12,14 +14,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
-
-#include <grpcpp/generic/generic_stub.h>
-#include <grpcpp/grpcpp.h>
-
-#include <future>
 
 namespace luxel::test {
 
@@ -46,7 +44,8 @@ int free_loopback_port() {
   addr.sin_family = AF_INET;
   addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   addr.sin_port = 0;
-  if (bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) throw std::runtime_error("bind");
+  if (bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
+    throw std::runtime_error("bind");
   socklen_t len = sizeof addr;
   getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
   close(fd);
@@ -105,7 +104,8 @@ int Daemon::stop(int sig, std::chrono::seconds timeout) {
 std::unique_ptr<v1::Luxel::Stub> Daemon::stub() const {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
-  return v1::Luxel::NewStub(grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args));
+  return v1::Luxel::NewStub(
+      grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), args));
 }
 
 std::unique_ptr<grpc::ClientContext> Daemon::context(std::chrono::seconds deadline) const {
@@ -115,7 +115,9 @@ std::unique_ptr<grpc::ClientContext> Daemon::context(std::chrono::seconds deadli
   return ctx;
 }
 
-std::string Daemon::log() const { return read_file(log_path_); }
+std::string Daemon::log() const {
+  return read_file(log_path_);
+}
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -223,7 +225,8 @@ grpc::Status raw_unary(const Daemon& d, const std::string& method, const std::st
   std::vector<grpc::Slice> slices;
   response->clear();
   if (st.ok() && resp.Dump(&slices).ok())
-    for (const auto& s : slices) response->append(reinterpret_cast<const char*>(s.begin()), s.size());
+    for (const auto& s : slices)
+      response->append(reinterpret_cast<const char*>(s.begin()), s.size());
   return st;
 }
 
@@ -249,15 +252,18 @@ grpc::Status raw_bidi_once(const Daemon& d, const std::string& method, const std
       call->Read(&resp, reinterpret_cast<void*>(3));
       std::vector<grpc::Slice> slices;
       if (step(3) && resp.Dump(&slices).ok())
-        for (const auto& s : slices) response->append(reinterpret_cast<const char*>(s.begin()), s.size());
+        for (const auto& s : slices)
+          response->append(reinterpret_cast<const char*>(s.begin()), s.size());
     }
   }
   call->WritesDone(reinterpret_cast<void*>(4));
   cq.Next(&tag, &ok);
   call->Finish(&st, reinterpret_cast<void*>(5));
-  while (cq.Next(&tag, &ok) && reinterpret_cast<intptr_t>(tag) != 5) {}
+  while (cq.Next(&tag, &ok) && reinterpret_cast<intptr_t>(tag) != 5) {
+  }
   cq.Shutdown();
-  while (cq.Next(&tag, &ok)) {}
+  while (cq.Next(&tag, &ok)) {
+  }
   return st;
 }
 

@@ -41,7 +41,8 @@ class Daemon {
 
   std::unique_ptr<v1::Luxel::Stub> stub() const;
   // A context carrying the token (if any) and a deadline.
-  std::unique_ptr<grpc::ClientContext> context(std::chrono::seconds deadline = std::chrono::seconds(30)) const;
+  std::unique_ptr<grpc::ClientContext> context(
+      std::chrono::seconds deadline = std::chrono::seconds(30)) const;
   const std::string& address() const { return address_; }
   std::string log() const;
   const std::string& data_dir() const { return data_dir_; }
@@ -56,10 +57,10 @@ struct Resource {
 };
 
 struct UploadOptions {
-  std::string sha256_override;   // header sha256 instead of the real one
-  long truncate_after = -1;      // send only this many bytes of the payload
+  std::string sha256_override;  // header sha256 instead of the real one
+  long truncate_after = -1;     // send only this many bytes of the payload
   size_t chunk_bytes = 64 * 1024;
-  uint64_t size_override = 0;    // header total_size instead of the real one
+  uint64_t size_override = 0;  // header total_size instead of the real one
 };
 
 grpc::Status upload_scene(const Daemon& d, const std::string& name, v1::SceneFormat format,

@@ -61,8 +61,9 @@ Daemon* ServiceE2E::daemon_ = nullptr;
 TEST_F(ServiceE2E, UploadStoresContentAddressedSceneOnce) {
   v1::SceneInfo first, second;
   const std::string id = upload_cornell(&first);
-  EXPECT_EQ(id, expected_scene_id(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-                                  {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}));
+  EXPECT_EQ(
+      id, expected_scene_id(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
+                            {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}));
   EXPECT_GT(first.statistics().triangles(), 0u);
   EXPECT_GT(first.statistics().emissive_triangles(), 0u);
   EXPECT_EQ(first.size(), fs::file_size(LUXEL_SCENES_DIR "/cornell_box.gltf") +
@@ -75,7 +76,10 @@ TEST_F(ServiceE2E, UploadStoresContentAddressedSceneOnce) {
   // One folder per scene; the resource sits beside the main file.
   const std::string scenes = daemon_->data_dir() + "/scenes";
   size_t n = 0;
-  for (const auto& e : fs::directory_iterator(scenes)) { (void)e; ++n; }
+  for (const auto& e : fs::directory_iterator(scenes)) {
+    (void)e;
+    ++n;
+  }
   EXPECT_GE(n, 1u);
   EXPECT_TRUE(fs::exists(scenes + "/" + id + "/cornell_box.bin"));
   EXPECT_TRUE(fs::is_empty(daemon_->data_dir() + "/staging"));
@@ -171,7 +175,8 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   auto reader = stub->WatchBake(wctx.get(), watch);
   v1::BakeEvent event;
   ASSERT_TRUE(reader->Read(&event));
-  EXPECT_TRUE(event.info().state() == v1::BAKE_STATE_QUEUED || event.info().state() == v1::BAKE_STATE_RUNNING)
+  EXPECT_TRUE(event.info().state() == v1::BAKE_STATE_QUEUED ||
+              event.info().state() == v1::BAKE_STATE_RUNNING)
       << v1::BakeState_Name(event.info().state());
   EXPECT_FALSE(event.final());
   int snapshots = 0, events = 1;
@@ -244,7 +249,9 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   EXPECT_GE(status.scenes(), 1u);
   EXPECT_EQ(status.max_concurrent_bakes(), 1u);
   const std::string log = daemon_->log();
-  EXPECT_NE(log.find("event=bake_started bake=" + bake.bake_id() + " scene=" + scene_id), std::string::npos) << log;
+  EXPECT_NE(log.find("event=bake_started bake=" + bake.bake_id() + " scene=" + scene_id),
+            std::string::npos)
+      << log;
   EXPECT_NE(log.find("event=bake_finished bake=" + bake.bake_id()), std::string::npos);
 }
 
@@ -267,7 +274,8 @@ TEST_F(ServiceE2E, StalledWatcherNeitherBlocksTheBakeNorGetsABacklog) {
   v1::BakeEvent event;
   ASSERT_TRUE(reader->Read(&event));
   // Stop reading: the bake must still finish.
-  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(30));
+  const v1::BakeInfo done =
+      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(30));
   ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
   // Reading again: newest state only, snapshots in order, then the final event.
   uint64_t last_snapshot_paths = 0;
@@ -297,7 +305,8 @@ TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
   v1::BakeInfo bake;
   auto ctx = daemon_->context();
   ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
-  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  const v1::BakeInfo done =
+      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
   ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
   EXPECT_NE(done.features().find("basis"), std::string::npos) << done.features();
   const std::vector<std::string> names(done.artifacts().begin(), done.artifacts().end());
@@ -332,7 +341,8 @@ TEST_F(ServiceE2E, ReferenceBakeGivesTrueErrorInProgress) {
   };
   v1::BakeInfo ref;
   ASSERT_TRUE(submit(small_settings(64, 32), &ref).ok());
-  const v1::BakeInfo ref_done = wait_for_bake(*daemon_, ref.bake_id(), is_finished, std::chrono::seconds(60));
+  const v1::BakeInfo ref_done =
+      wait_for_bake(*daemon_, ref.bake_id(), is_finished, std::chrono::seconds(60));
   ASSERT_EQ(ref_done.state(), v1::BAKE_STATE_SUCCEEDED) << ref_done.error_message();
 
   v1::BakeSettings settings = small_settings(16, 32);
@@ -340,23 +350,28 @@ TEST_F(ServiceE2E, ReferenceBakeGivesTrueErrorInProgress) {
   settings.set_reference_bake_id(ref.bake_id());
   v1::BakeInfo bake;
   ASSERT_TRUE(submit(settings, &bake).ok());
-  const v1::BakeInfo done = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  const v1::BakeInfo done =
+      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
   ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
   EXPECT_GT(done.progress().rmse(), 0.0);
   EXPECT_GT(done.progress().rel_mse(), 0.0);
   std::string bytes, sha;
   uint64_t total = 0;
   ASSERT_TRUE(download(*daemon_, bake.bake_id(), "error_series.csv", &bytes, &sha, &total).ok());
-  EXPECT_EQ(bytes.rfind("elapsed_s,paths,mean_spp,min_spp,rel_error,rmse,rel_mse\n", 0), 0u) << bytes;
-  EXPECT_EQ(bytes.find(",,"), std::string::npos) << "every point carries rmse and rel_mse: " << bytes;
+  EXPECT_EQ(bytes.rfind("elapsed_s,paths,mean_spp,min_spp,rel_error,rmse,rel_mse\n", 0), 0u)
+      << bytes;
+  EXPECT_EQ(bytes.find(",,"), std::string::npos)
+      << "every point carries rmse and rel_mse: " << bytes;
 
   // A reference of another size fails the bake with a message naming it.
   v1::BakeSettings other = small_settings(16, 64);
   other.set_reference_bake_id(ref.bake_id());
   ASSERT_TRUE(submit(other, &bake).ok());
-  const v1::BakeInfo failed = wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  const v1::BakeInfo failed =
+      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
   EXPECT_EQ(failed.state(), v1::BAKE_STATE_FAILED);
-  EXPECT_NE(failed.error_message().find("settings.reference"), std::string::npos) << failed.error_message();
+  EXPECT_NE(failed.error_message().find("settings.reference"), std::string::npos)
+      << failed.error_message();
 }
 
 TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {

@@ -32,12 +32,16 @@ class ServiceErrors : public ::testing::Test {
   // The store holds no scene and no upload debris.
   static size_t stored_scenes() {
     size_t n = 0;
-    for (const auto& e : fs::directory_iterator(daemon_->data_dir() + "/scenes")) { (void)e; ++n; }
+    for (const auto& e : fs::directory_iterator(daemon_->data_dir() + "/scenes")) {
+      (void)e;
+      ++n;
+    }
     return n;
   }
   static bool staging_empty() { return fs::is_empty(daemon_->data_dir() + "/staging"); }
 
-  grpc::Status submit(const v1::BakeSettings& settings, const std::string& scene_id, v1::BakeInfo* out) {
+  grpc::Status submit(const v1::BakeSettings& settings, const std::string& scene_id,
+                      v1::BakeInfo* out) {
     v1::SubmitBakeRequest req;
     req.set_scene_id(scene_id);
     *req.mutable_settings() = settings;
@@ -46,9 +50,10 @@ class ServiceErrors : public ::testing::Test {
   }
   std::string cornell_id() {
     v1::SceneInfo info;
-    auto st = upload_scene(*daemon_, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF,
-                           read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-                           {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
+    auto st =
+        upload_scene(*daemon_, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF,
+                     read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
+                     {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
     EXPECT_TRUE(st.ok()) << st.error_message();
     return info.scene_id();
   }
@@ -66,8 +71,9 @@ const std::string kBin = read_file(LUXEL_SCENES_DIR "/cornell_box.bin");
 TEST_F(ServiceErrors, WrongHashIsDataLossAndStoresNothing) {
   const size_t before = stored_scenes();
   v1::SceneInfo info;
-  auto st = upload_scene(*daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {{"cornell_box.bin", kBin}}, &info,
-                         {.sha256_override = std::string(64, 'a')});
+  auto st =
+      upload_scene(*daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {{"cornell_box.bin", kBin}},
+                   &info, {.sha256_override = std::string(64, 'a')});
   EXPECT_EQ(st.error_code(), grpc::StatusCode::DATA_LOSS) << st.error_message();
   EXPECT_NE(st.error_message().find("sha256 mismatch"), std::string::npos) << st.error_message();
   EXPECT_EQ(stored_scenes(), before);
@@ -77,8 +83,9 @@ TEST_F(ServiceErrors, WrongHashIsDataLossAndStoresNothing) {
 TEST_F(ServiceErrors, TruncatedStreamIsDataLossAndStoresNothing) {
   const size_t before = stored_scenes();
   v1::SceneInfo info;
-  auto st = upload_scene(*daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {{"cornell_box.bin", kBin}}, &info,
-                         {.truncate_after = static_cast<long>(kGltf.size() + 100), .chunk_bytes = 1000});
+  auto st = upload_scene(
+      *daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {{"cornell_box.bin", kBin}}, &info,
+      {.truncate_after = static_cast<long>(kGltf.size() + 100), .chunk_bytes = 1000});
   EXPECT_EQ(st.error_code(), grpc::StatusCode::DATA_LOSS) << st.error_message();
   EXPECT_NE(st.error_message().find("truncated"), std::string::npos) << st.error_message();
   // A declared size larger than what is sent is the same thing.
@@ -94,7 +101,8 @@ TEST_F(ServiceErrors, OversizeUploadIsResourceExhaustedNamingTheLimit) {
   v1::SceneInfo info;
   auto st = upload_scene(*daemon_, "big.glb", v1::SCENE_FORMAT_GLB, glb + glb, {}, &info);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
-  EXPECT_NE(st.error_message().find("--max-upload-bytes=200000"), std::string::npos) << st.error_message();
+  EXPECT_NE(st.error_message().find("--max-upload-bytes=200000"), std::string::npos)
+      << st.error_message();
   EXPECT_TRUE(staging_empty());
 }
 
@@ -116,10 +124,12 @@ TEST_F(ServiceErrors, GltfFailingValidationIsInvalidArgument) {
 
 TEST_F(ServiceErrors, ResourceUrisMayNotEscapeTheSceneFolder) {
   v1::SceneInfo info;
-  for (const std::string uri : {"../evil.bin", "/etc/passwd", "a/../../b.bin", "file:///x", "a\\b"}) {
+  for (const std::string uri :
+       {"../evil.bin", "/etc/passwd", "a/../../b.bin", "file:///x", "a\\b"}) {
     auto st = upload_scene(*daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {{uri, kBin}}, &info);
     EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << uri;
-    EXPECT_NE(st.error_message().find("header.resources.uri"), std::string::npos) << st.error_message();
+    EXPECT_NE(st.error_message().find("header.resources.uri"), std::string::npos)
+        << st.error_message();
   }
   EXPECT_FALSE(fs::exists(fs::path(daemon_->data_dir()).parent_path() / "evil.bin"));
   EXPECT_TRUE(staging_empty());
@@ -183,25 +193,44 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
   };
   const std::vector<Case> cases = {
       {"settings.max_bounces", [](v1::BakeSettings& s) { s.set_max_bounces(99); }},
-      {"settings.resolution", [](v1::BakeSettings& s) { s.set_resolution(1024); }},  // > --max-resolution
-      {"settings.encodings", [](v1::BakeSettings& s) { s.add_encodings(static_cast<v1::Encoding>(99)); }},
-      {"settings.encodings", [](v1::BakeSettings& s) {
+      {"settings.resolution",
+       [](v1::BakeSettings& s) { s.set_resolution(1024); }},  // > --max-resolution
+      {"settings.encodings",
+       [](v1::BakeSettings& s) { s.add_encodings(static_cast<v1::Encoding>(99)); }},
+      {"settings.encodings",
+       [](v1::BakeSettings& s) {
          s.add_encodings(v1::ENCODING_SH2);
          s.add_encodings(v1::ENCODING_SH2);
        }},
-      {"settings.reference_bake_id", [](v1::BakeSettings& s) { s.set_reference_bake_id(std::string(32, 'a')); }},
-      {"settings.target_metric", [](v1::BakeSettings& s) { s.set_target_metric(v1::TARGET_METRIC_RMSE); }},
-      {"settings.solver", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_solver(static_cast<v1::Solver>(42)); }},
-      {"settings.sg_sharpness", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_sg_sharpness(-2); }},
-      {"settings.acceleration", [](v1::BakeSettings& s) { s.add_encodings(v1::ENCODING_SG12); s.set_acceleration(100); }},
-      {"settings.sky.color", [](v1::BakeSettings& s) {
+      {"settings.reference_bake_id",
+       [](v1::BakeSettings& s) { s.set_reference_bake_id(std::string(32, 'a')); }},
+      {"settings.target_metric",
+       [](v1::BakeSettings& s) { s.set_target_metric(v1::TARGET_METRIC_RMSE); }},
+      {"settings.solver",
+       [](v1::BakeSettings& s) {
+         s.add_encodings(v1::ENCODING_SG12);
+         s.set_solver(static_cast<v1::Solver>(42));
+       }},
+      {"settings.sg_sharpness",
+       [](v1::BakeSettings& s) {
+         s.add_encodings(v1::ENCODING_SG12);
+         s.set_sg_sharpness(-2);
+       }},
+      {"settings.acceleration",
+       [](v1::BakeSettings& s) {
+         s.add_encodings(v1::ENCODING_SG12);
+         s.set_acceleration(100);
+       }},
+      {"settings.sky.color",
+       [](v1::BakeSettings& s) {
          s.mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
          s.mutable_sky()->add_color(1);
        }},
       {"settings.samples_per_texel", [](v1::BakeSettings& s) { s.set_samples_per_texel(0); }},
       {"settings.time_budget_s", [](v1::BakeSettings& s) { s.set_time_budget_s(-1); }},
       {"settings.paths_per_iteration", [](v1::BakeSettings& s) { s.set_paths_per_iteration(5); }},
-      {"settings.snapshot_format", [](v1::BakeSettings& s) { s.set_snapshot_format(static_cast<v1::SnapshotFormat>(42)); }},
+      {"settings.snapshot_format",
+       [](v1::BakeSettings& s) { s.set_snapshot_format(static_cast<v1::SnapshotFormat>(42)); }},
   };
   for (const auto& c : cases) {
     v1::BakeSettings s = small_settings(16);
@@ -209,11 +238,13 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
     v1::BakeInfo info;
     auto st = submit(s, id, &info);
     EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << c.field;
-    EXPECT_NE(st.error_message().find(c.field), std::string::npos) << c.field << ": " << st.error_message();
+    EXPECT_NE(st.error_message().find(c.field), std::string::npos)
+        << c.field << ": " << st.error_message();
   }
   v1::BakeInfo info;
   auto st = submit(small_settings(16, 1024), id, &info);
-  EXPECT_NE(st.error_message().find("--max-resolution=256"), std::string::npos) << st.error_message();
+  EXPECT_NE(st.error_message().find("--max-resolution=256"), std::string::npos)
+      << st.error_message();
   v1::ListBakesResponse list;
   auto ctx = daemon_->context();
   ASSERT_TRUE(stub_->ListBakes(ctx.get(), {}, &list).ok());
@@ -243,10 +274,15 @@ TEST_F(ServiceErrors, MissingOrWrongTokenIsUnauthenticated) {
 TEST_F(ServiceErrors, MalformedProtobufIsRefusedAndTheDaemonLivesOn) {
   std::string response;
   // Field 1 declared as a 100-byte string, 3 bytes present.
-  auto st = raw_unary(*daemon_, "/luxel.v1.Luxel/GetBake", std::string("\x0a\x64" "abc", 5), &response);
+  auto st = raw_unary(*daemon_, "/luxel.v1.Luxel/GetBake",
+                      std::string("\x0a\x64"
+                                  "abc",
+                                  5),
+                      &response);
   EXPECT_FALSE(st.ok());
   EXPECT_NE(st.error_code(), grpc::StatusCode::UNAVAILABLE) << st.error_message();
-  st = raw_unary(*daemon_, "/luxel.v1.Luxel/GetBake", std::string("\xff\xff\xff\xff\xff", 5), &response);
+  st = raw_unary(*daemon_, "/luxel.v1.Luxel/GetBake", std::string("\xff\xff\xff\xff\xff", 5),
+                 &response);
   EXPECT_FALSE(st.ok());
   v1::ServerStatus status;
   auto ctx = daemon_->context();
@@ -266,8 +302,9 @@ TEST_F(ServiceErrors, HealthServiceReportsServing) {
 TEST_F(ServiceErrors, ReflectionListsTheLuxelService) {
   std::string response;
   // ServerReflectionRequest{list_services: ""}
-  auto st = raw_bidi_once(*daemon_, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
-                          std::string("\x3a\x00", 2), &response);
+  auto st =
+      raw_bidi_once(*daemon_, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo",
+                    std::string("\x3a\x00", 2), &response);
   EXPECT_TRUE(st.ok()) << st.error_message();
   EXPECT_NE(response.find("luxel.v1.Luxel"), std::string::npos);
 }

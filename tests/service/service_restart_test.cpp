@@ -20,9 +20,9 @@ using namespace std::chrono_literals;
 
 std::string upload_cornell(const Daemon& d) {
   v1::SceneInfo info;
-  auto st = upload_scene(d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF,
-                         read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-                         {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
+  auto st = upload_scene(
+      d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
+      {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
   EXPECT_TRUE(st.ok()) << st.error_message();
   return info.scene_id();
 }
@@ -48,7 +48,8 @@ bool has_note(const v1::BakeInfo& info, const std::string& text) {
   return false;
 }
 
-output::Image download_exr(const Daemon& d, const std::string& bake_id, const std::string& scratch) {
+output::Image download_exr(const Daemon& d, const std::string& bake_id,
+                           const std::string& scratch) {
   std::string bytes, sha;
   uint64_t total = 0;
   auto st = download(d, bake_id, "irradiance.exr", &bytes, &sha, &total);
@@ -63,7 +64,8 @@ output::Image download_exr(const Daemon& d, const std::string& bake_id, const st
 TEST(ServiceRestart, KillDashNineMidBakeResumesFromCheckpoint) {
   TempDir dir;
   const std::string data = dir.path() + "/data";
-  const std::vector<std::string> flags = {"--checkpoint-interval", "0.3", "--max-concurrent-bakes", "2"};
+  const std::vector<std::string> flags = {"--checkpoint-interval", "0.3", "--max-concurrent-bakes",
+                                          "2"};
   auto daemon = std::make_unique<Daemon>(data, flags);
   const std::string scene_id = upload_cornell(*daemon);
   // Two identical bakes run side by side; both get killed after a checkpoint.
@@ -169,7 +171,8 @@ TEST(ServiceRestart, SigtermCheckpointsAndTheNextStartFinishes) {
   const std::string record = record_on_disk(*daemon, bake.bake_id());
   ASSERT_NE(record.find("BAKE_STATE_INTERRUPTED"), std::string::npos) << record;
   EXPECT_TRUE(fs::exists(data + "/bakes/" + bake.bake_id() + "/checkpoint.bin"));
-  EXPECT_NE(daemon->log().find("event=checkpoint_written bake=" + bake.bake_id()), std::string::npos);
+  EXPECT_NE(daemon->log().find("event=checkpoint_written bake=" + bake.bake_id()),
+            std::string::npos);
 
   daemon = std::make_unique<Daemon>(data, flags);
   const v1::BakeInfo done = wait_for_bake(*daemon, bake.bake_id(), is_finished);
@@ -188,7 +191,8 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   v1::BakeSettings long_bake = small_settings(0);
   long_bake.set_time_budget_s(120);
   const v1::BakeInfo running = submit(daemon, scene_id, long_bake);
-  wait_for_bake(daemon, running.bake_id(), [](const v1::BakeInfo& i) { return i.state() == v1::BAKE_STATE_RUNNING; });
+  wait_for_bake(daemon, running.bake_id(),
+                [](const v1::BakeInfo& i) { return i.state() == v1::BAKE_STATE_RUNNING; });
 
   v1::BakeSettings low = small_settings(16, 32), high = small_settings(16, 32);
   low.set_priority(0);
@@ -234,8 +238,9 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   // A cancelled bake has no artifacts; cancelling again is a no-op.
   std::string bytes, sha;
   uint64_t total = 0;
-  EXPECT_EQ(download(daemon, running.bake_id(), "irradiance.exr", &bytes, &sha, &total).error_code(),
-            grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(
+      download(daemon, running.bake_id(), "irradiance.exr", &bytes, &sha, &total).error_code(),
+      grpc::StatusCode::FAILED_PRECONDITION);
   ctx = daemon.context();
   ASSERT_TRUE(stub->CancelBake(ctx.get(), cancel, &cancelled).ok());
   EXPECT_EQ(cancelled.state(), v1::BAKE_STATE_CANCELLED);

@@ -59,7 +59,9 @@ double area(const RTCBounds& b) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-cl::float4 pack(float x, float y, float z, int w) { return {x, y, z, cl::as_float(w)}; }
+cl::float4 pack(float x, float y, float z, int w) {
+  return {x, y, z, cl::as_float(w)};
+}
 
 class Flattener {
  public:
@@ -87,7 +89,8 @@ class Flattener {
     return index;
   }
 
-  void leaf(const BuildLeaf* leaf, const RTCBounds& bounds, unsigned depth, int& first, int& count) {
+  void leaf(const BuildLeaf* leaf, const RTCBounds& bounds, unsigned depth, int& first,
+            int& count) {
     out_.stats.max_depth = std::max(out_.stats.max_depth, depth);
     out_.stats.leaves += 1;
     out_.stats.sah_cost += opt_.intersection_cost * leaf->count * area(bounds);
@@ -138,7 +141,9 @@ Result<RTCDevice> embree_device() {
   static std::once_flag once;
   static RTCDevice device = nullptr;
   std::call_once(once, [] { device = rtcNewDevice("threads=0"); });
-  if (!device) return unavailable(strprintf("Embree device creation failed (error %d)", rtcGetDeviceError(nullptr)));
+  if (!device)
+    return unavailable(
+        strprintf("Embree device creation failed (error %d)", rtcGetDeviceError(nullptr)));
   return device;
 }
 
@@ -201,7 +206,8 @@ Result<DeviceBvh> build_bvh(const TriangleSoup& soup, const BvhBuildOptions& opt
   if (!root) {
     const RTCError err = rtcGetDeviceError(device.value());
     rtcReleaseBVH(bvh);
-    return internal_error(strprintf("rtcBuildBVH failed over %zu triangles (Embree error %d)", n, static_cast<int>(err)));
+    return internal_error(strprintf("rtcBuildBVH failed over %zu triangles (Embree error %d)", n,
+                                    static_cast<int>(err)));
   }
 
   out.nodes.reserve(n);
@@ -236,6 +242,8 @@ Result<DeviceBvh> build_bvh(const TriangleSoup& soup, const BvhBuildOptions& opt
   return out;
 }
 
-unsigned required_stack_size(const DeviceBvh& bvh) { return bvh.stats.max_depth + 1; }
+unsigned required_stack_size(const DeviceBvh& bvh) {
+  return bvh.stats.max_depth + 1;
+}
 
 }  // namespace luxel::accel

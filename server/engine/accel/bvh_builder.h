@@ -13,26 +13,26 @@
 namespace luxel::accel {
 
 struct BvhBuildOptions {
-  unsigned max_leaf_size = 4;   // triangles per leaf (the builder may exceed it at max depth)
-  unsigned max_depth = 48;      // the traversal stack (LUX_STACK_SIZE) must be deeper
-  float traversal_cost = 1.0f;  // SAH cost of one node visit relative to...
+  unsigned max_leaf_size = 4;      // triangles per leaf (the builder may exceed it at max depth)
+  unsigned max_depth = 48;         // the traversal stack (LUX_STACK_SIZE) must be deeper
+  float traversal_cost = 1.0f;     // SAH cost of one node visit relative to...
   float intersection_cost = 1.0f;  // ...one triangle test
 };
 
 struct BvhStats {
   size_t nodes = 0;
   size_t leaves = 0;
-  size_t triangles = 0;       // referenced by leaves (== soup size)
+  size_t triangles = 0;  // referenced by leaves (== soup size)
   unsigned max_depth = 0;
-  double sah_cost = 0.0;      // expected cost per ray, relative to root area
-  double build_ms = 0.0;      // rtcBuildBVH plus flattening
-  size_t device_bytes = 0;    // nodes + triangles (+ alpha data)
+  double sah_cost = 0.0;    // expected cost per ray, relative to root area
+  double build_ms = 0.0;    // rtcBuildBVH plus flattening
+  size_t device_bytes = 0;  // nodes + triangles (+ alpha data)
 };
 
 struct DeviceBvh {
-  std::vector<cl::LuxBvhNode> nodes;        // node 0 is the root
-  std::vector<cl::LuxTriangle> triangles;   // leaf order
-  std::vector<cl::LuxTriangleUV> uvs;       // leaf order; empty unless alpha masks
+  std::vector<cl::LuxBvhNode> nodes;       // node 0 is the root
+  std::vector<cl::LuxTriangle> triangles;  // leaf order
+  std::vector<cl::LuxTriangleUV> uvs;      // leaf order; empty unless alpha masks
   std::vector<cl::LuxAlphaMask> masks;
   std::vector<uint8_t> alpha_texels;
   BvhStats stats;

@@ -111,15 +111,13 @@ Result<std::vector<Out>> trace_host(device::Context& ctx, const std::vector<cl::
 }  // namespace
 
 Result<std::vector<cl::LuxHit>> ClTracer::closest(const std::vector<cl::LuxRay>& rays) {
-  return trace_host<cl::LuxHit>(ctx_, rays, [&](auto& r, auto& c, auto& o, size_t n) {
-    return enqueue_closest(r, c, o, n);
-  });
+  return trace_host<cl::LuxHit>(
+      ctx_, rays, [&](auto& r, auto& c, auto& o, size_t n) { return enqueue_closest(r, c, o, n); });
 }
 
 Result<std::vector<int>> ClTracer::any(const std::vector<cl::LuxRay>& rays) {
-  return trace_host<int>(ctx_, rays, [&](auto& r, auto& c, auto& o, size_t n) {
-    return enqueue_any(r, c, o, n);
-  });
+  return trace_host<int>(
+      ctx_, rays, [&](auto& r, auto& c, auto& o, size_t n) { return enqueue_any(r, c, o, n); });
 }
 
 }  // namespace luxel::accel

@@ -117,7 +117,8 @@ void EmbreeTracer::intersect(std::span<const cl::LuxRay> rays, std::span<cl::Lux
   parallel_chunks(rays.size(), threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags =
+        coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     RTCRayHit batch[kStream];
     for (size_t s = begin; s < end; s += kStream) {
       const size_t m = std::min(kStream, end - s);
@@ -146,7 +147,8 @@ void EmbreeTracer::occluded(std::span<const cl::LuxRay> rays, std::span<int> occ
   parallel_chunks(rays.size(), threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags =
+        coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     RTCRay batch[kStream];
     for (size_t s = begin; s < end; s += kStream) {
       const size_t m = std::min(kStream, end - s);

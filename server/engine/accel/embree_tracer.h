@@ -29,8 +29,8 @@ class EmbreeTracer {
 
   // Closest hits for every ray, on `threads` threads (0: all cores).
   // `coherent` hints Embree that neighbouring rays are coherent.
-  void intersect(std::span<const cl::LuxRay> rays, std::span<cl::LuxHit> hits, bool coherent = false,
-                 unsigned threads = 0) const;
+  void intersect(std::span<const cl::LuxRay> rays, std::span<cl::LuxHit> hits,
+                 bool coherent = false, unsigned threads = 0) const;
   // Any hit: occluded[i] = 1 when something blocks ray i in [tmin, tmax].
   void occluded(std::span<const cl::LuxRay> rays, std::span<int> occluded, bool coherent = false,
                 unsigned threads = 0) const;

@@ -72,7 +72,8 @@ class SurfaceSampler {
   void sample(Pcg32& rng, Vec3& p, Vec3& n) const {
     const double x = static_cast<double>(rng.uniform()) * cdf_.back();
     const size_t t = std::min<size_t>(
-        static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin()), cdf_.size() - 1);
+        static_cast<size_t>(std::upper_bound(cdf_.begin(), cdf_.end(), x) - cdf_.begin()),
+        cdf_.size() - 1);
     float u = rng.uniform(), v = rng.uniform();
     if (u + v > 1.0f) {
       u = 1.0f - u;
@@ -102,15 +103,20 @@ Vec3 offset(Vec3 p, Vec3 n) {
 
 const char* ray_kind_name(RayKind kind) {
   switch (kind) {
-    case RayKind::kCoherent: return "coherent";
-    case RayKind::kIncoherent: return "incoherent";
-    case RayKind::kRandom: return "random";
-    case RayKind::kShadow: return "shadow";
+    case RayKind::kCoherent:
+      return "coherent";
+    case RayKind::kIncoherent:
+      return "incoherent";
+    case RayKind::kRandom:
+      return "random";
+    case RayKind::kShadow:
+      return "shadow";
   }
   return "?";
 }
 
-std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t count, uint64_t seed) {
+std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t count,
+                                  uint64_t seed) {
   std::vector<cl::LuxRay> rays;
   rays.reserve(count);
   Pcg32 rng(seed * 4 + static_cast<uint64_t>(kind));
@@ -121,7 +127,8 @@ std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t
   if (kind == RayKind::kCoherent || (!has_surface && kind != RayKind::kRandom)) {
     // Six 90-degree cameras; side chosen so six faces hold `count` rays.
     const size_t side = std::max<size_t>(8, static_cast<size_t>(std::ceil(std::sqrt(count / 6.0))));
-    static const Vec3 fwd[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    static const Vec3 fwd[6] = {{1, 0, 0},  {-1, 0, 0}, {0, 1, 0},
+                                {0, -1, 0}, {0, 0, 1},  {0, 0, -1}};
     static const Vec3 up[6] = {{0, 1, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, -1}, {0, 1, 0}, {0, 1, 0}};
     for (int face = 0; face < 6 && rays.size() < count; ++face) {
       const Vec3 right = cross(fwd[face], up[face]);
@@ -130,9 +137,12 @@ std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t
           for (size_t y = ty; y < std::min(side, ty + 8); ++y)
             for (size_t x = tx; x < std::min(side, tx + 8); ++x) {
               if (rays.size() >= count) break;
-              const float sx = 2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(side) - 1.0f;
-              const float sy = 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(side) - 1.0f;
-              rays.push_back(make_ray(centre, normalize(fwd[face] + right * sx + up[face] * sy), 0.0f, INFINITY));
+              const float sx =
+                  2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(side) - 1.0f;
+              const float sy =
+                  2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(side) - 1.0f;
+              rays.push_back(make_ray(centre, normalize(fwd[face] + right * sx + up[face] * sy),
+                                      0.0f, INFINITY));
             }
     }
     return rays;
@@ -143,14 +153,16 @@ std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t
     switch (kind) {
       case RayKind::kRandom: {
         const Vec3 e = b.extent();
-        const Vec3 o{b.lo.x + e.x * rng.uniform(), b.lo.y + e.y * rng.uniform(), b.lo.z + e.z * rng.uniform()};
+        const Vec3 o{b.lo.x + e.x * rng.uniform(), b.lo.y + e.y * rng.uniform(),
+                     b.lo.z + e.z * rng.uniform()};
         rays.push_back(make_ray(o, uniform_sphere(rng), 0.0f, INFINITY));
         break;
       }
       case RayKind::kIncoherent: {
         Vec3 p, n;
         sampler.sample(rng, p, n);
-        rays.push_back(make_ray(offset(p, n), cosine_hemisphere(rng, frame_from(n)), 0.0f, INFINITY));
+        rays.push_back(
+            make_ray(offset(p, n), cosine_hemisphere(rng, frame_from(n)), 0.0f, INFINITY));
         break;
       }
       case RayKind::kShadow: {
@@ -163,7 +175,8 @@ std::vector<cl::LuxRay> make_rays(const TriangleSoup& soup, RayKind kind, size_t
         rays.push_back(make_ray(o, target - o, 0.0f, 1.0f - 1e-4f));
         break;
       }
-      case RayKind::kCoherent: break;
+      case RayKind::kCoherent:
+        break;
     }
   }
   return rays;

@@ -6,8 +6,9 @@
 namespace luxel::accel {
 
 Result<Throughput> measure_throughput(device::Context& ctx, ClTracer& cl_tracer,
-                                      const EmbreeTracer& embree, const std::vector<cl::LuxRay>& rays,
-                                      Query query, bool coherent, int repeats) {
+                                      const EmbreeTracer& embree,
+                                      const std::vector<cl::LuxRay>& rays, Query query,
+                                      bool coherent, int repeats) {
   Throughput out;
   out.rays = rays.size();
   if (rays.empty()) return out;
@@ -18,7 +19,8 @@ Result<Throughput> measure_throughput(device::Context& ctx, ClTracer& cl_tracer,
   const int count = static_cast<int>(rays.size());
   auto count_buf = ctx.upload_bytes(&count, sizeof count, "ray count");
   if (!count_buf) return count_buf.status();
-  const size_t out_bytes = rays.size() * (query == Query::kClosest ? sizeof(cl::LuxHit) : sizeof(int));
+  const size_t out_bytes =
+      rays.size() * (query == Query::kClosest ? sizeof(cl::LuxHit) : sizeof(int));
   auto out_buf = ctx.alloc(out_bytes, "trace results", CL_MEM_WRITE_ONLY);
   if (!out_buf) return out_buf.status();
 
@@ -33,9 +35,11 @@ Result<Throughput> measure_throughput(device::Context& ctx, ClTracer& cl_tracer,
   for (int r = 0; r <= repeats; ++r) {  // pass 0 warms caches and the driver
     const double before = kernel_total();
     if (query == Query::kClosest)
-      LUXEL_RETURN_IF_ERROR(cl_tracer.enqueue_closest(ray_buf.value(), count_buf.value(), out_buf.value(), rays.size()));
+      LUXEL_RETURN_IF_ERROR(cl_tracer.enqueue_closest(ray_buf.value(), count_buf.value(),
+                                                      out_buf.value(), rays.size()));
     else
-      LUXEL_RETURN_IF_ERROR(cl_tracer.enqueue_any(ray_buf.value(), count_buf.value(), out_buf.value(), rays.size()));
+      LUXEL_RETURN_IF_ERROR(
+          cl_tracer.enqueue_any(ray_buf.value(), count_buf.value(), out_buf.value(), rays.size()));
     LUXEL_RETURN_IF_ERROR(ctx.finish());
     if (r > 0) best = std::min(best, kernel_total() - before);
   }
@@ -50,7 +54,8 @@ Result<Throughput> measure_throughput(device::Context& ctx, ClTracer& cl_tracer,
       embree.intersect(rays, hits, coherent);
     else
       embree.occluded(rays, occluded, coherent);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (r > 0) best = std::min(best, ms);
   }
   out.embree_ms = best;

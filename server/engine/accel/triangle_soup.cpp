@@ -18,7 +18,8 @@ cl::LuxAlphaMask make_mask(const scene::Scene& scene, const scene::Material& m,
   const float factor_a = m.base_color_factor.w;
   mask.cutoff = factor_a > 0 ? m.alpha_cutoff / factor_a : INFINITY;
   const int t = m.base_color_texture.texture;
-  if (t >= 0 && t < static_cast<int>(scene.textures.size()) && !scene.textures[static_cast<size_t>(t)].rgba.empty()) {
+  if (t >= 0 && t < static_cast<int>(scene.textures.size()) &&
+      !scene.textures[static_cast<size_t>(t)].rgba.empty()) {
     const scene::Texture& tex = scene.textures[static_cast<size_t>(t)];
     mask.width = tex.width;
     mask.height = tex.height;
@@ -42,8 +43,8 @@ Result<TriangleSoup> build_triangle_soup(const scene::Scene& scene) {
   for (const auto& inst : scene.instances)
     total += scene.meshes[static_cast<size_t>(inst.mesh)].triangle_count();
   if (total > static_cast<size_t>(INT32_MAX))
-    return resource_exhausted(strprintf("scene has %zu world triangles; at most %d are supported",
-                                        total, INT32_MAX));
+    return resource_exhausted(
+        strprintf("scene has %zu world triangles; at most %d are supported", total, INT32_MAX));
 
   // Masks per material, created on first use.
   std::map<int, int> mask_of_material;
@@ -68,17 +69,20 @@ Result<TriangleSoup> build_triangle_soup(const scene::Scene& scene) {
     const auto& mesh = scene.meshes[static_cast<size_t>(inst.mesh)];
     for (size_t t = 0; t < mesh.triangle_count(); ++t) {
       for (int k = 0; k < 3; ++k) {
-        const Vec3 p = transform_point(inst.object_to_world, mesh.positions[mesh.indices[t * 3 + static_cast<size_t>(k)]]);
+        const Vec3 p = transform_point(
+            inst.object_to_world, mesh.positions[mesh.indices[t * 3 + static_cast<size_t>(k)]]);
         if (!is_finite(p))
-          return invalid_argument(strprintf(
-              "instance '%s' (node[%d]) of mesh '%s': transform sends triangle %zu to a non-finite position",
-              inst.name.c_str(), inst.node_index, mesh.name.c_str(), t));
+          return invalid_argument(
+              strprintf("instance '%s' (node[%d]) of mesh '%s': transform sends triangle %zu to a "
+                        "non-finite position",
+                        inst.name.c_str(), inst.node_index, mesh.name.c_str(), t));
         soup.vertices.push_back(p);
         soup.bounds.extend(p);
       }
       soup.instance.push_back(static_cast<uint32_t>(i));
       soup.mesh_triangle.push_back(static_cast<uint32_t>(t));
-      soup.alpha_mask.push_back(mask_for(mesh.triangle_material.empty() ? -1 : mesh.triangle_material[t]));
+      soup.alpha_mask.push_back(
+          mask_for(mesh.triangle_material.empty() ? -1 : mesh.triangle_material[t]));
     }
   }
   if (soup.has_alpha_masks()) {

@@ -20,7 +20,9 @@ Hasher& Hasher::add(const void* data, size_t size) {
   return *this;
 }
 
-Hasher& Hasher::add(std::string_view bytes) { return add(bytes.data(), bytes.size()); }
+Hasher& Hasher::add(std::string_view bytes) {
+  return add(bytes.data(), bytes.size());
+}
 
 std::string Hasher::hex() const {
   char buf[33];

@@ -1,10 +1,11 @@
 #include "common/machine_info.h"
-#include "luxel_version.h"
 
 #include <sys/utsname.h>
 
 #include <fstream>
 #include <thread>
+
+#include "luxel_version.h"
 
 namespace luxel {
 
@@ -28,8 +29,8 @@ MachineInfo machine_info() {
 }
 
 std::string describe(const MachineInfo& m) {
-  return m.cpu_model + " (" + std::to_string(m.hardware_threads) + " threads), " + m.os + ", luxel " +
-         m.luxel_version;
+  return m.cpu_model + " (" + std::to_string(m.hardware_threads) + " threads), " + m.os +
+         ", luxel " + m.luxel_version;
 }
 
 }  // namespace luxel

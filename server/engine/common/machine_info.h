@@ -7,10 +7,10 @@
 namespace luxel {
 
 struct MachineInfo {
-  std::string cpu_model;     // /proc/cpuinfo "model name"
+  std::string cpu_model;  // /proc/cpuinfo "model name"
   unsigned hardware_threads = 0;
-  std::string os;            // uname sysname + release
-  std::string luxel_version; // version (git revision)
+  std::string os;             // uname sysname + release
+  std::string luxel_version;  // version (git revision)
 };
 
 MachineInfo machine_info();

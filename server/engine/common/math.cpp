@@ -43,7 +43,8 @@ Vec3 transform_normal(const Mat4& m, Vec3 n) {
       c[i][j] = m.at(i1, j1) * m.at(i2, j2) - m.at(i1, j2) * m.at(i2, j1);
     }
   Vec3 r;
-  for (int i = 0; i < 3; ++i) r[i] = static_cast<float>(c[i][0] * n.x + c[i][1] * n.y + c[i][2] * n.z);
+  for (int i = 0; i < 3; ++i)
+    r[i] = static_cast<float>(c[i][0] * n.x + c[i][1] * n.y + c[i][2] * n.z);
   return normalize(r);
 }
 

@@ -16,7 +16,9 @@ Sha256::Sha256() : impl_(std::make_unique<Impl>()) {
   LUXEL_CHECK(EVP_DigestInit_ex(impl_->ctx, EVP_sha256(), nullptr) == 1);
 }
 
-Sha256::~Sha256() { EVP_MD_CTX_free(impl_->ctx); }
+Sha256::~Sha256() {
+  EVP_MD_CTX_free(impl_->ctx);
+}
 
 void Sha256::update(const void* data, size_t size) {
   if (size > 0) LUXEL_CHECK(EVP_DigestUpdate(impl_->ctx, data, size) == 1);

@@ -7,13 +7,20 @@ namespace luxel {
 
 const char* status_code_name(StatusCode code) {
   switch (code) {
-    case StatusCode::kOk: return "OK";
-    case StatusCode::kInvalidArgument: return "INVALID_ARGUMENT";
-    case StatusCode::kNotFound: return "NOT_FOUND";
-    case StatusCode::kDataLoss: return "DATA_LOSS";
-    case StatusCode::kResourceExhausted: return "RESOURCE_EXHAUSTED";
-    case StatusCode::kUnavailable: return "UNAVAILABLE";
-    case StatusCode::kInternal: return "INTERNAL";
+    case StatusCode::kOk:
+      return "OK";
+    case StatusCode::kInvalidArgument:
+      return "INVALID_ARGUMENT";
+    case StatusCode::kNotFound:
+      return "NOT_FOUND";
+    case StatusCode::kDataLoss:
+      return "DATA_LOSS";
+    case StatusCode::kResourceExhausted:
+      return "RESOURCE_EXHAUSTED";
+    case StatusCode::kUnavailable:
+      return "UNAVAILABLE";
+    case StatusCode::kInternal:
+      return "INTERNAL";
   }
   return "UNKNOWN";
 }
@@ -41,8 +48,8 @@ std::string strprintf(const char* fmt, ...) {
 }
 
 void check_failed(const char* expr, const char* file, int line, const char* msg) {
-  std::fprintf(stderr, "luxel: CHECK failed at %s:%d: %s%s%s\n", file, line, expr,
-               msg ? " — " : "", msg ? msg : "");
+  std::fprintf(stderr, "luxel: CHECK failed at %s:%d: %s%s%s\n", file, line, expr, msg ? " — " : "",
+               msg ? msg : "");
   std::abort();
 }
 

@@ -47,18 +47,30 @@ class [[nodiscard]] Status {
 // printf-style formatting into a std::string (libstdc++ 12 has no std::format).
 std::string strprintf(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 
-inline Status invalid_argument(std::string m) { return {StatusCode::kInvalidArgument, std::move(m)}; }
-inline Status not_found(std::string m) { return {StatusCode::kNotFound, std::move(m)}; }
-inline Status data_loss(std::string m) { return {StatusCode::kDataLoss, std::move(m)}; }
-inline Status resource_exhausted(std::string m) { return {StatusCode::kResourceExhausted, std::move(m)}; }
-inline Status unavailable(std::string m) { return {StatusCode::kUnavailable, std::move(m)}; }
-inline Status internal_error(std::string m) { return {StatusCode::kInternal, std::move(m)}; }
+inline Status invalid_argument(std::string m) {
+  return {StatusCode::kInvalidArgument, std::move(m)};
+}
+inline Status not_found(std::string m) {
+  return {StatusCode::kNotFound, std::move(m)};
+}
+inline Status data_loss(std::string m) {
+  return {StatusCode::kDataLoss, std::move(m)};
+}
+inline Status resource_exhausted(std::string m) {
+  return {StatusCode::kResourceExhausted, std::move(m)};
+}
+inline Status unavailable(std::string m) {
+  return {StatusCode::kUnavailable, std::move(m)};
+}
+inline Status internal_error(std::string m) {
+  return {StatusCode::kInternal, std::move(m)};
+}
 
 // A value or an error Status.
 template <typename T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : value_(std::move(value)) {}  // NOLINT: implicit by design
+  Result(T value) : value_(std::move(value)) {}         // NOLINT: implicit by design
   Result(Status status) : status_(std::move(status)) {  // NOLINT
     if (status_.is_ok()) status_ = internal_error("Result constructed from an OK status");
   }
@@ -82,18 +94,18 @@ class [[nodiscard]] Result {
 }  // namespace luxel
 
 // Invariant checks: always on (cheap), abort with location. Not for user errors.
-#define LUXEL_CHECK(expr)                                                      \
-  do {                                                                         \
-    if (!(expr)) ::luxel::check_failed(#expr, __FILE__, __LINE__, nullptr);    \
+#define LUXEL_CHECK(expr)                                                   \
+  do {                                                                      \
+    if (!(expr)) ::luxel::check_failed(#expr, __FILE__, __LINE__, nullptr); \
   } while (0)
-#define LUXEL_CHECK_MSG(expr, msg)                                             \
-  do {                                                                         \
-    if (!(expr)) ::luxel::check_failed(#expr, __FILE__, __LINE__, (msg));      \
+#define LUXEL_CHECK_MSG(expr, msg)                                        \
+  do {                                                                    \
+    if (!(expr)) ::luxel::check_failed(#expr, __FILE__, __LINE__, (msg)); \
   } while (0)
 
 // Propagate an error Status from an expression returning Status.
-#define LUXEL_RETURN_IF_ERROR(expr)            \
-  do {                                         \
-    ::luxel::Status _luxel_st = (expr);        \
-    if (!_luxel_st.is_ok()) return _luxel_st;  \
+#define LUXEL_RETURN_IF_ERROR(expr)           \
+  do {                                        \
+    ::luxel::Status _luxel_st = (expr);       \
+    if (!_luxel_st.is_ok()) return _luxel_st; \
   } while (0)

@@ -5,7 +5,8 @@ namespace luxel::device {
 std::string cl_error_name(cl_int err) {
   switch (err) {
 #define LUXEL_CL_ERR(e) \
-  case e: return #e;
+  case e:               \
+    return #e;
     LUXEL_CL_ERR(CL_SUCCESS)
     LUXEL_CL_ERR(CL_DEVICE_NOT_FOUND)
     LUXEL_CL_ERR(CL_DEVICE_NOT_AVAILABLE)
@@ -66,17 +67,20 @@ std::string cl_error_name(cl_int err) {
     LUXEL_CL_ERR(CL_INVALID_LINKER_OPTIONS)
     LUXEL_CL_ERR(CL_INVALID_DEVICE_PARTITION_COUNT)
 #undef LUXEL_CL_ERR
-    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR";
-    default: return "CL_UNKNOWN_ERROR(" + std::to_string(err) + ")";
+    case -1001:
+      return "CL_PLATFORM_NOT_FOUND_KHR";
+    default:
+      return "CL_UNKNOWN_ERROR(" + std::to_string(err) + ")";
   }
 }
 
 Status cl_status(cl_int err, const std::string& what) {
   if (err == CL_SUCCESS) return Status::ok();
-  const StatusCode code = (err == CL_MEM_OBJECT_ALLOCATION_FAILURE || err == CL_OUT_OF_HOST_MEMORY ||
-                           err == CL_OUT_OF_RESOURCES || err == CL_INVALID_BUFFER_SIZE)
-                              ? StatusCode::kResourceExhausted
-                              : StatusCode::kUnavailable;
+  const StatusCode code =
+      (err == CL_MEM_OBJECT_ALLOCATION_FAILURE || err == CL_OUT_OF_HOST_MEMORY ||
+       err == CL_OUT_OF_RESOURCES || err == CL_INVALID_BUFFER_SIZE)
+          ? StatusCode::kResourceExhausted
+          : StatusCode::kUnavailable;
   return {code, what + ": " + cl_error_name(err)};
 }
 

@@ -18,8 +18,8 @@ Status cl_status(cl_int err, const std::string& what);
 
 }  // namespace luxel::device
 
-#define LUXEL_CL_RETURN_IF_ERROR(call, what)                          \
-  do {                                                                \
-    const cl_int _luxel_err = (call);                                 \
+#define LUXEL_CL_RETURN_IF_ERROR(call, what)                                             \
+  do {                                                                                   \
+    const cl_int _luxel_err = (call);                                                    \
     if (_luxel_err != CL_SUCCESS) return ::luxel::device::cl_status(_luxel_err, (what)); \
   } while (0)

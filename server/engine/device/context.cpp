@@ -44,7 +44,8 @@ std::string lower(std::string s) {
 std::string DeviceInfo::describe() const {
   return strprintf("%s (%s, %s, driver %s, %u CUs, %.1f GiB)", device_name.c_str(),
                    platform_name.c_str(), is_gpu ? "GPU" : "CPU", driver_version.c_str(),
-                   compute_units, static_cast<double>(global_mem_bytes) / (1024.0 * 1024.0 * 1024.0));
+                   compute_units,
+                   static_cast<double>(global_mem_bytes) / (1024.0 * 1024.0 * 1024.0));
 }
 
 Result<std::vector<DeviceInfo>> list_devices() {
@@ -73,7 +74,8 @@ Result<std::vector<DeviceInfo>> list_devices() {
       info.vendor = device_string(devices[d], CL_DEVICE_VENDOR);
       info.device_version = device_string(devices[d], CL_DEVICE_VERSION);
       info.driver_version = device_string(devices[d], CL_DRIVER_VERSION);
-      info.is_gpu = (device_value<cl_device_type>(devices[d], CL_DEVICE_TYPE) & CL_DEVICE_TYPE_GPU) != 0;
+      info.is_gpu =
+          (device_value<cl_device_type>(devices[d], CL_DEVICE_TYPE) & CL_DEVICE_TYPE_GPU) != 0;
       info.compute_units = device_value<cl_uint>(devices[d], CL_DEVICE_MAX_COMPUTE_UNITS);
       info.global_mem_bytes = device_value<cl_ulong>(devices[d], CL_DEVICE_GLOBAL_MEM_SIZE);
       info.max_alloc_bytes = device_value<cl_ulong>(devices[d], CL_DEVICE_MAX_MEM_ALLOC_SIZE);
@@ -119,7 +121,8 @@ Result<DeviceInfo> choose_device(const std::string& spec_in) {
   if (std::sscanf(spec.c_str(), "%d:%d%c", &p, &d, &tail) == 2) {
     for (const auto& info : all)
       if (info.platform_index == p && info.device_index == d) return info;
-    return not_found(source + " '" + spec + "': no device with that platform:device index; devices:" + listing());
+    return not_found(source + " '" + spec +
+                     "': no device with that platform:device index; devices:" + listing());
   }
   for (const auto& info : all)
     if (lower(info.device_name).find(want) != std::string::npos ||
@@ -197,9 +200,9 @@ Result<Buffer> Context::alloc(size_t bytes, const std::string& name, cl_mem_flag
   // always bind every argument of the program.
   const size_t n = std::max<size_t>(bytes, 16);
   if (n > info_.max_alloc_bytes)
-    return resource_exhausted(strprintf("buffer '%s' needs %zu bytes, device max allocation is %llu",
-                                        name.c_str(), n,
-                                        static_cast<unsigned long long>(info_.max_alloc_bytes)));
+    return resource_exhausted(
+        strprintf("buffer '%s' needs %zu bytes, device max allocation is %llu", name.c_str(), n,
+                  static_cast<unsigned long long>(info_.max_alloc_bytes)));
   cl_int err = CL_SUCCESS;
   cl_mem mem = clCreateBuffer(context_, flags, n, nullptr, &err);
   LUXEL_CL_RETURN_IF_ERROR(err, strprintf("allocating buffer '%s' (%zu bytes)", name.c_str(), n));
@@ -215,15 +218,15 @@ Result<Buffer> Context::upload_bytes(const void* data, size_t bytes, const std::
 }
 
 Status Context::write(const Buffer& buffer, const void* data, size_t bytes, size_t offset) {
-  return cl_status(clEnqueueWriteBuffer(queue_, buffer.get(), CL_TRUE, offset, bytes, data, 0,
-                                        nullptr, nullptr),
-                   "clEnqueueWriteBuffer");
+  return cl_status(
+      clEnqueueWriteBuffer(queue_, buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr, nullptr),
+      "clEnqueueWriteBuffer");
 }
 
 Status Context::read(const Buffer& buffer, void* data, size_t bytes, size_t offset) {
-  return cl_status(clEnqueueReadBuffer(queue_, buffer.get(), CL_TRUE, offset, bytes, data, 0,
-                                       nullptr, nullptr),
-                   "clEnqueueReadBuffer");
+  return cl_status(
+      clEnqueueReadBuffer(queue_, buffer.get(), CL_TRUE, offset, bytes, data, 0, nullptr, nullptr),
+      "clEnqueueReadBuffer");
 }
 
 Status Context::launch(const Kernel& kernel, size_t global, size_t local, const char* label) {

@@ -26,7 +26,7 @@ struct DeviceInfo {
   std::string platform_name;
   std::string device_name;
   std::string vendor;
-  std::string device_version;   // "OpenCL 1.2 pocl ..."
+  std::string device_version;  // "OpenCL 1.2 pocl ..."
   std::string driver_version;
   bool is_gpu = false;
   unsigned compute_units = 0;
@@ -50,7 +50,10 @@ class Buffer {
  public:
   Buffer() = default;
   Buffer(cl_mem mem, size_t bytes) : mem_(mem), bytes_(bytes) {}
-  Buffer(Buffer&& o) noexcept : mem_(o.mem_), bytes_(o.bytes_) { o.mem_ = nullptr; o.bytes_ = 0; }
+  Buffer(Buffer&& o) noexcept : mem_(o.mem_), bytes_(o.bytes_) {
+    o.mem_ = nullptr;
+    o.bytes_ = 0;
+  }
   Buffer& operator=(Buffer&& o) noexcept;
   Buffer(const Buffer&) = delete;
   Buffer& operator=(const Buffer&) = delete;
@@ -96,8 +99,7 @@ class Kernel {
     return cl_status(clSetKernelArg(k_, index, sizeof m, &m), arg_what(index));
   }
   template <typename T>
-    requires std::is_trivially_copyable_v<T>
-  Status set_arg(cl_uint index, const T& v) {
+  requires std::is_trivially_copyable_v<T> Status set_arg(cl_uint index, const T& v) {
     return cl_status(clSetKernelArg(k_, index, sizeof v, &v), arg_what(index));
   }
   // The kernel's parameter count (CL_KERNEL_NUM_ARGS).
@@ -127,7 +129,8 @@ class Context {
   LaunchTimer& timer() { return timer_; }
 
   // Allocates a device buffer; name appears in the error if it fails.
-  Result<Buffer> alloc(size_t bytes, const std::string& name, cl_mem_flags flags = CL_MEM_READ_WRITE);
+  Result<Buffer> alloc(size_t bytes, const std::string& name,
+                       cl_mem_flags flags = CL_MEM_READ_WRITE);
   // Allocates and uploads host data (blocking).
   template <typename T>
   Result<Buffer> upload(const std::vector<T>& data, const std::string& name,

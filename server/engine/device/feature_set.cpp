@@ -9,7 +9,8 @@ namespace luxel::device {
 FeatureSet& FeatureSet::set(const std::string& name, int value) {
   LUXEL_CHECK_MSG(!name.empty(), "empty feature name");
   for (char c : name)
-    LUXEL_CHECK_MSG(std::isupper(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '_',
+    LUXEL_CHECK_MSG(std::isupper(static_cast<unsigned char>(c)) ||
+                        std::isdigit(static_cast<unsigned char>(c)) || c == '_',
                     "feature names are upper-case identifiers");
   if (value == 0)
     values_.erase(name);

@@ -13,7 +13,7 @@
 namespace luxel::device {
 
 struct EmbeddedKernelFile {
-  const char* path;        // relative to kernels/, e.g. "shared/geometry.h"
+  const char* path;  // relative to kernels/, e.g. "shared/geometry.h"
   std::string_view text;
 };
 

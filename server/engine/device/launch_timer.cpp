@@ -6,7 +6,9 @@
 
 namespace luxel::device {
 
-LaunchTimer::~LaunchTimer() { reset(); }
+LaunchTimer::~LaunchTimer() {
+  reset();
+}
 
 void LaunchTimer::record(const std::string& name, cl_event event) {
   pending_.emplace_back(name, event);
@@ -16,7 +18,8 @@ Status LaunchTimer::collect() {
   Status result;
   for (auto& [name, event] : pending_) {
     cl_ulong start = 0, end = 0;
-    cl_int err = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr);
+    cl_int err =
+        clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof start, &start, nullptr);
     if (err == CL_SUCCESS)
       err = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof end, &end, nullptr);
     clReleaseEvent(event);

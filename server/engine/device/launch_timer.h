@@ -14,7 +14,7 @@ namespace luxel::device {
 
 struct LaunchStats {
   uint64_t launches = 0;
-  double total_ms = 0.0;   // device execution time (CL_PROFILING_COMMAND_START..END)
+  double total_ms = 0.0;  // device execution time (CL_PROFILING_COMMAND_START..END)
   double max_ms = 0.0;
 };
 

@@ -1,5 +1,4 @@
 #include "device/program_cache.h"
-#include "luxel_version.h"
 
 #include <unistd.h>
 
@@ -12,6 +11,7 @@
 
 #include "common/hash.h"
 #include "device/kernel_sources.h"
+#include "luxel_version.h"
 
 namespace luxel::device {
 namespace fs = std::filesystem;
@@ -62,8 +62,10 @@ ProgramCache::ProgramCache(cl_context context, DeviceInfo device)
 
 std::string ProgramCache::cache_dir() {
   if (const char* d = std::getenv("LUXEL_CACHE_DIR"); d && *d) return d;
-  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::string(x) + "/luxel/programs";
-  if (const char* h = std::getenv("HOME"); h && *h) return std::string(h) + "/.cache/luxel/programs";
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x)
+    return std::string(x) + "/luxel/programs";
+  if (const char* h = std::getenv("HOME"); h && *h)
+    return std::string(h) + "/.cache/luxel/programs";
   return "/tmp/luxel-cache/programs";
 }
 
@@ -124,22 +126,23 @@ Result<cl_program> ProgramCache::build_from_source(const std::string& source,
   const bool kept = write_atomic(src_path, source.data(), source.size()) &&
                     write_atomic(log_path, log_file.data(), log_file.size());
   std::string shown = log.size() > 4000 ? log.substr(0, 4000) + "\n[... truncated]" : log;
-  return Status(StatusCode::kInternal,
-                strprintf("building kernel program '%s' for %s failed (%s) with options '%s'.%s\n"
-                          "build log:\n%s",
-                          entry.c_str(), device_.device_name.c_str(), cl_error_name(err).c_str(),
-                          options.c_str(),
-                          kept ? (" Expanded source kept at " + src_path.string() + ", log at " +
-                                  log_path.string())
-                                     .c_str()
-                               : " (could not write the expanded source to the cache folder)",
-                          shown.c_str()));
+  return Status(
+      StatusCode::kInternal,
+      strprintf(
+          "building kernel program '%s' for %s failed (%s) with options '%s'.%s\n"
+          "build log:\n%s",
+          entry.c_str(), device_.device_name.c_str(), cl_error_name(err).c_str(), options.c_str(),
+          kept ? (" Expanded source kept at " + src_path.string() + ", log at " + log_path.string())
+                     .c_str()
+               : " (could not write the expanded source to the cache folder)",
+          shown.c_str()));
 }
 
 cl_program ProgramCache::load_binary(const std::string& path, const std::string& options) {
   std::ifstream f(path, std::ios::binary);
   if (!f) return nullptr;
-  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(f)),
+                                   std::istreambuf_iterator<char>());
   if (bytes.empty()) return nullptr;
   const unsigned char* ptr = bytes.data();
   const size_t len = bytes.size();
@@ -159,12 +162,14 @@ cl_program ProgramCache::load_binary(const std::string& path, const std::string&
 
 void ProgramCache::store_binary(cl_program program, const std::string& path) {
   size_t size = 0;
-  if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof size, &size, nullptr) != CL_SUCCESS ||
+  if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof size, &size, nullptr) !=
+          CL_SUCCESS ||
       size == 0)
     return;
   std::vector<unsigned char> bytes(size);
   unsigned char* ptr = bytes.data();
-  if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof ptr, &ptr, nullptr) != CL_SUCCESS) return;
+  if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof ptr, &ptr, nullptr) != CL_SUCCESS)
+    return;
   // A cache that cannot be written only costs a rebuild next time.
   write_atomic(path, bytes.data(), bytes.size());
 }

@@ -61,9 +61,9 @@ SphereQuadrature SphereQuadrature::build(BasisDomain domain, int n_z) {
 
 Result<GramMatrix> gram_analytic(const SphericalBasis& basis) {
   if (!has_closed_form(basis))
-    return invalid_argument(strprintf("no closed-form Gram matrix for basis '%s' over the %s",
-                                      basis.describe().name.c_str(),
-                                      basis.spec().fit_domain == BasisDomain::kSphere ? "sphere" : "hemisphere"));
+    return invalid_argument(strprintf(
+        "no closed-form Gram matrix for basis '%s' over the %s", basis.describe().name.c_str(),
+        basis.spec().fit_domain == BasisDomain::kSphere ? "sphere" : "hemisphere"));
   const int n = basis.size();
   GramMatrix g(size_t(n * n), 0.0);
   if (basis.spec().kind != BasisKind::kSphericalGaussian) {
@@ -75,12 +75,14 @@ Result<GramMatrix> gram_analytic(const SphericalBasis& basis) {
   for (int i = 0; i < n; ++i) {
     for (int j = 0; j < n; ++j) {
       const Vec3 a = p[size_t(i)], b = p[size_t(j)];
-      const double rx = l * (double(a.x) + b.x), ry = l * (double(a.y) + b.y), rz = l * (double(a.z) + b.z);
+      const double rx = l * (double(a.x) + b.x), ry = l * (double(a.y) + b.y),
+                   rz = l * (double(a.z) + b.z);
       const double r = std::sqrt(rx * rx + ry * ry + rz * rz);
       // 4 pi e^{-2l} sinh(r) / r, written to avoid overflow for large l and
       // the 0/0 at r -> 0 (antipodal lobes): sinh(r)/r -> 1.
-      g[size_t(i * n + j)] = r < 1e-8 ? 4.0 * kPi * std::exp(-2.0 * l)
-                                      : 2.0 * kPi / r * (std::exp(r - 2.0 * l) - std::exp(-r - 2.0 * l));
+      g[size_t(i * n + j)] = r < 1e-8
+                                 ? 4.0 * kPi * std::exp(-2.0 * l)
+                                 : 2.0 * kPi / r * (std::exp(r - 2.0 * l) - std::exp(-r - 2.0 * l));
     }
   }
   return g;
@@ -94,7 +96,8 @@ GramMatrix gram_numeric(const SphericalBasis& basis, int n_z) {
   for (size_t k = 0; k < q.directions.size(); ++k) {
     basis.evaluate(q.directions[k], b.data());
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j <= i; ++j) g[size_t(i * n + j)] += q.weights[k] * double(b[size_t(i)]) * b[size_t(j)];
+      for (int j = 0; j <= i; ++j)
+        g[size_t(i * n + j)] += q.weights[k] * double(b[size_t(i)]) * b[size_t(j)];
   }
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < i; ++j) g[size_t(j * n + i)] = g[size_t(i * n + j)];
@@ -106,7 +109,8 @@ GramMatrix gram(const SphericalBasis& basis) {
   return gram_numeric(basis);
 }
 
-std::vector<double> project(const SphericalBasis& basis, const std::function<double(Vec3)>& f, int n_z) {
+std::vector<double> project(const SphericalBasis& basis, const std::function<double(Vec3)>& f,
+                            int n_z) {
   const SphereQuadrature q = SphereQuadrature::build(basis.spec().fit_domain, n_z);
   std::vector<double> m(size_t(basis.size()), 0.0);
   std::vector<float> b(static_cast<size_t>(basis.size()));
@@ -120,12 +124,15 @@ std::vector<double> project(const SphericalBasis& basis, const std::function<dou
 
 Result<std::vector<double>> solve_spd(const GramMatrix& g, std::vector<double> rhs) {
   const size_t n = rhs.size();
-  if (g.size() != n * n) return invalid_argument(strprintf("Gram matrix has %zu entries, expected %zu", g.size(), n * n));
+  if (g.size() != n * n)
+    return invalid_argument(
+        strprintf("Gram matrix has %zu entries, expected %zu", g.size(), n * n));
   std::vector<double> l(n * n, 0.0);
   for (size_t j = 0; j < n; ++j) {
     double d = g[j * n + j];
     for (size_t k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];
-    if (!(d > 0.0)) return invalid_argument(strprintf("Gram matrix is not positive definite at row %zu", j));
+    if (!(d > 0.0))
+      return invalid_argument(strprintf("Gram matrix is not positive definite at row %zu", j));
     l[j * n + j] = std::sqrt(d);
     for (size_t i = j + 1; i < n; ++i) {
       double s = g[i * n + j];
@@ -144,8 +151,8 @@ Result<std::vector<double>> solve_spd(const GramMatrix& g, std::vector<double> r
   return rhs;
 }
 
-Result<std::vector<float>> fit_least_squares(const SphericalBasis& basis, const std::function<double(Vec3)>& f,
-                                             int n_z) {
+Result<std::vector<float>> fit_least_squares(const SphericalBasis& basis,
+                                             const std::function<double(Vec3)>& f, int n_z) {
   Result<std::vector<double>> x = solve_spd(gram(basis), project(basis, f, n_z));
   if (!x) return x.status();
   return std::vector<float>(x.value().begin(), x.value().end());

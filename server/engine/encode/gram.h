@@ -35,13 +35,14 @@ GramMatrix gram_numeric(const SphericalBasis& basis, int n_z = 128);
 GramMatrix gram(const SphericalBasis& basis);
 
 // Raw moments m_i = integral over fit_domain of f B_i (right side of Eq. 7.3).
-std::vector<double> project(const SphericalBasis& basis, const std::function<double(Vec3)>& f, int n_z = 128);
+std::vector<double> project(const SphericalBasis& basis, const std::function<double(Vec3)>& f,
+                            int n_z = 128);
 
 // Solves G x = rhs for symmetric positive definite G by Cholesky (double).
 Result<std::vector<double>> solve_spd(const GramMatrix& g, std::vector<double> rhs);
 
 // Least-squares coefficients of f over fit_domain: G^-1 m (Eq. 7.3).
-Result<std::vector<float>> fit_least_squares(const SphericalBasis& basis, const std::function<double(Vec3)>& f,
-                                             int n_z = 128);
+Result<std::vector<float>> fit_least_squares(const SphericalBasis& basis,
+                                             const std::function<double(Vec3)>& f, int n_z = 128);
 
 }  // namespace luxel::encode

@@ -40,13 +40,13 @@ Json instance_to_json(const Manifest::Instance& in) {
 Json stats_to_json(const Manifest::Stats& s) {
   // nlohmann writes non-finite doubles as null.
   Json j{{"seconds", s.seconds},
-              {"paths", s.paths},
-              {"mean_spp", s.mean_spp},
-              {"min_spp", s.min_spp},
-              {"error_estimate", s.error_estimate},
-              {"nonfinite_dropped", s.nonfinite_dropped},
-              {"termination", s.termination},
-              {"covered_texels", static_cast<uint64_t>(s.covered_texels)}};
+         {"paths", s.paths},
+         {"mean_spp", s.mean_spp},
+         {"min_spp", s.min_spp},
+         {"error_estimate", s.error_estimate},
+         {"nonfinite_dropped", s.nonfinite_dropped},
+         {"termination", s.termination},
+         {"covered_texels", static_cast<uint64_t>(s.covered_texels)}};
   if (s.rmse >= 0) {
     j["rmse"] = s.rmse;
     j["rel_mse"] = s.rel_mse;
@@ -302,8 +302,8 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
       return invalid_argument(strprintf("%s: encodings: expected an array", what.c_str()));
     for (size_t i = 0; i < enc.size(); ++i) {
       if (!enc[i].is_object() || !enc[i].contains("name") || !enc[i]["name"].is_string())
-        return invalid_argument(strprintf("%s: encodings[%zu]: expected an object with a name",
-                                          what.c_str(), i));
+        return invalid_argument(
+            strprintf("%s: encodings[%zu]: expected an object with a name", what.c_str(), i));
       m.encodings_json.push_back(enc[i].dump());
     }
   }

@@ -14,13 +14,13 @@
 #pragma once
 
 #include <cstddef>
-#include "luxel_version.h"
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
 
 #include "common/status.h"
+#include "luxel_version.h"
 
 namespace luxel::output {
 
@@ -77,7 +77,8 @@ struct Manifest {
     uint64_t paths = 0;
     double mean_spp = 0, min_spp = 0;
     double error_estimate = 0;  // mean relative standard error (DESIGN.md)
-    double rmse = -1, rel_mse = -1;  // against a reference lightmap; -1 (absent in JSON) without one
+    double rmse = -1,
+           rel_mse = -1;  // against a reference lightmap; -1 (absent in JSON) without one
     uint64_t nonfinite_dropped = 0;
     std::string termination;  // why the bake stopped: "samples", "time", "error", ...
     size_t covered_texels = 0;

@@ -21,10 +21,14 @@ namespace luxel::pipeline {
 
 const char* termination_name(Termination t) {
   switch (t) {
-    case Termination::kSamples: return "samples";
-    case Termination::kTime: return "time";
-    case Termination::kError: return "error";
-    case Termination::kCancelled: return "cancelled";
+    case Termination::kSamples:
+      return "samples";
+    case Termination::kTime:
+      return "time";
+    case Termination::kError:
+      return "error";
+    case Termination::kCancelled:
+      return "cancelled";
   }
   return "?";
 }
@@ -147,8 +151,7 @@ Status Baker::run_iteration(uint32_t batch) {
     if (nee) LUXEL_RETURN_IF_ERROR(trace_shadows(/*texel_point=*/false));
     if (compaction_) {
       // §5.1: keep only live paths; the new count stays on the device.
-      const device::Buffer* next_count =
-          a.live.count == &b_.count_a ? &b_.count_b : &b_.count_a;
+      const device::Buffer* next_count = a.live.count == &b_.count_a ? &b_.count_b : &b_.count_a;
       LUXEL_RETURN_IF_ERROR(compaction_->enqueue(a.paths.tagged, a.paths.alive, *a.live.count,
                                                  *spare, *next_count, cap));
       spare = std::exchange(a.live.active, spare);
@@ -175,8 +178,7 @@ Status Baker::compute_stats(BakeProgress& progress) {
   a.params.paths = 0;
   const uint32_t covered = a.params.covered_count;
   const size_t groups = (covered + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
-  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::accum_stats, groups * LUX_STATS_GROUP,
-                               LUX_STATS_GROUP));
+  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::accum_stats, groups * LUX_STATS_GROUP, LUX_STATS_GROUP));
   std::vector<cl::LuxAccumStats> partials(groups);
   LUXEL_RETURN_IF_ERROR(ctx_.read(a.accum.stats, partials));
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
@@ -308,8 +310,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   assemble_result(s_, settings_, state.value(), result);
   record_final_progress(progress, ctx_, result);
   result.termination = why;
-  result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() +
-                             sort_->device_bytes() +
+  result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() + sort_->device_bytes() +
                              (compaction_ ? compaction_->device_bytes() : 0);
   return result;
 }

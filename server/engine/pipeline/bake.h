@@ -27,14 +27,14 @@ namespace luxel::pipeline {
 
 struct BakeProgress {
   double elapsed_s = 0;
-  uint64_t paths = 0;          // paths traced so far
-  double mean_spp = 0;         // mean samples per covered texel
-  uint32_t min_spp = 0;        // minimum over covered texels
-  double error = 1;            // mean relative standard error over covered texels
-  double rmse = -1;            // with a reference: RMSE over covered texels and RGB (-1: none)
-  double rel_mse = -1;         // with a reference: mean (x - ref)^2 / (ref^2 + 1e-2) (-1: none)
-  double eta_s = -1;           // estimated seconds left (-1: unknown)
-  double fraction = 0;         // progress towards the nearest stopping rule, [0, 1]
+  uint64_t paths = 0;    // paths traced so far
+  double mean_spp = 0;   // mean samples per covered texel
+  uint32_t min_spp = 0;  // minimum over covered texels
+  double error = 1;      // mean relative standard error over covered texels
+  double rmse = -1;      // with a reference: RMSE over covered texels and RGB (-1: none)
+  double rel_mse = -1;   // with a reference: mean (x - ref)^2 / (ref^2 + 1e-2) (-1: none)
+  double eta_s = -1;     // estimated seconds left (-1: unknown)
+  double fraction = 0;   // progress towards the nearest stopping rule, [0, 1]
   uint32_t iteration = 0;
 };
 
@@ -63,9 +63,10 @@ struct EncodedLightmap {
 
 struct BakeResult {
   int width = 0, height = 0;
-  std::vector<float> irradiance;   // RGBA, row 0 = top; A = fraction of the texel covered by geometry
-  std::vector<float> samples;      // samples per texel (own-texel paths)
-  std::vector<float> rel_error;    // relative standard error per texel (0 where uncovered)
+  std::vector<float>
+      irradiance;                // RGBA, row 0 = top; A = fraction of the texel covered by geometry
+  std::vector<float> samples;    // samples per texel (own-texel paths)
+  std::vector<float> rel_error;  // relative standard error per texel (0 where uncovered)
   atlas::Atlas atlas;
   size_t covered_texels = 0;
 
@@ -81,12 +82,12 @@ struct BakeResult {
   std::vector<EncodedLightmap> encodings;  // directional encodings, in the requested order
   size_t basis_bytes_per_texel = 0;        // device state of all encodings per texel
 
-  std::string features;            // compiled bake features ("light_emissive, nee, ...")
+  std::string features;  // compiled bake features ("light_emissive, nee, ...")
   std::string device;
   size_t sample_info_bytes = 0;
   size_t peak_device_bytes = 0;
-  double setup_s = 0;              // import excluded: atlas, BVH, uploads, program builds
-  std::string kernel_table;        // per-kernel timing table (Table 5.4 style)
+  double setup_s = 0;        // import excluded: atlas, BVH, uploads, program builds
+  std::string kernel_table;  // per-kernel timing table (Table 5.4 style)
   std::vector<std::pair<std::string, double>> kernel_ms;  // name -> total ms
 };
 
@@ -97,22 +98,22 @@ using ProgressFn = std::function<bool(const BakeProgress&)>;
 // A progressive image of the bake so far (not dilated).
 struct BakeSnapshot {
   int width = 0, height = 0;
-  std::vector<float> irradiance;   // RGBA like BakeResult::irradiance
+  std::vector<float> irradiance;  // RGBA like BakeResult::irradiance
   BakeProgress progress;
 };
 
 // Everything a long-running host (the daemon) hooks into a bake. All
 // callbacks run on the bake's thread between iterations.
 struct BakeHooks {
-  ProgressFn on_progress;                      // every settings.progress_interval_s
-  double snapshot_interval_s = 0;              // 0: no snapshots
+  ProgressFn on_progress;          // every settings.progress_interval_s
+  double snapshot_interval_s = 0;  // 0: no snapshots
   std::function<void(const BakeSnapshot&)> on_snapshot;
-  double checkpoint_interval_s = 0;            // 0: no periodic checkpoints
+  double checkpoint_interval_s = 0;  // 0: no periodic checkpoints
   std::function<void(const BakeCheckpoint&)> on_checkpoint;
   const std::atomic<bool>* checkpoint_now = nullptr;  // set: checkpoint after the current iteration
-  std::string fingerprint;                     // stored in checkpoints (scene + settings)
-  const BakeCheckpoint* resume = nullptr;      // continue from this state
-  const std::atomic<bool>* cancel = nullptr;   // set to stop after the current iteration
+  std::string fingerprint;                            // stored in checkpoints (scene + settings)
+  const BakeCheckpoint* resume = nullptr;             // continue from this state
+  const std::atomic<bool>* cancel = nullptr;          // set to stop after the current iteration
   // Held around every iteration's device work. Bakes that share one device
   // (a daemon running several at once) pass the same mutex, so they take
   // turns on the device instead of oversubscribing it (two PoCL contexts on

@@ -84,7 +84,8 @@ void record_final_progress(const BakeProgress& p, device::Context& ctx, BakeResu
   r.rel_mse = p.rel_mse;
   r.device = ctx.info().describe();
   r.kernel_table = ctx.timer().table();
-  for (const auto& [name, stats] : ctx.timer().stats()) r.kernel_ms.push_back({name, stats.total_ms});
+  for (const auto& [name, stats] : ctx.timer().stats())
+    r.kernel_ms.push_back({name, stats.total_ms});
 }
 
 std::vector<ErrorSample> series_from_checkpoint(const BakeCheckpoint& c) {
@@ -92,9 +93,8 @@ std::vector<ErrorSample> series_from_checkpoint(const BakeCheckpoint& c) {
   const auto& s = c.series;
   const size_t stride = c.series_stride;
   for (size_t i = 0; i + stride <= s.size(); i += stride)
-    out.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2],
-                   static_cast<uint32_t>(s[i + 3]), s[i + 4], stride >= 7 ? s[i + 5] : -1.0,
-                   stride >= 7 ? s[i + 6] : -1.0});
+    out.push_back({s[i], static_cast<uint64_t>(s[i + 1]), s[i + 2], static_cast<uint32_t>(s[i + 3]),
+                   s[i + 4], stride >= 7 ? s[i + 5] : -1.0, stride >= 7 ? s[i + 6] : -1.0});
   return out;
 }
 

@@ -184,8 +184,8 @@ Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c)
     return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",
                                       c.basis.size(), basis_size));
   if (basis_size > 0)
-    LUXEL_RETURN_IF_ERROR(ctx.write(args_.encodings.basis_state, c.basis.data(),
-                                    basis_size * sizeof(cl::float4)));
+    LUXEL_RETURN_IF_ERROR(
+        ctx.write(args_.encodings.basis_state, c.basis.data(), basis_size * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx.write(acc.nonfinite, &nonfinite, sizeof nonfinite));
   return ctx.finish();
 }

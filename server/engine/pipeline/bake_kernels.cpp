@@ -29,8 +29,7 @@ Status bind_value(device::Kernel& k, cl_uint index, const Given& v) {
 #define LUXEL_BIND_buffer(T, name) bind_buffer(k, index++, g.name, #name)
 #define LUXEL_BIND_live(T, name) bind_live(k, index++, g.name, #name)
 #define LUXEL_BIND_value(T, name) bind_value<T>(k, index++, g.name)
-#define LUXEL_BIND_ENTRY(kind, T, name, what) \
-  LUXEL_RETURN_IF_ERROR(LUXEL_BIND_##kind(T, name));
+#define LUXEL_BIND_ENTRY(kind, T, name, what) LUXEL_RETURN_IF_ERROR(LUXEL_BIND_##kind(T, name));
 #define LUXEL_BIND_GROUP(access, group) \
   {                                     \
     const auto& g = args.group;         \
@@ -40,12 +39,12 @@ Status bind_value(device::Kernel& k, cl_uint index, const Given& v) {
 #define LUXEL_COUNT_GROUP(access, group) LUX_GROUP_##group(LUXEL_COUNT_ENTRY)
 
 // bind_<kernel>(k, args): params, then every group of the kernel's list.
-#define LUXEL_DEFINE_BINDER(kernel)                                         \
-  Status bind_##kernel(device::Kernel& k, const BakeArgs& args) {           \
-    cl_uint index = 0;                                                      \
-    LUXEL_RETURN_IF_ERROR(k.set_arg(index++, args.params));                 \
-    LUX_KERNEL_##kernel(LUXEL_BIND_GROUP) return Status::ok();              \
-  }                                                                         \
+#define LUXEL_DEFINE_BINDER(kernel)                               \
+  Status bind_##kernel(device::Kernel& k, const BakeArgs& args) { \
+    cl_uint index = 0;                                            \
+    LUXEL_RETURN_IF_ERROR(k.set_arg(index++, args.params));       \
+    LUX_KERNEL_##kernel(LUXEL_BIND_GROUP) return Status::ok();    \
+  }                                                               \
   constexpr cl_uint kArgs_##kernel = 1 LUX_KERNEL_##kernel(LUXEL_COUNT_GROUP);
 LUX_BAKE_KERNELS(LUXEL_DEFINE_BINDER)
 #undef LUXEL_DEFINE_BINDER
@@ -56,17 +55,18 @@ Result<BakeKernels> BakeKernels::create(device::Context& ctx, const device::Feat
   auto program = ctx.programs().get("bake.cl", features);
   if (!program) return program.status();
   BakeKernels out;
-#define LUXEL_CREATE_KERNEL(name)                                                          \
-  {                                                                                          \
-    auto k = program.value()->kernel(#name);                                               \
-    if (!k) return k.status();                                                               \
-    auto n = k.value().num_args();                                                           \
-    if (!n) return n.status();                                                               \
-    if (n.value() != kArgs_##name)                                                         \
-      return internal_error(strprintf("bake.cl kernel '%s' takes %u arguments, "             \
-                                      "kernels/shared/bake_args.h declares %u",              \
-                                      #name, n.value(), kArgs_##name));                  \
-    out[BakeKernel::name] = std::move(k.value());                                          \
+#define LUXEL_CREATE_KERNEL(name)                              \
+  {                                                            \
+    auto k = program.value()->kernel(#name);                   \
+    if (!k) return k.status();                                 \
+    auto n = k.value().num_args();                             \
+    if (!n) return n.status();                                 \
+    if (n.value() != kArgs_##name)                             \
+      return internal_error(                                   \
+          strprintf("bake.cl kernel '%s' takes %u arguments, " \
+                    "kernels/shared/bake_args.h declares %u",  \
+                    #name, n.value(), kArgs_##name));          \
+    out[BakeKernel::name] = std::move(k.value());              \
   }
   LUX_BAKE_KERNELS(LUXEL_CREATE_KERNEL)
 #undef LUXEL_CREATE_KERNEL
@@ -77,7 +77,8 @@ Status BakeKernels::bind(BakeKernel k, const BakeArgs& args) {
   device::Kernel& kernel = (*this)[k];
   switch (k) {
 #define LUXEL_BIND_CASE(name) \
-  case BakeKernel::name: return bind_##name(kernel, args);
+  case BakeKernel::name:      \
+    return bind_##name(kernel, args);
     LUX_BAKE_KERNELS(LUXEL_BIND_CASE)
 #undef LUXEL_BIND_CASE
   }

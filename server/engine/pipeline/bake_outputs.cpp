@@ -1,10 +1,10 @@
 #include "pipeline/bake_outputs.h"
-#include "luxel_version.h"
 
 #include <filesystem>
 #include <system_error>
 
 #include "common/atomic_file.h"
+#include "luxel_version.h"
 #include "output/dilate.h"
 #include "output/exr.h"
 #include "output/preview.h"
@@ -25,8 +25,8 @@ std::string series_csv(const BakeResult& r) {
   // rmse / rel_mse: against the reference lightmap, empty without one.
   std::string s = "elapsed_s,paths,mean_spp,min_spp,rel_error,rmse,rel_mse\n";
   for (const auto& e : r.series) {
-    s += strprintf("%.6f,%llu,%.4f,%u,%.6g,", e.elapsed_s,
-                   static_cast<unsigned long long>(e.paths), e.mean_spp, e.min_spp, e.error);
+    s += strprintf("%.6f,%llu,%.4f,%u,%.6g,", e.elapsed_s, static_cast<unsigned long long>(e.paths),
+                   e.mean_spp, e.min_spp, e.error);
     s += e.rmse >= 0 ? strprintf("%.6g,%.6g\n", e.rmse, e.rel_mse) : std::string(",\n");
   }
   return s;
@@ -89,8 +89,9 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
                                        const std::string& scene_sha256) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
-  if (ec) return invalid_argument(strprintf("cannot create output folder '%s': %s", dir.c_str(),
-                                            ec.message().c_str()));
+  if (ec)
+    return invalid_argument(
+        strprintf("cannot create output folder '%s': %s", dir.c_str(), ec.message().c_str()));
   namespace fs = std::filesystem;
   OutputPaths paths;
   auto at = [&](const char* name) { return (fs::path(dir) / name).string(); };
@@ -108,19 +109,21 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       {"luxel/units", "W/m^2"},
       {"luxel/alpha", "fraction of the texel covered by geometry"},
       {"luxel/scene", scene.source_name}};
-  LUXEL_RETURN_IF_ERROR(output::write_exr(paths.irradiance_exr, lightmap, {"R", "G", "B", "A"}, meta));
+  LUXEL_RETURN_IF_ERROR(
+      output::write_exr(paths.irradiance_exr, lightmap, {"R", "G", "B", "A"}, meta));
   LUXEL_RETURN_IF_ERROR(output::write_png_preview(paths.preview_png, lightmap));
-  LUXEL_RETURN_IF_ERROR(output::write_exr(
-      paths.samples_exr, to_image(result.width, result.height, 1, result.samples), {"Y"},
-      {{"luxel/content", "samples per texel"}}));
-  LUXEL_RETURN_IF_ERROR(output::write_exr(
-      paths.error_exr, to_image(result.width, result.height, 1, result.rel_error), {"Y"},
-      {{"luxel/content", "relative standard error of the texel mean"}}));
+  LUXEL_RETURN_IF_ERROR(output::write_exr(paths.samples_exr,
+                                          to_image(result.width, result.height, 1, result.samples),
+                                          {"Y"}, {{"luxel/content", "samples per texel"}}));
+  LUXEL_RETURN_IF_ERROR(
+      output::write_exr(paths.error_exr, to_image(result.width, result.height, 1, result.rel_error),
+                        {"Y"}, {{"luxel/content", "relative standard error of the texel mean"}}));
   // Directional encodings: one EXR each, channels c00.R .. cNN.B, dilated
   // with the irradiance map's coverage so every channel pads the same texels.
   output::Image coverage = to_image(result.width, result.height, 1, {});
   coverage.pixels.resize(size_t(result.width) * result.height);
-  for (size_t t = 0; t < coverage.pixels.size(); ++t) coverage.pixels[t] = result.irradiance[t * 4 + 3];
+  for (size_t t = 0; t < coverage.pixels.size(); ++t)
+    coverage.pixels[t] = result.irradiance[t * 4 + 3];
   std::vector<output::Manifest::File> encoding_files;
   for (const auto& e : result.encodings) {
     output::Image img = to_image(result.width, result.height, e.count * 3, e.coefficients);
@@ -136,7 +139,8 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     paths.encodings.push_back(at(file.c_str()));
     encoding_files.push_back({e.name, file, "exr",
                               strprintf("float32, %d coefficients x RGB of the %s basis (see "
-                                        "encodings in this manifest)", e.count, e.name.c_str())});
+                                        "encodings in this manifest)",
+                                        e.count, e.name.c_str())});
   }
 
   const std::string csv = series_csv(result);

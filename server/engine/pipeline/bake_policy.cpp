@@ -36,9 +36,12 @@ bool BakePolicy::report_due(double since_report_s) const {
 
 double BakePolicy::tracked_error(const BakeProgress& p) const {
   switch (settings_.target_metric) {
-    case ErrorMetric::kRmse: return p.rmse;
-    case ErrorMetric::kRelMse: return p.rel_mse;
-    case ErrorMetric::kEstimate: break;
+    case ErrorMetric::kRmse:
+      return p.rmse;
+    case ErrorMetric::kRelMse:
+      return p.rel_mse;
+    case ErrorMetric::kEstimate:
+      break;
   }
   return p.error;
 }
@@ -53,8 +56,7 @@ bool BakePolicy::snapshot_due(double since_snapshot_s) const {
 
 bool BakePolicy::checkpoint_due(double since_checkpoint_s, bool requested) const {
   if (!checkpoints_) return false;
-  return (checkpoint_interval_s_ > 0 && since_checkpoint_s >= checkpoint_interval_s_) ||
-         requested;
+  return (checkpoint_interval_s_ > 0 && since_checkpoint_s >= checkpoint_interval_s_) || requested;
 }
 
 void BakePolicy::estimate(BakeProgress& p, bool final_report) const {

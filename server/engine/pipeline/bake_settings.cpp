@@ -6,13 +6,18 @@
 
 namespace luxel::pipeline {
 
-const char* filter_name(Filter f) { return f == Filter::kGaussian ? "gaussian" : "box"; }
+const char* filter_name(Filter f) {
+  return f == Filter::kGaussian ? "gaussian" : "box";
+}
 
 const char* error_metric_name(ErrorMetric m) {
   switch (m) {
-    case ErrorMetric::kEstimate: return "estimate";
-    case ErrorMetric::kRmse: return "rmse";
-    case ErrorMetric::kRelMse: return "relmse";
+    case ErrorMetric::kEstimate:
+      return "estimate";
+    case ErrorMetric::kRmse:
+      return "rmse";
+    case ErrorMetric::kRelMse:
+      return "relmse";
   }
   return "?";
 }
@@ -20,8 +25,8 @@ const char* error_metric_name(ErrorMetric m) {
 Result<ErrorMetric> parse_error_metric(const std::string& name) {
   for (auto m : {ErrorMetric::kEstimate, ErrorMetric::kRmse, ErrorMetric::kRelMse})
     if (name == error_metric_name(m)) return m;
-  return invalid_argument(strprintf("unknown error metric '%s': expected estimate, rmse or relmse",
-                                    name.c_str()));
+  return invalid_argument(
+      strprintf("unknown error metric '%s': expected estimate, rmse or relmse", name.c_str()));
 }
 
 std::map<std::string, std::string> BakeSettings::describe() const {
@@ -31,7 +36,8 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["samples_per_texel"] = std::to_string(samples_per_texel);
   m["time_budget_s"] = strprintf("%g", time_budget_s);
   m["target_error"] = strprintf("%g", target_error);
-  if (target_metric != ErrorMetric::kEstimate) m["target_metric"] = error_metric_name(target_metric);
+  if (target_metric != ErrorMetric::kEstimate)
+    m["target_metric"] = error_metric_name(target_metric);
   if (reference) m["reference"] = reference_name.empty() ? "given" : reference_name;
   m["max_bounces"] = std::to_string(max_bounces);
   m["rr_depth"] = std::to_string(rr_depth);
@@ -53,9 +59,12 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   }
   const auto& sky = lights.sky;
   switch (sky.kind) {
-    case SkySettings::Kind::kNone: m["sky"] = "none"; break;
+    case SkySettings::Kind::kNone:
+      m["sky"] = "none";
+      break;
     case SkySettings::Kind::kConstant:
-      m["sky"] = strprintf("constant %g,%g,%g x %g", sky.color.x, sky.color.y, sky.color.z, sky.intensity);
+      m["sky"] =
+          strprintf("constant %g,%g,%g x %g", sky.color.x, sky.color.y, sky.color.z, sky.intensity);
       break;
     case SkySettings::Kind::kEquirect:
       m["sky"] = strprintf("equirect %s x %g rot %g", sky.equirect_path.c_str(), sky.intensity,

@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <map>
 #include <memory>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "atlas/atlas.h"
 #include "common/status.h"
@@ -31,15 +31,15 @@ Result<ErrorMetric> parse_error_metric(const std::string& name);
 // BakeSettings so that one schema describes every setting of a SubmitBake.
 enum class SnapshotFormat { kPng, kExr, kNone };
 struct JobSettings {
-  int priority = 0;                  // higher runs first; FIFO among equals
-  double snapshot_interval_s = 5;    // seconds between snapshots
+  int priority = 0;                // higher runs first; FIFO among equals
+  double snapshot_interval_s = 5;  // seconds between snapshots
   SnapshotFormat snapshot_format = SnapshotFormat::kPng;
-  int snapshot_max_side = 512;       // PNG snapshot longest side, pixels
-  std::string reference_bake_id;     // benchmark mode on the daemon
+  int snapshot_max_side = 512;    // PNG snapshot longest side, pixels
+  std::string reference_bake_id;  // benchmark mode on the daemon
 };
 
 struct BakeSettings {
-  atlas::AtlasSettings atlas;   // resolution or texel density
+  atlas::AtlasSettings atlas;  // resolution or texel density
 
   // Stopping rules: whichever is reached first. 0 disables a rule; at least
   // one must be set.
@@ -54,14 +54,14 @@ struct BakeSettings {
   std::shared_ptr<const std::vector<float>> reference;
   std::string reference_name;  // where it came from (manifest, logs)
 
-  int max_bounces = 4;          // indirect bounces after the texel point (0 = direct light only)
-  int rr_depth = 3;             // Russian roulette from this vertex depth on
+  int max_bounces = 4;  // indirect bounces after the texel point (0 = direct light only)
+  int rr_depth = 3;     // Russian roulette from this vertex depth on
   uint32_t paths_per_iteration = 1u << 18;  // batch size: bounds device memory
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
-  float clamp_luminance = 0;    // firefly clamp on a path's luminance; 0 = off (unbiased)
-  LightSettings lights;         // sky, sun, directional angular radius
-  EncodingSettings encodings;   // directional encodings besides irradiance
+  float clamp_luminance = 0;   // firefly clamp on a path's luminance; 0 = off (unbiased)
+  LightSettings lights;        // sky, sun, directional angular radius
+  EncodingSettings encodings;  // directional encodings besides irradiance
 
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;

@@ -4,8 +4,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "common/hash.h"
 #include "common/atomic_file.h"
+#include "common/hash.h"
 
 namespace luxel::pipeline {
 namespace {
@@ -16,7 +16,9 @@ constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
 class Writer {
  public:
   template <typename T>
-  void pod(const T& v) { raw(&v, sizeof v); }
+  void pod(const T& v) {
+    raw(&v, sizeof v);
+  }
   template <typename T>
   void vec(const std::vector<T>& v) {
     pod<uint64_t>(v.size());
@@ -37,7 +39,9 @@ class Reader {
  public:
   Reader(const std::string& b, size_t end) : b_(b), end_(end) {}
   template <typename T>
-  bool pod(T& v) { return raw(&v, sizeof v); }
+  bool pod(T& v) {
+    return raw(&v, sizeof v);
+  }
   template <typename T>
   bool vec(std::vector<T>& v, uint64_t max_elements) {
     uint64_t n = 0;
@@ -101,7 +105,8 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   const uint64_t texels_max = uint64_t{1} << 28;
   if (!r.raw(magic, sizeof magic)) return corrupt("not a Luxel checkpoint");
   const bool v1 = std::memcmp(magic, kMagicV1, sizeof kMagicV1) == 0;
-  if (!v1 && std::memcmp(magic, kMagic, sizeof kMagic) != 0) return corrupt("not a Luxel checkpoint");
+  if (!v1 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+    return corrupt("not a Luxel checkpoint");
   if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
@@ -112,7 +117,8 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   c.series_stride = v1 ? 5 : 7;
   const size_t texels = size_t{c.width} * c.height;
   if (c.mean.size() != texels || c.m2.size() != texels || c.weight.size() != texels ||
-      c.spp.size() != texels || c.series.size() % c.series_stride != 0 || c.basis.size() % texels != 0)
+      c.spp.size() != texels || c.series.size() % c.series_stride != 0 ||
+      c.basis.size() % texels != 0)
     return corrupt("array sizes do not match the lightmap");
   return c;
 }

@@ -14,7 +14,6 @@
 
 namespace luxel::pipeline {
 
-
 struct BakeCheckpoint {
   // What the state belongs to: a hash of the scene content and of the
   // settings that shape the result. Resuming with another fingerprint fails.
@@ -22,10 +21,10 @@ struct BakeCheckpoint {
   uint32_t width = 0, height = 0;
   uint64_t paths_done = 0;
   uint32_t iteration = 0;
-  double elapsed_s = 0;           // tracing time before the checkpoint
+  double elapsed_s = 0;  // tracing time before the checkpoint
   uint64_t nonfinite = 0;
-  std::vector<double> series;     // ErrorSample fields flattened, series_stride per point
-  size_t series_stride = 7;       // 7 (with rmse, rel_mse); 5 in version-1 files
+  std::vector<double> series;  // ErrorSample fields flattened, series_stride per point
+  size_t series_stride = 7;    // 7 (with rmse, rel_mse); 5 in version-1 files
   std::vector<cl::float4> mean, m2;
   std::vector<cl::float2> weight;
   std::vector<uint32_t> spp;

@@ -11,10 +11,14 @@ namespace luxel::pipeline {
 
 const char* solver_name(EncodingSolver s) {
   switch (s) {
-    case EncodingSolver::kAuto: return "auto";
-    case EncodingSolver::kProjection: return "projection";
-    case EncodingSolver::kProgressive: return "progressive";
-    case EncodingSolver::kProgressiveNonNegative: return "progressive-nn";
+    case EncodingSolver::kAuto:
+      return "auto";
+    case EncodingSolver::kProjection:
+      return "projection";
+    case EncodingSolver::kProgressive:
+      return "progressive";
+    case EncodingSolver::kProgressiveNonNegative:
+      return "progressive-nn";
   }
   return "?";
 }
@@ -23,8 +27,9 @@ Result<EncodingSolver> parse_solver(const std::string& name) {
   for (auto s : {EncodingSolver::kAuto, EncodingSolver::kProjection, EncodingSolver::kProgressive,
                  EncodingSolver::kProgressiveNonNegative})
     if (name == solver_name(s)) return s;
-  return invalid_argument(strprintf(
-      "unknown solver '%s': expected auto, projection, progressive or progressive-nn", name.c_str()));
+  return invalid_argument(
+      strprintf("unknown solver '%s': expected auto, projection, progressive or progressive-nn",
+                name.c_str()));
 }
 
 Result<std::vector<std::string>> parse_encoding_list(const std::string& list) {
@@ -64,19 +69,22 @@ Status validate_encodings(const EncodingSettings& e) {
 std::string Encoding::describe_json(const std::string& file, float acceleration,
                                     double residual_rms) const {
   nlohmann::ordered_json j = nlohmann::ordered_json::parse(basis.describe().to_json());
-  j["frame"] = tangent_frame
-                   ? "tangent: z = interpolated shading normal, x = surface direction of "
-                     "increasing lightmap u (TEXCOORD_1) projected onto the tangent plane, y = z x x"
-                   : "world (glTF scene space, +y up)";
+  j["frame"] =
+      tangent_frame
+          ? "tangent: z = interpolated shading normal, x = surface direction of "
+            "increasing lightmap u (TEXCOORD_1) projected onto the tangent plane, y = z x x"
+          : "world (glTF scene space, +y up)";
   j["solver"] = solver_name(solver);
   if (solver != EncodingSolver::kProjection) j["acceleration"] = acceleration;
-  j["quantity"] = "incident radiance L(w) in W/(m^2 sr); reconstructed irradiance is in W/m^2 "
-                  "like irradiance.exr";
+  j["quantity"] =
+      "incident radiance L(w) in W/(m^2 sr); reconstructed irradiance is in W/m^2 "
+      "like irradiance.exr";
   if (residual_rms >= 0)
-    j["residual_rms"] = residual_rms;  // mean over covered texels of the running RMS of delta (luminance)
+    j["residual_rms"] =
+        residual_rms;  // mean over covered texels of the running RMS of delta (luminance)
   j["file"] = file;
-  j["channels"] = strprintf("c00.R .. c%02d.B: coefficient i of each colour channel",
-                            basis.size() - 1);
+  j["channels"] =
+      strprintf("c00.R .. c%02d.B: coefficient i of each colour channel", basis.size() - 1);
   return j.dump();
 }
 
@@ -100,7 +108,8 @@ Result<EncodingPlan> plan_encodings(const EncodingSettings& settings) {
       solver = sh ? EncodingSolver::kProjection : EncodingSolver::kProgressiveNonNegative;
 
     cl::LuxEncoding e{};
-    e.kind = sh ? LUX_ENC_SH : (spec.kind == encode::BasisKind::kSphericalGaussian ? LUX_ENC_SG : LUX_ENC_AD);
+    e.kind = sh ? LUX_ENC_SH
+                : (spec.kind == encode::BasisKind::kSphericalGaussian ? LUX_ENC_SG : LUX_ENC_AD);
     e.count = basis.value().size();
     e.first_dir = static_cast<int>(plan.directions.size());
     e.state_offset = static_cast<int>(plan.stride);
@@ -110,7 +119,8 @@ Result<EncodingPlan> plan_encodings(const EncodingSettings& settings) {
                : solver == EncodingSolver::kProgressive ? LUX_SOLVER_PROGRESSIVE
                                                         : LUX_SOLVER_PROGRESSIVE_NN;
     e.sharpness = spec.sharpness;
-    for (const Vec3& d : basis.value().directions()) plan.directions.push_back({d.x, d.y, d.z, 0.0f});
+    for (const Vec3& d : basis.value().directions())
+      plan.directions.push_back({d.x, d.y, d.z, 0.0f});
     plan.stride += static_cast<uint32_t>(1 + e.count);
     plan.table.push_back(e);
     plan.encodings.push_back({std::move(basis.value()), solver, hemisphere});

@@ -38,9 +38,9 @@ struct EncodingSettings {
   // Directional encodings besides irradiance (always baked): "sh1", "sh2",
   // "sg6" / "sg9" / "sg12" (optional "-hemi"), "ambient-dice9" / "ambient-dice12".
   std::vector<std::string> names;
-  float sg_sharpness = 3.4f;      // SG lambda (Eq. 8.2; §8.3.2 suggests ~3.4)
+  float sg_sharpness = 3.4f;  // SG lambda (Eq. 8.2; §8.3.2 suggests ~3.4)
   EncodingSolver solver = EncodingSolver::kAuto;
-  float acceleration = 3.0f;      // alpha of Eq. 7.14 (§7.3: 3 converges quickest)
+  float acceleration = 3.0f;  // alpha of Eq. 7.14 (§7.3: 3 converges quickest)
 };
 
 // Splits "irradiance,sh2,sg12" into the directional names (irradiance is
@@ -53,7 +53,7 @@ Status validate_encodings(const EncodingSettings& e);
 // One resolved encoding.
 struct Encoding {
   encode::SphericalBasis basis;
-  EncodingSolver solver;   // never kAuto
+  EncodingSolver solver;  // never kAuto
   bool tangent_frame;
   std::string name() const { return basis.describe().name; }
   // The manifest entry: basis description plus frame, solver and file.
@@ -63,9 +63,9 @@ struct Encoding {
 
 struct EncodingPlan {
   std::vector<Encoding> encodings;
-  std::vector<cl::LuxEncoding> table;   // device table, one per encoding
-  std::vector<cl::float4> directions;   // lobe directions of SG and Ambient Dice
-  uint32_t stride = 0;                  // float4 of state per texel
+  std::vector<cl::LuxEncoding> table;  // device table, one per encoding
+  std::vector<cl::float4> directions;  // lobe directions of SG and Ambient Dice
+  uint32_t stride = 0;                 // float4 of state per texel
   bool empty() const { return encodings.empty(); }
   size_t bytes_per_texel() const { return size_t{stride} * 16; }
 };

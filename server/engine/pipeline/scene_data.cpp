@@ -5,7 +5,9 @@
 namespace luxel::pipeline {
 namespace {
 
-cl::float4 f4(Vec3 v, float w = 0) { return {v.x, v.y, v.z, w}; }
+cl::float4 f4(Vec3 v, float w = 0) {
+  return {v.x, v.y, v.z, w};
+}
 float int_bits(int32_t i) {
   float f;
   std::memcpy(&f, &i, sizeof f);
@@ -47,8 +49,8 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
   SceneData out;
   const size_t n = soup.size();
   if (triangle_light.size() != n)
-    return internal_error(strprintf("light table covers %zu triangles, the scene has %zu",
-                                      triangle_light.size(), n));
+    return internal_error(
+        strprintf("light table covers %zu triangles, the scene has %zu", triangle_light.size(), n));
   out.materials.reserve(scene.materials.size());
   for (const auto& m : scene.materials) out.materials.push_back(to_device(m));
 
@@ -56,7 +58,8 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
   uint32_t first = 0;
   for (size_t i = 0; i < scene.instances.size(); ++i) {
     out.instance_first[i] = first;
-    first += static_cast<uint32_t>(scene.meshes[static_cast<size_t>(scene.instances[i].mesh)].triangle_count());
+    first += static_cast<uint32_t>(
+        scene.meshes[static_cast<size_t>(scene.instances[i].mesh)].triangle_count());
   }
   if (first != n)
     return internal_error(strprintf("triangle soup has %zu triangles, instances %u", n, first));

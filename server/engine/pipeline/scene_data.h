@@ -21,13 +21,13 @@
 namespace luxel::pipeline {
 
 struct SceneData {
-  std::vector<cl::LuxSurfaceTri> surface;      // per world triangle
-  std::vector<cl::LuxTriangleUV> atlas_uvs;    // per world triangle, atlas UV in [0,1]
+  std::vector<cl::LuxSurfaceTri> surface;    // per world triangle
+  std::vector<cl::LuxTriangleUV> atlas_uvs;  // per world triangle, atlas UV in [0,1]
   std::vector<cl::LuxMaterial> materials;
-  std::vector<uint32_t> instance_first;        // per instance
-  bool uses_textures = false;                  // a base colour or metallic-roughness texture is used
+  std::vector<uint32_t> instance_first;  // per instance
+  bool uses_textures = false;            // a base colour or metallic-roughness texture is used
   bool uses_emissive_texture = false;
-  bool needs_specular = false;                 // some used material is not a rough dielectric
+  bool needs_specular = false;  // some used material is not a rough dielectric
 };
 
 // `triangle_light`: per world triangle, emissive light index or -1 (from the

@@ -32,15 +32,17 @@ enum ComponentBits : unsigned {
 // Integer component types must be normalized and are mapped to [0,1] or
 // [-1,1] (KHR_mesh_quantization). Non-finite values are errors. `budget` is
 // the number of elements still allowed for this import (decremented).
-Status read_floats(const tinygltf::Model& model, int index, const char* semantic, int type, unsigned allowed,
-                   const std::string& ctx, uint64_t* budget, std::vector<float>* out);
+Status read_floats(const tinygltf::Model& model, int index, const char* semantic, int type,
+                   unsigned allowed, const std::string& ctx, uint64_t* budget,
+                   std::vector<float>* out);
 
 // Reads an index accessor (SCALAR, u8/u16/u32).
-Status read_indices(const tinygltf::Model& model, int index, const std::string& ctx, uint64_t* budget,
-                    std::vector<uint32_t>* out);
+Status read_indices(const tinygltf::Model& model, int index, const std::string& ctx,
+                    uint64_t* budget, std::vector<uint32_t>* out);
 
 // The bytes of a buffer view, checked against its buffer.
-Result<std::string_view> buffer_view_bytes(const tinygltf::Model& model, int view, const std::string& ctx);
+Result<std::string_view> buffer_view_bytes(const tinygltf::Model& model, int view,
+                                           const std::string& ctx);
 
 // "accessor 5 (POSITION)" style names of component types for messages.
 const char* component_type_name(int component_type);

@@ -20,7 +20,8 @@ using detail::build_mesh;
 
 std::string node_label(const tinygltf::Model& model, int i) {
   const std::string& name = model.nodes[static_cast<size_t>(i)].name;
-  return name.empty() ? strprintf("node[%d]", i) : strprintf("node '%s' (node[%d])", name.c_str(), i);
+  return name.empty() ? strprintf("node[%d]", i)
+                      : strprintf("node '%s' (node[%d])", name.c_str(), i);
 }
 
 bool all_finite(const std::vector<double>& v) {
@@ -36,7 +37,8 @@ Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
   auto bad = [&](const char* what) {
     return invalid_argument(strprintf("%s: %s", node_label(model, i).c_str(), what));
   };
-  if (!all_finite(n.matrix) || !all_finite(n.translation) || !all_finite(n.rotation) || !all_finite(n.scale)) {
+  if (!all_finite(n.matrix) || !all_finite(n.translation) || !all_finite(n.rotation) ||
+      !all_finite(n.scale)) {
     return bad("transform has a NaN or infinite value");
   }
   if (n.matrix.size() == 16) {
@@ -45,7 +47,8 @@ Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
     return m;
   }
   if (!n.matrix.empty()) return bad("matrix must have 16 numbers");
-  if (!(n.translation.empty() || n.translation.size() == 3)) return bad("translation must have 3 numbers");
+  if (!(n.translation.empty() || n.translation.size() == 3))
+    return bad("translation must have 3 numbers");
   if (!(n.rotation.empty() || n.rotation.size() == 4)) return bad("rotation must have 4 numbers");
   if (!(n.scale.empty() || n.scale.size() == 3)) return bad("scale must have 3 numbers");
   double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, s[3] = {1, 1, 1};
@@ -74,8 +77,10 @@ Status check_hierarchy(const tinygltf::Model& model, std::vector<int>* parent) {
       }
       int& slot = (*parent)[static_cast<size_t>(c)];
       if (slot >= 0) {
-        return invalid_argument(strprintf("%s has several parents (node[%d] and node[%zu]); a node may have only "
-                                          "one parent", node_label(model, c).c_str(), slot, p));
+        return invalid_argument(
+            strprintf("%s has several parents (node[%d] and node[%zu]); a node may have only "
+                      "one parent",
+                      node_label(model, c).c_str(), slot, p));
       }
       slot = static_cast<int>(p);
     }
@@ -93,8 +98,8 @@ Status check_hierarchy(const tinygltf::Model& model, std::vector<int>* parent) {
       i = (*parent)[static_cast<size_t>(i)];
     }
     if (i >= 0 && state[static_cast<size_t>(i)] == 1) {
-      return invalid_argument(strprintf("%s is part of a cycle in the node hierarchy",
-                                        node_label(model, i).c_str()));
+      return invalid_argument(
+          strprintf("%s is part of a cycle in the node hierarchy", node_label(model, i).c_str()));
     }
     for (int k : path) state[static_cast<size_t>(k)] = 2;
   }
@@ -118,14 +123,17 @@ Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::ve
   std::vector<uint8_t> seen(model.nodes.size(), 0);
   for (int r : model.scenes[static_cast<size_t>(s)].nodes) {
     if (r < 0 || static_cast<size_t>(r) >= model.nodes.size()) {
-      return invalid_argument(strprintf("scene %d: node %d does not exist (%zu nodes)", s, r, model.nodes.size()));
+      return invalid_argument(
+          strprintf("scene %d: node %d does not exist (%zu nodes)", s, r, model.nodes.size()));
     }
     if (parent[static_cast<size_t>(r)] >= 0) {
-      return invalid_argument(strprintf("scene %d: %s is listed as a root but is a child of node[%d]", s,
-                                        node_label(model, r).c_str(), parent[static_cast<size_t>(r)]));
+      return invalid_argument(
+          strprintf("scene %d: %s is listed as a root but is a child of node[%d]", s,
+                    node_label(model, r).c_str(), parent[static_cast<size_t>(r)]));
     }
     if (seen[static_cast<size_t>(r)]++) {
-      return invalid_argument(strprintf("scene %d: %s is listed twice", s, node_label(model, r).c_str()));
+      return invalid_argument(
+          strprintf("scene %d: %s is listed twice", s, node_label(model, r).c_str()));
     }
     roots.push_back(r);
   }
@@ -161,7 +169,8 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
     if (node.mesh >= 0 || node.mesh < -1) {
       if (static_cast<size_t>(node.mesh) >= model.meshes.size()) {
         return invalid_argument(strprintf("%s: mesh %d does not exist (%zu meshes)",
-                                          node_label(model, item.node).c_str(), node.mesh, model.meshes.size()));
+                                          node_label(model, item.node).c_str(), node.mesh,
+                                          model.meshes.size()));
       }
       int& slot = mesh_slot[static_cast<size_t>(node.mesh)];
       if (slot < 0) {
@@ -177,14 +186,16 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.object_to_world = world;
       scene->instances.push_back(std::move(inst));
     }
-    LUXEL_RETURN_IF_ERROR(detail::convert_node_light(model, item.node, node_label(model, item.node), world, scene));
-    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.push_back({*c, world});
+    LUXEL_RETURN_IF_ERROR(
+        detail::convert_node_light(model, item.node, node_label(model, item.node), world, scene));
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c)
+      stack.push_back({*c, world});
   }
   return Status::ok();
 }
 
-Result<Scene> import_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                           const ImportOptions& options) {
+Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
+                           const std::string& name, const ImportOptions& options) {
   tinygltf::Model model;
   LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &model));
   Scene scene;
@@ -201,8 +212,8 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir, 
 
 }  // namespace
 
-Result<Scene> import_gltf_memory(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                                 const ImportOptions& options) {
+Result<Scene> import_gltf_memory(std::string_view bytes, const std::string& base_dir,
+                                 const std::string& name, const ImportOptions& options) {
   // Library code below may still throw on hostile input (allocation failure,
   // container limits); a bad upload must become an error, not a crash.
   try {

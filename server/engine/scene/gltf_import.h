@@ -28,7 +28,7 @@ struct ImportOptions {
   uint64_t max_accessor_elements = uint64_t{1} << 30;
   // Per image: longest side and pixel count; over all images: decoded pixels.
   int max_image_side = 16384;
-  uint64_t max_image_pixels = uint64_t{1} << 26;        // 8192 x 8192
+  uint64_t max_image_pixels = uint64_t{1} << 26;          // 8192 x 8192
   uint64_t max_total_texture_pixels = uint64_t{1} << 28;  // 4 GiB of float RGBA
 };
 

@@ -5,9 +5,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <optional>
-
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "common/uri.h"
 
@@ -50,44 +49,51 @@ Status parse_container(std::string_view bytes, const std::string& name, Containe
   const uint64_t length = read_u32(bytes.data() + 8);
   const uint64_t json_length = read_u32(bytes.data() + 12);
   if (version != 2) {
-    return invalid_argument(strprintf("'%s': .glb version %u, only 2 is supported", name.c_str(), version));
+    return invalid_argument(
+        strprintf("'%s': .glb version %u, only 2 is supported", name.c_str(), version));
   }
   if (length > bytes.size()) {
-    return data_loss(strprintf("'%s': truncated .glb: the header declares %llu bytes, the data has %zu",
-                               name.c_str(), static_cast<unsigned long long>(length), bytes.size()));
+    return data_loss(
+        strprintf("'%s': truncated .glb: the header declares %llu bytes, the data has %zu",
+                  name.c_str(), static_cast<unsigned long long>(length), bytes.size()));
   }
   if (read_u32(bytes.data() + 16) != kChunkJson) {
     return invalid_argument(strprintf("'%s': .glb: the first chunk is not JSON", name.c_str()));
   }
   if (20 + json_length > length) {
-    return data_loss(strprintf("'%s': truncated .glb: the JSON chunk (%llu bytes) runs past the end (%llu bytes)",
-                               name.c_str(), static_cast<unsigned long long>(json_length),
-                               static_cast<unsigned long long>(length)));
+    return data_loss(strprintf(
+        "'%s': truncated .glb: the JSON chunk (%llu bytes) runs past the end (%llu bytes)",
+        name.c_str(), static_cast<unsigned long long>(json_length),
+        static_cast<unsigned long long>(length)));
   }
   if (json_length == 0 || json_length % 4 != 0) {
-    return invalid_argument(strprintf("'%s': .glb: JSON chunk length %llu is not a positive multiple of 4",
-                                      name.c_str(), static_cast<unsigned long long>(json_length)));
+    return invalid_argument(
+        strprintf("'%s': .glb: JSON chunk length %llu is not a positive multiple of 4",
+                  name.c_str(), static_cast<unsigned long long>(json_length)));
   }
   out->glb = bytes.substr(0, length);
   out->json = bytes.substr(20, json_length);
   const uint64_t bin_at = 20 + json_length;
   if (bin_at == length) return Status::ok();
   if (bin_at + 8 > length) {
-    return data_loss(strprintf("'%s': truncated .glb: %llu bytes after the JSON chunk, a chunk header needs 8",
-                               name.c_str(), static_cast<unsigned long long>(length - bin_at)));
+    return data_loss(
+        strprintf("'%s': truncated .glb: %llu bytes after the JSON chunk, a chunk header needs 8",
+                  name.c_str(), static_cast<unsigned long long>(length - bin_at)));
   }
   const uint64_t bin_length = read_u32(bytes.data() + bin_at);
   if (read_u32(bytes.data() + bin_at + 4) != kChunkBin) {
     return invalid_argument(strprintf("'%s': .glb: the second chunk is not BIN", name.c_str()));
   }
   if (bin_at + 8 + bin_length > length) {
-    return data_loss(strprintf("'%s': truncated .glb: the BIN chunk declares %llu bytes, %llu remain",
-                               name.c_str(), static_cast<unsigned long long>(bin_length),
-                               static_cast<unsigned long long>(length - bin_at - 8)));
+    return data_loss(
+        strprintf("'%s': truncated .glb: the BIN chunk declares %llu bytes, %llu remain",
+                  name.c_str(), static_cast<unsigned long long>(bin_length),
+                  static_cast<unsigned long long>(length - bin_at - 8)));
   }
   if (bin_length == 0 || bin_length % 4 != 0) {
-    return invalid_argument(strprintf("'%s': .glb: BIN chunk length %llu is not a positive multiple of 4",
-                                      name.c_str(), static_cast<unsigned long long>(bin_length)));
+    return invalid_argument(
+        strprintf("'%s': .glb: BIN chunk length %llu is not a positive multiple of 4", name.c_str(),
+                  static_cast<unsigned long long>(bin_length)));
   }
   out->has_bin = true;
   out->bin_size = bin_length;
@@ -103,10 +109,12 @@ Result<json> parse_json(std::string_view text, const std::string& name) {
       return true;
     };
     json doc = json::parse(text.begin(), text.end(), limit_depth);
-    if (!doc.is_object()) return invalid_argument(strprintf("'%s': the glTF JSON is not an object", name.c_str()));
+    if (!doc.is_object())
+      return invalid_argument(strprintf("'%s': the glTF JSON is not an object", name.c_str()));
     return doc;
   } catch (const DepthExceeded&) {
-    return invalid_argument(strprintf("'%s': JSON nested deeper than %d levels", name.c_str(), kMaxJsonDepth));
+    return invalid_argument(
+        strprintf("'%s': JSON nested deeper than %d levels", name.c_str(), kMaxJsonDepth));
   } catch (const std::exception& e) {
     return invalid_argument(strprintf("'%s': invalid JSON: %s", name.c_str(), e.what()));
   }
@@ -125,7 +133,9 @@ std::string get_string(const json& o, const char* key) {
   return it != o.end() && it->is_string() ? it->get<std::string>() : std::string();
 }
 
-bool is_data_uri(const std::string& uri) { return uri.rfind("data:", 0) == 0; }
+bool is_data_uri(const std::string& uri) {
+  return uri.rfind("data:", 0) == 0;
+}
 
 // Bytes a base64 data URI decodes to (tinygltf accepts only base64 payloads).
 uint64_t data_uri_size(const std::string& uri) {
@@ -138,10 +148,13 @@ uint64_t data_uri_size(const std::string& uri) {
 }
 
 // Resolves an external URI for `what` ("buffer 0", "image 3 'wood'").
-Result<fs::path> resolve_external(const std::string& uri, const std::string& base_dir, const std::string& what) {
+Result<fs::path> resolve_external(const std::string& uri, const std::string& base_dir,
+                                  const std::string& what) {
   if (base_dir.empty()) {
-    return not_found(strprintf("%s: external file '%s' cannot be read: the scene was given without its folder "
-                               "(embed the data or upload the file with it)", what.c_str(), uri.c_str()));
+    return not_found(
+        strprintf("%s: external file '%s' cannot be read: the scene was given without its folder "
+                  "(embed the data or upload the file with it)",
+                  what.c_str(), uri.c_str()));
   }
   // The uri is a URI reference: "%20" is a space in the file name.
   auto decoded = percent_decode_uri(uri);
@@ -151,14 +164,14 @@ Result<fs::path> resolve_external(const std::string& uri, const std::string& bas
   bool escapes = rel.is_absolute() || path.find('\0') != std::string::npos;
   for (const auto& part : rel) escapes = escapes || part == "..";
   if (escapes) {
-    return invalid_argument(strprintf("%s: uri '%s' must be a relative path inside the scene folder",
-                                      what.c_str(), uri.c_str()));
+    return invalid_argument(strprintf(
+        "%s: uri '%s' must be a relative path inside the scene folder", what.c_str(), uri.c_str()));
   }
   fs::path full = fs::path(base_dir) / rel;
   std::error_code ec;
   if (!fs::is_regular_file(full, ec)) {
-    return not_found(strprintf("%s: file '%s' not found (looked for '%s')", what.c_str(), uri.c_str(),
-                               full.string().c_str()));
+    return not_found(strprintf("%s: file '%s' not found (looked for '%s')", what.c_str(),
+                               uri.c_str(), full.string().c_str()));
   }
   return full;
 }
@@ -177,13 +190,16 @@ Status check_buffers(const json& doc, const Container& c, const std::string& bas
     if (!b.is_object()) return invalid_argument(strprintf("buffer %zu is not a JSON object", i));
     const std::string what = describe("buffer", i, b);
     const auto length = get_uint(b, "byteLength");
-    if (!length) return invalid_argument(what + ": byteLength is missing or not a non-negative integer");
+    if (!length)
+      return invalid_argument(what + ": byteLength is missing or not a non-negative integer");
     sizes->push_back(*length);
     const std::string uri = get_string(b, "uri");
     uint64_t available = 0;
     if (uri.empty()) {
       if (c.glb.empty()) return invalid_argument(what + ": no uri (only a .glb may omit it)");
-      if (i != 0) return invalid_argument(what + ": no uri (only buffer 0 of a .glb may refer to the BIN chunk)");
+      if (i != 0)
+        return invalid_argument(what +
+                                ": no uri (only buffer 0 of a .glb may refer to the BIN chunk)");
       if (!c.has_bin) return data_loss(what + ": refers to the BIN chunk, but the .glb has none");
       available = c.bin_size;
     } else if (is_data_uri(uri)) {
@@ -193,11 +209,13 @@ Status check_buffers(const json& doc, const Container& c, const std::string& bas
       if (!path) return path.status();
       std::error_code ec;
       available = fs::file_size(*path, ec);
-      if (ec) return not_found(strprintf("%s: cannot read '%s': %s", what.c_str(), uri.c_str(), ec.message().c_str()));
+      if (ec)
+        return not_found(
+            strprintf("%s: cannot read '%s': %s", what.c_str(), uri.c_str(), ec.message().c_str()));
     }
     if (available < *length) {
-      return data_loss(strprintf("%s: byteLength is %llu but the data holds only %llu bytes", what.c_str(),
-                                 static_cast<unsigned long long>(*length),
+      return data_loss(strprintf("%s: byteLength is %llu but the data holds only %llu bytes",
+                                 what.c_str(), static_cast<unsigned long long>(*length),
                                  static_cast<unsigned long long>(available)));
     }
   }
@@ -206,7 +224,8 @@ Status check_buffers(const json& doc, const Container& c, const std::string& bas
 
 // Images: external files must exist; a buffer view image must lie inside its
 // buffer (tinygltf takes a pointer into the buffer before anyone checks).
-Status check_images(const json& doc, const std::string& base_dir, const std::vector<uint64_t>& buffer_sizes) {
+Status check_images(const json& doc, const std::string& base_dir,
+                    const std::vector<uint64_t>& buffer_sizes) {
   auto it = doc.find("images");
   if (it == doc.end() || !it->is_array()) return Status::ok();
   auto views = doc.find("bufferViews");
@@ -230,15 +249,17 @@ Status check_images(const json& doc, const std::string& base_dir, const std::vec
     const uint64_t offset = get_uint(bv, "byteOffset").value_or(0);
     const auto length = get_uint(bv, "byteLength");
     if (!buffer || *buffer >= buffer_sizes.size() || !length) {
-      return invalid_argument(strprintf("%s: bufferView %llu has no valid buffer or byteLength", what.c_str(),
-                                        static_cast<unsigned long long>(*view)));
+      return invalid_argument(strprintf("%s: bufferView %llu has no valid buffer or byteLength",
+                                        what.c_str(), static_cast<unsigned long long>(*view)));
     }
     const uint64_t size = buffer_sizes[*buffer];
     if (offset > size || *length > size - offset) {
-      return data_loss(strprintf("%s: bufferView %llu (byteOffset %llu, byteLength %llu) overruns buffer %llu "
-                                 "(%llu bytes)", what.c_str(), static_cast<unsigned long long>(*view),
-                                 static_cast<unsigned long long>(offset), static_cast<unsigned long long>(*length),
-                                 static_cast<unsigned long long>(*buffer), static_cast<unsigned long long>(size)));
+      return data_loss(strprintf(
+          "%s: bufferView %llu (byteOffset %llu, byteLength %llu) overruns buffer %llu "
+          "(%llu bytes)",
+          what.c_str(), static_cast<unsigned long long>(*view),
+          static_cast<unsigned long long>(offset), static_cast<unsigned long long>(*length),
+          static_cast<unsigned long long>(*buffer), static_cast<unsigned long long>(size)));
     }
   }
   return Status::ok();
@@ -266,9 +287,12 @@ bool fs_exists(const std::string& path, void* user) {
 }
 
 // No shell-style expansion (the default once used wordexp).
-std::string fs_expand(const std::string& path, void*) { return path; }
+std::string fs_expand(const std::string& path, void*) {
+  return path;
+}
 
-bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+             void* user) {
   if (!static_cast<FsContext*>(user)->allow) return false;
   std::ifstream f(path, std::ios::binary);
   if (!f) {
@@ -295,7 +319,8 @@ std::string trim(std::string s) {
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
                   tinygltf::Model* model) {
   if (bytes.size() > 0xFFFFFFF0u) {
-    return resource_exhausted(strprintf("'%s': %zu bytes, glTF files are limited to 4 GiB", name.c_str(), bytes.size()));
+    return resource_exhausted(
+        strprintf("'%s': %zu bytes, glTF files are limited to 4 GiB", name.c_str(), bytes.size()));
   }
   Container c;
   LUXEL_RETURN_IF_ERROR(parse_container(bytes, name, &c));
@@ -313,11 +338,13 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
   bool ok = false;
   try {
     if (c.glb.empty()) {
-      ok = loader.LoadASCIIFromString(model, &err, &warn, c.json.data(), static_cast<unsigned>(c.json.size()),
-                                      base_dir, tinygltf::NO_REQUIRE);
+      ok = loader.LoadASCIIFromString(model, &err, &warn, c.json.data(),
+                                      static_cast<unsigned>(c.json.size()), base_dir,
+                                      tinygltf::NO_REQUIRE);
     } else {
-      ok = loader.LoadBinaryFromMemory(model, &err, &warn, reinterpret_cast<const unsigned char*>(c.glb.data()),
-                                       static_cast<unsigned>(c.glb.size()), base_dir, tinygltf::NO_REQUIRE);
+      ok = loader.LoadBinaryFromMemory(
+          model, &err, &warn, reinterpret_cast<const unsigned char*>(c.glb.data()),
+          static_cast<unsigned>(c.glb.size()), base_dir, tinygltf::NO_REQUIRE);
     }
   } catch (const std::exception& e) {
     return invalid_argument(strprintf("'%s': malformed glTF: %s", name.c_str(), e.what()));

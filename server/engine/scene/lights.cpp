@@ -9,7 +9,9 @@ namespace {
 
 constexpr double kHalfPi = 1.57079632679489661923;
 
-bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0; }
+bool finite_nonneg(double v) {
+  return std::isfinite(v) && v >= 0;
+}
 
 }  // namespace
 
@@ -23,8 +25,8 @@ Status convert_node_light(const tinygltf::Model& model, int node, const std::str
   }
   const int index = ext->second.Get("light").GetNumberAsInt();
   if (index < 0 || static_cast<size_t>(index) >= model.lights.size()) {
-    return invalid_argument(strprintf("%s: light %d does not exist (%zu lights)", node_label.c_str(), index,
-                                      model.lights.size()));
+    return invalid_argument(strprintf("%s: light %d does not exist (%zu lights)",
+                                      node_label.c_str(), index, model.lights.size()));
   }
   const auto& gl = model.lights[static_cast<size_t>(index)];
   const std::string label = gl.name.empty() ? strprintf("light %d", index)
@@ -39,29 +41,34 @@ Status convert_node_light(const tinygltf::Model& model, int node, const std::str
   } else if (gl.type == "directional") {
     light.type = LightType::kDirectional;
   } else {
-    return invalid_argument(strprintf("%s (on %s): type '%s' is not point, spot or directional", label.c_str(),
-                                      node_label.c_str(), gl.type.c_str()));
+    return invalid_argument(strprintf("%s (on %s): type '%s' is not point, spot or directional",
+                                      label.c_str(), node_label.c_str(), gl.type.c_str()));
   }
   if (!gl.color.empty()) {
     if (gl.color.size() != 3 || !finite_nonneg(gl.color[0]) || !finite_nonneg(gl.color[1]) ||
         !finite_nonneg(gl.color[2])) {
       return invalid_argument(label + ": color must be 3 finite non-negative numbers");
     }
-    light.color = {static_cast<float>(gl.color[0]), static_cast<float>(gl.color[1]), static_cast<float>(gl.color[2])};
+    light.color = {static_cast<float>(gl.color[0]), static_cast<float>(gl.color[1]),
+                   static_cast<float>(gl.color[2])};
   }
   if (!finite_nonneg(gl.intensity) || gl.intensity > 3.0e38) {
-    return invalid_argument(strprintf("%s: intensity %g must be finite and non-negative", label.c_str(), gl.intensity));
+    return invalid_argument(
+        strprintf("%s: intensity %g must be finite and non-negative", label.c_str(), gl.intensity));
   }
   light.intensity = static_cast<float>(gl.intensity);
   if (!finite_nonneg(gl.range) || gl.range > 3.0e38) {
-    return invalid_argument(strprintf("%s: range %g must be finite and positive", label.c_str(), gl.range));
+    return invalid_argument(
+        strprintf("%s: range %g must be finite and positive", label.c_str(), gl.range));
   }
   light.range = static_cast<float>(gl.range);
   if (light.type == LightType::kSpot) {
     const double inner = gl.spot.innerConeAngle, outer = gl.spot.outerConeAngle;
     if (!(inner >= 0 && inner < outer && outer <= kHalfPi)) {
-      return invalid_argument(strprintf("%s: spot cone angles inner %g, outer %g must satisfy 0 <= inner < outer "
-                                        "<= pi/2", label.c_str(), inner, outer));
+      return invalid_argument(
+          strprintf("%s: spot cone angles inner %g, outer %g must satisfy 0 <= inner < outer "
+                    "<= pi/2",
+                    label.c_str(), inner, outer));
     }
     light.inner_cone_angle = static_cast<float>(inner);
     light.outer_cone_angle = static_cast<float>(outer);
@@ -69,8 +76,9 @@ Status convert_node_light(const tinygltf::Model& model, int node, const std::str
   light.position = transform_point(world, Vec3{0, 0, 0});
   const Vec3 dir = transform_vector(world, Vec3{0, 0, -1});
   if (!is_finite(light.position) || !is_finite(dir) || !(length(dir) > 0)) {
-    return invalid_argument(strprintf("%s (on %s): the node transform gives no valid position/direction",
-                                      label.c_str(), node_label.c_str()));
+    return invalid_argument(
+        strprintf("%s (on %s): the node transform gives no valid position/direction", label.c_str(),
+                  node_label.c_str()));
   }
   light.direction = normalize(dir);
   scene->lights.push_back(light);

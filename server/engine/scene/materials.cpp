@@ -14,25 +14,31 @@ namespace {
 class TextureTable {
  public:
   TextureTable(const tinygltf::Model& model, const ImportOptions& options, Scene* scene)
-      : model_(model), options_(options), scene_(scene), pixel_budget_(options.max_total_texture_pixels) {}
+      : model_(model),
+        options_(options),
+        scene_(scene),
+        pixel_budget_(options.max_total_texture_pixels) {}
 
   // Resolves a textureInfo of material `what` ("material 'x' (material[1])
   // baseColorTexture") to a TextureRef, decoding the image on first use.
-  Result<TextureRef> resolve(int texture_index, int texcoord, ColorSpace space, const std::string& what) {
+  Result<TextureRef> resolve(int texture_index, int texcoord, ColorSpace space,
+                             const std::string& what) {
     TextureRef ref;
     if (texture_index < 0) return ref;
     if (static_cast<size_t>(texture_index) >= model_.textures.size()) {
-      return invalid_argument(strprintf("%s: texture %d does not exist (%zu textures)", what.c_str(), texture_index,
-                                        model_.textures.size()));
+      return invalid_argument(strprintf("%s: texture %d does not exist (%zu textures)",
+                                        what.c_str(), texture_index, model_.textures.size()));
     }
     if (texcoord != 0 && texcoord != 1) {
-      return invalid_argument(strprintf("%s: texCoord %d is not supported (0 or 1)", what.c_str(), texcoord));
+      return invalid_argument(
+          strprintf("%s: texCoord %d is not supported (0 or 1)", what.c_str(), texcoord));
     }
     const int image = model_.textures[static_cast<size_t>(texture_index)].source;
     if (image < 0 || static_cast<size_t>(image) >= model_.images.size()) {
-      return invalid_argument(strprintf("%s: texture %d has no valid image source (source %d; textures given only "
-                                        "through extensions such as KHR_texture_basisu are not supported)",
-                                        what.c_str(), texture_index, image));
+      return invalid_argument(
+          strprintf("%s: texture %d has no valid image source (source %d; textures given only "
+                    "through extensions such as KHR_texture_basisu are not supported)",
+                    what.c_str(), texture_index, image));
     }
     ref.texcoord = texcoord;
     const auto key = std::make_pair(image, space);
@@ -64,15 +70,17 @@ bool finite_all(const std::vector<double>& v) {
 
 Status check_factor(const std::string& label, const char* field, double v, double lo, double hi) {
   if (!std::isfinite(v) || v < lo || v > hi) {
-    return invalid_argument(strprintf("%s: %s %g is outside [%g, %g]", label.c_str(), field, v, lo, hi));
+    return invalid_argument(
+        strprintf("%s: %s %g is outside [%g, %g]", label.c_str(), field, v, lo, hi));
   }
   return Status::ok();
 }
 
 Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* table) {
   const auto& gm = model.materials[static_cast<size_t>(index)];
-  const std::string label = gm.name.empty() ? strprintf("material[%d]", index)
-                                            : strprintf("material '%s' (material[%d])", gm.name.c_str(), index);
+  const std::string label = gm.name.empty()
+                                ? strprintf("material[%d]", index)
+                                : strprintf("material '%s' (material[%d])", gm.name.c_str(), index);
   Material m;
   m.name = gm.name.empty() ? strprintf("material[%d]", index) : gm.name;
   const auto& pbr = gm.pbrMetallicRoughness;
@@ -80,9 +88,11 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   if (pbr.baseColorFactor.size() != 4 || !finite_all(pbr.baseColorFactor)) {
     return invalid_argument(label + ": baseColorFactor must be 4 finite numbers");
   }
-  for (double v : pbr.baseColorFactor) LUXEL_RETURN_IF_ERROR(check_factor(label, "baseColorFactor", v, 0, 1));
-  m.base_color_factor = {static_cast<float>(pbr.baseColorFactor[0]), static_cast<float>(pbr.baseColorFactor[1]),
-                         static_cast<float>(pbr.baseColorFactor[2]), static_cast<float>(pbr.baseColorFactor[3])};
+  for (double v : pbr.baseColorFactor)
+    LUXEL_RETURN_IF_ERROR(check_factor(label, "baseColorFactor", v, 0, 1));
+  m.base_color_factor = {
+      static_cast<float>(pbr.baseColorFactor[0]), static_cast<float>(pbr.baseColorFactor[1]),
+      static_cast<float>(pbr.baseColorFactor[2]), static_cast<float>(pbr.baseColorFactor[3])};
   LUXEL_RETURN_IF_ERROR(check_factor(label, "metallicFactor", pbr.metallicFactor, 0, 1));
   LUXEL_RETURN_IF_ERROR(check_factor(label, "roughnessFactor", pbr.roughnessFactor, 0, 1));
   m.metallic_factor = static_cast<float>(pbr.metallicFactor);
@@ -96,7 +106,8 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   for (double v : gm.emissiveFactor) {
     LUXEL_RETURN_IF_ERROR(check_factor(label, "emissiveFactor", v, 0, HUGE_VAL));
   }
-  m.emissive_factor = {static_cast<float>(gm.emissiveFactor[0]), static_cast<float>(gm.emissiveFactor[1]),
+  m.emissive_factor = {static_cast<float>(gm.emissiveFactor[0]),
+                       static_cast<float>(gm.emissiveFactor[1]),
                        static_cast<float>(gm.emissiveFactor[2])};
   auto ext = gm.extensions.find("KHR_materials_emissive_strength");
   if (ext != gm.extensions.end() && ext->second.IsObject() && ext->second.Has("emissiveStrength")) {
@@ -115,18 +126,19 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   } else if (gm.alphaMode == "BLEND") {
     m.alpha_mode = AlphaMode::kBlend;
   } else {
-    return invalid_argument(strprintf("%s: alphaMode '%s' is not OPAQUE, MASK or BLEND", label.c_str(),
-                                      gm.alphaMode.c_str()));
+    return invalid_argument(strprintf("%s: alphaMode '%s' is not OPAQUE, MASK or BLEND",
+                                      label.c_str(), gm.alphaMode.c_str()));
   }
   LUXEL_RETURN_IF_ERROR(check_factor(label, "alphaCutoff", gm.alphaCutoff, 0, 3.0e38));
   m.alpha_cutoff = static_cast<float>(gm.alphaCutoff);
 
-  auto base = table->resolve(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, ColorSpace::kSRGB,
-                             label + " baseColorTexture");
+  auto base = table->resolve(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
+                             ColorSpace::kSRGB, label + " baseColorTexture");
   if (!base) return base.status();
   m.base_color_texture = *base;
-  auto mr = table->resolve(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
-                           ColorSpace::kLinear, label + " metallicRoughnessTexture");
+  auto mr =
+      table->resolve(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                     ColorSpace::kLinear, label + " metallicRoughnessTexture");
   if (!mr) return mr.status();
   m.metallic_roughness_texture = *mr;
   auto em = table->resolve(gm.emissiveTexture.index, gm.emissiveTexture.texCoord, ColorSpace::kSRGB,

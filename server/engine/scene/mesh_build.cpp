@@ -17,13 +17,20 @@ constexpr double kRelativeAreaEpsilon = 1e-12;
 
 const char* mode_name(int mode) {
   switch (mode) {
-    case TINYGLTF_MODE_POINTS: return "POINTS";
-    case TINYGLTF_MODE_LINE: return "LINES";
-    case TINYGLTF_MODE_LINE_LOOP: return "LINE_LOOP";
-    case TINYGLTF_MODE_LINE_STRIP: return "LINE_STRIP";
-    case TINYGLTF_MODE_TRIANGLE_STRIP: return "TRIANGLE_STRIP";
-    case TINYGLTF_MODE_TRIANGLE_FAN: return "TRIANGLE_FAN";
-    default: return "unknown";
+    case TINYGLTF_MODE_POINTS:
+      return "POINTS";
+    case TINYGLTF_MODE_LINE:
+      return "LINES";
+    case TINYGLTF_MODE_LINE_LOOP:
+      return "LINE_LOOP";
+    case TINYGLTF_MODE_LINE_STRIP:
+      return "LINE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_STRIP:
+      return "TRIANGLE_STRIP";
+    case TINYGLTF_MODE_TRIANGLE_FAN:
+      return "TRIANGLE_FAN";
+    default:
+      return "unknown";
   }
 }
 
@@ -54,7 +61,9 @@ bool zero_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return !(doubled_area > kRelativeAreaEpsilon * longest2);
 }
 
-Vec3 vec3_at(const std::vector<float>& v, size_t i) { return {v[3 * i], v[3 * i + 1], v[3 * i + 2]}; }
+Vec3 vec3_at(const std::vector<float>& v, size_t i) {
+  return {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
+}
 
 int default_material(const tinygltf::Model& model, Scene* scene) {
   const size_t index = model.materials.size();
@@ -66,10 +75,13 @@ int default_material(const tinygltf::Model& model, Scene* scene) {
   return static_cast<int>(index);
 }
 
-Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, const ImportOptions& options,
-                        uint64_t* budget, Scene* scene, Mesh* mesh, bool* all_tangents) {
-  const auto& prim = model.meshes[static_cast<size_t>(mesh_index)].primitives[static_cast<size_t>(prim_index)];
-  const std::string ctx = strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
+Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index,
+                        const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh,
+                        bool* all_tangents) {
+  const auto& prim =
+      model.meshes[static_cast<size_t>(mesh_index)].primitives[static_cast<size_t>(prim_index)];
+  const std::string ctx =
+      strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
 
   std::vector<float> pos, nrm, tan, uv0, uv1;
   Attribute attrs[] = {
@@ -83,21 +95,25 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   for (auto& a : attrs) {
     auto it = prim.attributes.find(a.semantic);
     if (it == prim.attributes.end()) continue;
-    LUXEL_RETURN_IF_ERROR(read_floats(model, it->second, a.semantic, a.type, a.allowed, ctx, budget, a.out));
+    LUXEL_RETURN_IF_ERROR(
+        read_floats(model, it->second, a.semantic, a.type, a.allowed, ctx, budget, a.out));
     a.present = true;
     const size_t comps = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 2;
     const size_t count = a.out->size() / comps;
     if (a.out == &pos) {
       vertex_count = count;
     } else if (count != vertex_count) {
-      return invalid_argument(strprintf("%s: accessor %d (%s): count %zu differs from the POSITION count %zu",
-                                        ctx.c_str(), it->second, a.semantic, count, vertex_count));
+      return invalid_argument(
+          strprintf("%s: accessor %d (%s): count %zu differs from the POSITION count %zu",
+                    ctx.c_str(), it->second, a.semantic, count, vertex_count));
     }
   }
   if (!attrs[0].present) return invalid_argument(ctx + ": has no POSITION attribute");
   if (!attrs[4].present && options.require_lightmap_uvs) {
-    return invalid_argument(ctx + ": TEXCOORD_1 (lightmap UVs) is missing; every primitive needs lightmap UVs "
-                                  "(UV generation is not implemented yet)");
+    return invalid_argument(
+        ctx +
+        ": TEXCOORD_1 (lightmap UVs) is missing; every primitive needs lightmap UVs "
+        "(UV generation is not implemented yet)");
   }
   const size_t base = mesh->positions.size();
   if (base + vertex_count > std::numeric_limits<uint32_t>::max()) {
@@ -109,9 +125,10 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     LUXEL_RETURN_IF_ERROR(read_indices(model, prim.indices, ctx, budget, &indices));
     for (size_t i = 0; i < indices.size(); ++i) {
       if (indices[i] >= vertex_count) {
-        return invalid_argument(strprintf("%s: accessor %d (indices): index %u at position %zu is out of range "
-                                          "(POSITION has %zu vertices)", ctx.c_str(), prim.indices, indices[i], i,
-                                          vertex_count));
+        return invalid_argument(
+            strprintf("%s: accessor %d (indices): index %u at position %zu is out of range "
+                      "(POSITION has %zu vertices)",
+                      ctx.c_str(), prim.indices, indices[i], i, vertex_count));
       }
     }
   } else {
@@ -119,16 +136,17 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     for (size_t i = 0; i < vertex_count; ++i) indices[i] = static_cast<uint32_t>(i);
   }
   if (indices.size() % 3 != 0) {
-    return invalid_argument(strprintf("%s: %zu %s is not a multiple of 3 (mode TRIANGLES)", ctx.c_str(),
-                                      indices.size(), prim.indices >= 0 ? "indices" : "vertices"));
+    return invalid_argument(strprintf("%s: %zu %s is not a multiple of 3 (mode TRIANGLES)",
+                                      ctx.c_str(), indices.size(),
+                                      prim.indices >= 0 ? "indices" : "vertices"));
   }
 
   int material = prim.material;
   if (material < 0) {
     material = default_material(model, scene);
   } else if (static_cast<size_t>(material) >= model.materials.size()) {
-    return invalid_argument(strprintf("%s: material %d does not exist (%zu materials)", ctx.c_str(), material,
-                                      model.materials.size()));
+    return invalid_argument(strprintf("%s: material %d does not exist (%zu materials)", ctx.c_str(),
+                                      material, model.materials.size()));
   }
 
   // Keep the triangles with three distinct indices and a non-zero area.
@@ -136,7 +154,8 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   kept.reserve(indices.size());
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
     const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
-    if (a == b || b == c || a == c || zero_area(vec3_at(pos, a), vec3_at(pos, b), vec3_at(pos, c))) {
+    if (a == b || b == c || a == c ||
+        zero_area(vec3_at(pos, a), vec3_at(pos, b), vec3_at(pos, c))) {
       ++scene->import_stats.degenerate_triangles_dropped;
       continue;
     }
@@ -152,9 +171,11 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     // they get flat normals.
     mesh->generated_normals = true;
     for (size_t t = 0; t < kept.size(); t += 3) {
-      const Vec3 p0 = vec3_at(pos, kept[t]), p1 = vec3_at(pos, kept[t + 1]), p2 = vec3_at(pos, kept[t + 2]);
+      const Vec3 p0 = vec3_at(pos, kept[t]), p1 = vec3_at(pos, kept[t + 1]),
+                 p2 = vec3_at(pos, kept[t + 2]);
       const Vec3 n = cross(p1 - p0, p2 - p0);
-      for (int k = 0; k < 3; ++k) normals[kept[t + static_cast<size_t>(k)]] = normals[kept[t + static_cast<size_t>(k)]] + n;
+      for (int k = 0; k < 3; ++k)
+        normals[kept[t + static_cast<size_t>(k)]] = normals[kept[t + static_cast<size_t>(k)]] + n;
     }
     for (auto& n : normals) n = normalize(n);
   }
@@ -166,7 +187,8 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     mesh->uv1.push_back(attrs[4].present ? Vec2{uv1[2 * i], uv1[2 * i + 1]} : Vec2{});
   }
   if (*all_tangents && attrs[2].present) {
-    for (size_t i = 0; i < vertex_count; ++i) mesh->tangents.push_back({tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3]});
+    for (size_t i = 0; i < vertex_count; ++i)
+      mesh->tangents.push_back({tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3]});
   } else {
     *all_tangents = false;
     mesh->tangents.clear();
@@ -195,13 +217,13 @@ Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const Impo
     const int mode = gm.primitives[p].mode;
     if (mode != TINYGLTF_MODE_TRIANGLES && mode != -1) {
       ++scene->import_stats.skipped_primitives;
-      scene->import_stats.warnings.push_back(strprintf("%s primitive %zu: mode %d (%s) is not TRIANGLES; skipped",
-                                                       mesh_label(model, mesh_index).c_str(), p, mode,
-                                                       mode_name(mode)));
+      scene->import_stats.warnings.push_back(
+          strprintf("%s primitive %zu: mode %d (%s) is not TRIANGLES; skipped",
+                    mesh_label(model, mesh_index).c_str(), p, mode, mode_name(mode)));
       continue;
     }
-    LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), options, budget, scene, &mesh,
-                                           &all_tangents));
+    LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), options, budget,
+                                           scene, &mesh, &all_tangents));
   }
   if (!all_tangents) mesh.tangents.clear();
   return mesh;

@@ -17,14 +17,14 @@ namespace luxel::scene {
 // Degenerate and zero-area triangles were dropped during import (counted in
 // ImportStats). Vertex attributes are parallel arrays of equal length.
 struct Mesh {
-  std::string name;                // glTF mesh name, or "mesh[<index>]"
-  int gltf_index = -1;             // index in the glTF meshes array
+  std::string name;     // glTF mesh name, or "mesh[<index>]"
+  int gltf_index = -1;  // index in the glTF meshes array
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;       // always present (generated when missing)
-  std::vector<Vec4> tangents;      // empty unless the file had TANGENT everywhere
-  std::vector<Vec2> uv0;           // material UVs (TEXCOORD_0); zeros when absent
-  std::vector<Vec2> uv1;           // lightmap UVs (TEXCOORD_1); required
-  std::vector<uint32_t> indices;   // 3 per triangle
+  std::vector<Vec3> normals;               // always present (generated when missing)
+  std::vector<Vec4> tangents;              // empty unless the file had TANGENT everywhere
+  std::vector<Vec2> uv0;                   // material UVs (TEXCOORD_0); zeros when absent
+  std::vector<Vec2> uv1;                   // lightmap UVs (TEXCOORD_1); required
+  std::vector<uint32_t> indices;           // 3 per triangle
   std::vector<int32_t> triangle_material;  // per triangle; index into Scene::materials
   bool generated_normals = false;
 
@@ -32,31 +32,31 @@ struct Mesh {
 };
 
 struct Instance {
-  std::string name;       // node name, or "node[<index>]"
-  int node_index = -1;    // glTF node
-  int mesh = -1;          // index into Scene::meshes
-  Mat4 object_to_world;   // composed down the node hierarchy
+  std::string name;      // node name, or "node[<index>]"
+  int node_index = -1;   // glTF node
+  int mesh = -1;         // index into Scene::meshes
+  Mat4 object_to_world;  // composed down the node hierarchy
 };
 
 enum class AlphaMode { kOpaque, kMask, kBlend };
 
 // Reference to a texture used by a material. texture < 0: none.
 struct TextureRef {
-  int texture = -1;       // index into Scene::textures
-  int texcoord = 0;       // which UV set (0 or 1)
+  int texture = -1;  // index into Scene::textures
+  int texcoord = 0;  // which UV set (0 or 1)
 };
 
 // glTF pbrMetallicRoughness plus emission; factors multiply textures.
 struct Material {
   std::string name;
   Vec4 base_color_factor{1, 1, 1, 1};
-  TextureRef base_color_texture;        // sRGB in the file, linear here
+  TextureRef base_color_texture;  // sRGB in the file, linear here
   float metallic_factor = 1.0f;
   float roughness_factor = 1.0f;
   TextureRef metallic_roughness_texture;  // G = roughness, B = metallic (linear)
   Vec3 emissive_factor{0, 0, 0};
-  TextureRef emissive_texture;          // sRGB in the file, linear here
-  float emissive_strength = 1.0f;       // KHR_materials_emissive_strength
+  TextureRef emissive_texture;     // sRGB in the file, linear here
+  float emissive_strength = 1.0f;  // KHR_materials_emissive_strength
   bool double_sided = false;
   AlphaMode alpha_mode = AlphaMode::kOpaque;
   float alpha_cutoff = 0.5f;
@@ -73,11 +73,11 @@ enum class ColorSpace { kLinear, kSRGB };
 // UV (0,0) is the top-left corner). One glTF image used both as sRGB colour and
 // as linear data becomes two Textures.
 struct Texture {
-  std::string name;            // image name or uri, or "image[<index>]"
+  std::string name;  // image name or uri, or "image[<index>]"
   int gltf_image = -1;
   ColorSpace source_space = ColorSpace::kLinear;  // how the file's values were encoded
   int width = 0, height = 0;
-  std::vector<float> rgba;     // width * height * 4, linear
+  std::vector<float> rgba;  // width * height * 4, linear
 };
 
 enum class LightType { kPoint, kSpot, kDirectional };
@@ -87,28 +87,29 @@ enum class LightType { kPoint, kSpot, kDirectional };
 struct Light {
   std::string name;
   LightType type = LightType::kPoint;
-  Vec3 color{1, 1, 1};          // linear RGB
+  Vec3 color{1, 1, 1};  // linear RGB
   float intensity = 1.0f;
-  float range = 0.0f;           // 0: infinite
+  float range = 0.0f;             // 0: infinite
   float inner_cone_angle = 0.0f;  // radians, spot only
   float outer_cone_angle = 0.785398f;
-  Vec3 position{0, 0, 0};       // world space (point, spot)
-  Vec3 direction{0, 0, -1};     // world space, unit, direction the light points
+  Vec3 position{0, 0, 0};    // world space (point, spot)
+  Vec3 direction{0, 0, -1};  // world space, unit, direction the light points
   int node_index = -1;
 };
 
 // What the importer dropped, skipped or generated; reported, never fatal.
 struct ImportStats {
   size_t degenerate_triangles_dropped = 0;  // repeated index or zero-area
-  size_t skipped_primitives = 0;            // non-triangle modes (points, lines, strips kept? see note)
-  std::vector<std::string> warnings;        // human-readable, name the node/mesh/primitive
+  size_t skipped_primitives = 0;      // non-triangle modes (points, lines, strips kept? see note)
+  std::vector<std::string> warnings;  // human-readable, name the node/mesh/primitive
 };
 
 struct Scene {
-  std::string source_name;     // file name as given
+  std::string source_name;  // file name as given
   std::vector<Mesh> meshes;
   std::vector<Instance> instances;
-  std::vector<Material> materials;  // always at least one (the glTF default material is appended when used)
+  std::vector<Material>
+      materials;  // always at least one (the glTF default material is appended when used)
   std::vector<Texture> textures;
   std::vector<Light> lights;
   ImportStats import_stats;

@@ -15,7 +15,9 @@ constexpr double kPi = 3.14159265358979323846;
 double texture_mean(const Texture& t) {
   if (t.rgba.empty()) return 1.0;
   double sum = 0;
-  for (size_t i = 0; i < t.rgba.size(); i += 4) sum += static_cast<double>(t.rgba[i]) + static_cast<double>(t.rgba[i + 1]) + static_cast<double>(t.rgba[i + 2]);
+  for (size_t i = 0; i < t.rgba.size(); i += 4)
+    sum += static_cast<double>(t.rgba[i]) + static_cast<double>(t.rgba[i + 1]) +
+           static_cast<double>(t.rgba[i + 2]);
   return sum / (3.0 * static_cast<double>(t.rgba.size() / 4));
 }
 
@@ -24,10 +26,11 @@ double texture_mean(const Texture& t) {
 double emission(const Scene& scene, const Material& m) {
   if (!m.is_emissive()) return 0;
   const Vec3 f = m.emissive_factor;
-  double e = (static_cast<double>(f.x) + static_cast<double>(f.y) + static_cast<double>(f.z)) / 3.0 *
-             static_cast<double>(m.emissive_strength);
+  double e = (static_cast<double>(f.x) + static_cast<double>(f.y) + static_cast<double>(f.z)) /
+             3.0 * static_cast<double>(m.emissive_strength);
   const int t = m.emissive_texture.texture;
-  if (t >= 0 && static_cast<size_t>(t) < scene.textures.size()) e *= texture_mean(scene.textures[static_cast<size_t>(t)]);
+  if (t >= 0 && static_cast<size_t>(t) < scene.textures.size())
+    e *= texture_mean(scene.textures[static_cast<size_t>(t)]);
   return e;
 }
 
@@ -37,10 +40,15 @@ double world_area(const Mat4& m, Vec3 a, Vec3 b, Vec3 c) {
            m.at(r, 2) * static_cast<double>(v.z) + m.at(r, 3);
   };
   double pa[3], pb[3], pc[3];
-  for (int r = 0; r < 3; ++r) { pa[r] = p(a, r); pb[r] = p(b, r); pc[r] = p(c, r); }
+  for (int r = 0; r < 3; ++r) {
+    pa[r] = p(a, r);
+    pb[r] = p(b, r);
+    pc[r] = p(c, r);
+  }
   const double e1[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
   const double e2[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
-  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2], z = e1[0] * e2[1] - e1[1] * e2[0];
+  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
+               z = e1[0] * e2[1] - e1[1] * e2[0];
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
@@ -54,13 +62,19 @@ void rasterize(Vec2 a, Vec2 b, Vec2 c, int res, std::vector<uint8_t>* hits) {
   double cx = static_cast<double>(c.x) * r, cy = static_cast<double>(c.y) * r;
   const double area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
   if (!(std::fabs(area) > 0) || !std::isfinite(area)) return;
-  if (area < 0) { std::swap(bx, cx); std::swap(by, cy); }
+  if (area < 0) {
+    std::swap(bx, cx);
+    std::swap(by, cy);
+  }
   const double lo_x = std::max(0.0, std::floor(std::min({ax, bx, cx}) - 0.5));
   const double hi_x = std::min(res - 1.0, std::ceil(std::max({ax, bx, cx}) - 0.5));
   const double lo_y = std::max(0.0, std::floor(std::min({ay, by, cy}) - 0.5));
   const double hi_y = std::min(res - 1.0, std::ceil(std::max({ay, by, cy}) - 0.5));
   if (lo_x > hi_x || lo_y > hi_y) return;
-  struct Edge { double x0, y0, dx, dy; bool inclusive; };
+  struct Edge {
+    double x0, y0, dx, dy;
+    bool inclusive;
+  };
   auto edge = [](double x0, double y0, double x1, double y1) {
     const double dx = x1 - x0, dy = y1 - y0;
     return Edge{x0, y0, dx, dy, dy < 0 || (dy == 0 && dx < 0)};
@@ -73,10 +87,14 @@ void rasterize(Vec2 a, Vec2 b, Vec2 c, int res, std::vector<uint8_t>* hits) {
       bool inside = true;
       for (const Edge& e : edges) {
         const double w = e.dx * (py - e.y0) - e.dy * (px - e.x0);
-        if (w < 0 || (w == 0 && !e.inclusive)) { inside = false; break; }
+        if (w < 0 || (w == 0 && !e.inclusive)) {
+          inside = false;
+          break;
+        }
       }
       if (inside) {
-        uint8_t& h = (*hits)[static_cast<size_t>(y) * static_cast<size_t>(res) + static_cast<size_t>(x)];
+        uint8_t& h =
+            (*hits)[static_cast<size_t>(y) * static_cast<size_t>(res) + static_cast<size_t>(x)];
         if (h < 255) ++h;
       }
     }
@@ -101,11 +119,13 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
   s.skipped_primitives = scene.import_stats.skipped_primitives;
 
   std::vector<double> emission_of(scene.materials.size());
-  for (size_t i = 0; i < scene.materials.size(); ++i) emission_of[i] = emission(scene, scene.materials[i]);
+  for (size_t i = 0; i < scene.materials.size(); ++i)
+    emission_of[i] = emission(scene, scene.materials[i]);
   auto material_at = [&](const Mesh& m, size_t t) -> const Material* {
     const int id = t < m.triangle_material.size() ? m.triangle_material[t] : -1;
-    return id >= 0 && static_cast<size_t>(id) < scene.materials.size() ? &scene.materials[static_cast<size_t>(id)]
-                                                                         : nullptr;
+    return id >= 0 && static_cast<size_t>(id) < scene.materials.size()
+               ? &scene.materials[static_cast<size_t>(id)]
+               : nullptr;
   };
 
   for (const auto& m : scene.meshes) s.mesh_triangles += m.triangle_count();
@@ -113,7 +133,8 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
     if (inst.mesh < 0 || static_cast<size_t>(inst.mesh) >= scene.meshes.size()) continue;
     const Mesh& m = scene.meshes[static_cast<size_t>(inst.mesh)];
     s.world_triangles += m.triangle_count();
-    for (const Vec3& p : m.positions) s.world_bounds.extend(transform_point(inst.object_to_world, p));
+    for (const Vec3& p : m.positions)
+      s.world_bounds.extend(transform_point(inst.object_to_world, p));
     for (size_t t = 0; t < m.triangle_count(); ++t) {
       const Material* mat = material_at(m, t);
       if (mat == nullptr) continue;
@@ -121,8 +142,10 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
       const double e = emission_of[static_cast<size_t>(mat - scene.materials.data())];
       if (e > 0) {
         ++s.emissive_triangles;
-        s.emissive_power += kPi * e * world_area(inst.object_to_world, m.positions[m.indices[3 * t]],
-                                                 m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]);
+        s.emissive_power +=
+            kPi * e *
+            world_area(inst.object_to_world, m.positions[m.indices[3 * t]],
+                       m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]);
       }
     }
   }
@@ -141,7 +164,8 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
     if (m.uv1.size() != m.positions.size()) continue;
     std::fill(hits.begin(), hits.end(), 0);
     for (size_t t = 0; t < m.triangle_count(); ++t) {
-      rasterize(m.uv1[m.indices[3 * t]], m.uv1[m.indices[3 * t + 1]], m.uv1[m.indices[3 * t + 2]], res, &hits);
+      rasterize(m.uv1[m.indices[3 * t]], m.uv1[m.indices[3 * t + 1]], m.uv1[m.indices[3 * t + 2]],
+                res, &hits);
     }
     for (size_t i = 0; i < hits.size(); ++i) {
       if (hits[i] == 0) continue;
@@ -164,24 +188,30 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
 std::string format_stats(const SceneStats& s) {
   std::ostringstream o;
   o << "meshes:            " << s.meshes << " (" << s.instances << " instances)\n"
-    << "triangles:         " << s.mesh_triangles << " unique, " << s.world_triangles << " after instancing\n"
-    << "materials:         " << s.materials << " (" << s.alpha_masked_triangles << " alpha-masked triangles)\n"
-    << "textures:          " << s.textures << " (" << strprintf("%.1f", static_cast<double>(s.texture_bytes) / (1 << 20))
-    << " MiB decoded)\n"
-    << "punctual lights:   " << s.point_lights << " point, " << s.spot_lights << " spot, " << s.directional_lights
-    << " directional\n"
-    << "emissive:          " << s.emissive_triangles << " triangles, power " << strprintf("%.6g", s.emissive_power)
-    << " (emissive units x m^2)\n";
+    << "triangles:         " << s.mesh_triangles << " unique, " << s.world_triangles
+    << " after instancing\n"
+    << "materials:         " << s.materials << " (" << s.alpha_masked_triangles
+    << " alpha-masked triangles)\n"
+    << "textures:          " << s.textures << " ("
+    << strprintf("%.1f", static_cast<double>(s.texture_bytes) / (1 << 20)) << " MiB decoded)\n"
+    << "punctual lights:   " << s.point_lights << " point, " << s.spot_lights << " spot, "
+    << s.directional_lights << " directional\n"
+    << "emissive:          " << s.emissive_triangles << " triangles, power "
+    << strprintf("%.6g", s.emissive_power) << " (emissive units x m^2)\n";
   if (s.world_bounds.empty()) {
     o << "bounds:            empty\n";
   } else {
     const auto& b = s.world_bounds;
-    o << strprintf("bounds:            (%g, %g, %g) .. (%g, %g, %g)\n", static_cast<double>(b.lo.x), static_cast<double>(b.lo.y),
-                   static_cast<double>(b.lo.z), static_cast<double>(b.hi.x), static_cast<double>(b.hi.y),
+    o << strprintf("bounds:            (%g, %g, %g) .. (%g, %g, %g)\n", static_cast<double>(b.lo.x),
+                   static_cast<double>(b.lo.y), static_cast<double>(b.lo.z),
+                   static_cast<double>(b.hi.x), static_cast<double>(b.hi.y),
                    static_cast<double>(b.hi.z));
   }
-  o << strprintf("lightmap UVs:      %.2f%% of %d^2 texels covered, %zu overlap within a mesh, %zu shared by several meshes\n",
-                 100.0 * s.lightmap_coverage, s.coverage_resolution, s.lightmap_overlap_texels, s.lightmap_shared_texels)
+  o << strprintf(
+           "lightmap UVs:      %.2f%% of %d^2 texels covered, %zu overlap within a mesh, %zu "
+           "shared by several meshes\n",
+           100.0 * s.lightmap_coverage, s.coverage_resolution, s.lightmap_overlap_texels,
+           s.lightmap_shared_texels)
     << "import:            " << s.degenerate_triangles_dropped << " degenerate triangles dropped, "
     << s.skipped_primitives << " non-triangle primitives skipped\n";
   return o.str();

@@ -11,14 +11,14 @@ namespace luxel::scene {
 struct SceneStats {
   size_t meshes = 0;
   size_t instances = 0;
-  size_t mesh_triangles = 0;     // unique triangles (each mesh once)
-  size_t world_triangles = 0;    // after instancing
+  size_t mesh_triangles = 0;   // unique triangles (each mesh once)
+  size_t world_triangles = 0;  // after instancing
   size_t materials = 0;
   size_t textures = 0;
-  size_t texture_bytes = 0;      // host memory of decoded textures
+  size_t texture_bytes = 0;           // host memory of decoded textures
   size_t alpha_masked_triangles = 0;  // world triangles with alphaMode MASK
   size_t point_lights = 0, spot_lights = 0, directional_lights = 0;
-  size_t emissive_triangles = 0;      // world triangles with an emissive material
+  size_t emissive_triangles = 0;  // world triangles with an emissive material
   // Total emitted power of the emissive triangles, in glTF emissive units x m^2
   // (sum over triangles of area * pi * mean(emissive factor * strength); the
   // emissive texture's mean is used when there is one).

@@ -2,12 +2,12 @@
 // disabled (tinygltf_config.h) because it decodes before we can check sizes.
 #include "scene/textures.h"
 
+#include <stb_image.h>
+
 #include <array>
 #include <climits>
 #include <cmath>
 #include <memory>
-
-#include <stb_image.h>
 
 #include "scene/accessor.h"
 
@@ -21,7 +21,8 @@ struct StbFree {
 const std::array<float, 256>& srgb_lut() {
   static const std::array<float, 256> lut = [] {
     std::array<float, 256> t{};
-    for (int i = 0; i < 256; ++i) t[static_cast<size_t>(i)] = srgb_to_linear(static_cast<float>(i) / 255.0f);
+    for (int i = 0; i < 256; ++i)
+      t[static_cast<size_t>(i)] = srgb_to_linear(static_cast<float>(i) / 255.0f);
     return t;
   }();
   return lut;
@@ -36,7 +37,8 @@ float srgb_to_linear(float c) {
 
 std::string image_label(const tinygltf::Model& model, int image) {
   const auto& img = model.images[static_cast<size_t>(image)];
-  const std::string& n = !img.name.empty() ? img.name : (img.uri.rfind("data:", 0) == 0 ? std::string() : img.uri);
+  const std::string& n =
+      !img.name.empty() ? img.name : (img.uri.rfind("data:", 0) == 0 ? std::string() : img.uri);
   return n.empty() ? strprintf("image %d", image) : strprintf("image %d '%s'", image, n.c_str());
 }
 
@@ -52,37 +54,41 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   } else if (!img.image.empty()) {
     encoded = std::string_view(reinterpret_cast<const char*>(img.image.data()), img.image.size());
   } else if (!img.uri.empty() && img.uri.rfind("data:", 0) != 0) {
-    return not_found(strprintf("%s: file '%s' could not be loaded", label.c_str(), img.uri.c_str()));
+    return not_found(
+        strprintf("%s: file '%s' could not be loaded", label.c_str(), img.uri.c_str()));
   } else {
     return invalid_argument(label + ": has neither image data nor a bufferView");
   }
   if (encoded.empty() || encoded.size() > static_cast<size_t>(INT_MAX)) {
-    return invalid_argument(strprintf("%s: %zu bytes of encoded data", label.c_str(), encoded.size()));
+    return invalid_argument(
+        strprintf("%s: %zu bytes of encoded data", label.c_str(), encoded.size()));
   }
   const auto* data = reinterpret_cast<const stbi_uc*>(encoded.data());
   const int size = static_cast<int>(encoded.size());
   int w = 0, h = 0, channels = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &channels)) {
-    return invalid_argument(strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
+    return invalid_argument(
+        strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
   }
   const uint64_t pixels = static_cast<uint64_t>(w) * static_cast<uint64_t>(h);
   if (w <= 0 || h <= 0 || w > options.max_image_side || h > options.max_image_side ||
       pixels > options.max_image_pixels) {
-    return resource_exhausted(strprintf("%s: %d x %d pixels exceeds the limit (%d per side, %llu pixels)",
-                                        label.c_str(), w, h, options.max_image_side,
-                                        static_cast<unsigned long long>(options.max_image_pixels)));
+    return resource_exhausted(strprintf(
+        "%s: %d x %d pixels exceeds the limit (%d per side, %llu pixels)", label.c_str(), w, h,
+        options.max_image_side, static_cast<unsigned long long>(options.max_image_pixels)));
   }
   Texture tex;
-  tex.name = !img.name.empty() ? img.name : (img.uri.empty() || img.uri.rfind("data:", 0) == 0)
-                                                ? strprintf("image[%d]", image) : img.uri;
+  tex.name = !img.name.empty()                                     ? img.name
+             : (img.uri.empty() || img.uri.rfind("data:", 0) == 0) ? strprintf("image[%d]", image)
+                                                                   : img.uri;
   tex.gltf_image = image;
   tex.source_space = space;
   tex.width = w;
   tex.height = h;
   if (!options.decode_textures) return tex;
   if (pixels > *pixel_budget) {
-    return resource_exhausted(strprintf("%s: decoding %d x %d pixels exceeds the import's texture budget",
-                                        label.c_str(), w, h));
+    return resource_exhausted(strprintf(
+        "%s: decoding %d x %d pixels exceeds the import's texture budget", label.c_str(), w, h));
   }
   *pixel_budget -= pixels;
 
@@ -92,7 +98,8 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   if (stbi_is_16_bit_from_memory(data, size)) {
     std::unique_ptr<stbi_us, StbFree> px(stbi_load_16_from_memory(data, size, &dw, &dh, &dc, 4));
     if (!px || dw != w || dh != h) {
-      return invalid_argument(strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
+      return invalid_argument(
+          strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
     }
     for (uint64_t i = 0; i < pixels * 4; ++i) {
       const float v = static_cast<float>(px.get()[i]) / 65535.0f;
@@ -101,7 +108,8 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   } else {
     std::unique_ptr<stbi_uc, StbFree> px(stbi_load_from_memory(data, size, &dw, &dh, &dc, 4));
     if (!px || dw != w || dh != h) {
-      return invalid_argument(strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
+      return invalid_argument(
+          strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
     }
     const auto& lut = srgb_lut();
     for (uint64_t i = 0; i < pixels * 4; ++i) {

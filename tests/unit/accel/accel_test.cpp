@@ -23,7 +23,8 @@ using cl::LuxRay;
 struct SceneBuilder {
   scene::Scene s;
   SceneBuilder() { s.materials.push_back(scene::Material{}); }
-  int add_mesh(std::vector<Vec3> p, std::vector<uint32_t> idx, std::vector<Vec2> uv0 = {}, int material = 0) {
+  int add_mesh(std::vector<Vec3> p, std::vector<uint32_t> idx, std::vector<Vec2> uv0 = {},
+               int material = 0) {
     scene::Mesh m;
     m.name = "m" + std::to_string(s.meshes.size());
     m.positions = std::move(p);
@@ -123,12 +124,12 @@ TEST_F(AccelTest, SingleTriangleDistanceAndBarycentrics) {
   build(b.s);
   EXPECT_EQ(bvh_.stats.triangles, 1u);
   const std::vector<LuxRay> rays = {
-      ray({0.25f, 0.5f, 2}, {0, 0, -1}),               // hit at t = 2
-      ray({0.25f, 0.5f, -3}, {0, 0, 2}),               // back face, t = 1.5 (dir not unit)
-      ray({0.75f, 0.75f, 2}, {0, 0, -1}),              // outside the triangle
-      ray({0.25f, 0.5f, 2}, {0, 0, -1}, 0.0f, 1.5f),   // tmax before the triangle
-      ray({0.25f, 0.5f, 2}, {0, 0, -1}, 2.5f),         // tmin after the triangle
-      ray({0.25f, 0.5f, 2}, {0, 0, 1}),                // pointing away
+      ray({0.25f, 0.5f, 2}, {0, 0, -1}),              // hit at t = 2
+      ray({0.25f, 0.5f, -3}, {0, 0, 2}),              // back face, t = 1.5 (dir not unit)
+      ray({0.75f, 0.75f, 2}, {0, 0, -1}),             // outside the triangle
+      ray({0.25f, 0.5f, 2}, {0, 0, -1}, 0.0f, 1.5f),  // tmax before the triangle
+      ray({0.25f, 0.5f, 2}, {0, 0, -1}, 2.5f),        // tmin after the triangle
+      ray({0.25f, 0.5f, 2}, {0, 0, 1}),               // pointing away
   };
   const auto h = cl_closest(rays);
   ASSERT_EQ(h.size(), rays.size());
@@ -169,7 +170,8 @@ TEST_F(AccelTest, ClosestOfOverlappingLayersAndOriginalIds) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0.01f, 3.99f);
   std::vector<LuxRay> rays;
-  for (int i = 0; i < 2000; ++i) rays.push_back(ray({u(rng), u(rng), i % 2 ? 5.0f : -5.0f}, {0, 0, i % 2 ? -1.0f : 1.0f}));
+  for (int i = 0; i < 2000; ++i)
+    rays.push_back(ray({u(rng), u(rng), i % 2 ? 5.0f : -5.0f}, {0, 0, i % 2 ? -1.0f : 1.0f}));
   const auto h = cl_closest(rays);
   for (size_t i = 0; i < rays.size(); ++i) {
     ASSERT_GE(h[i].prim, 0);
@@ -188,10 +190,11 @@ TEST_F(AccelTest, WatertightAtSharedEdgesAndVertices) {
   std::vector<LuxRay> rays;
   for (int y = 1; y < 16; ++y)
     for (int x = 1; x < 16; ++x) {
-      rays.push_back(ray({float(x), float(y), 3}, {0, 0, -1}));              // vertex
-      rays.push_back(ray({x + 0.5f, float(y), 3}, {0, 0, -1}));              // horizontal edge
-      rays.push_back(ray({x + 0.5f, y + 0.5f, 3}, {0, 0, -1}));              // diagonal edge
-      rays.push_back(ray({float(x) - 3, float(y) - 2, 3}, {1, 2 / 3.0f, -1}));  // slanted to a vertex
+      rays.push_back(ray({float(x), float(y), 3}, {0, 0, -1}));  // vertex
+      rays.push_back(ray({x + 0.5f, float(y), 3}, {0, 0, -1}));  // horizontal edge
+      rays.push_back(ray({x + 0.5f, y + 0.5f, 3}, {0, 0, -1}));  // diagonal edge
+      rays.push_back(
+          ray({float(x) - 3, float(y) - 2, 3}, {1, 2 / 3.0f, -1}));  // slanted to a vertex
     }
   const auto h = cl_closest(rays);
   size_t misses = 0;
@@ -209,7 +212,10 @@ TEST_F(AccelTest, OffsetRaysDoNotSelfIntersectAtLargeCoordinates) {
     SceneBuilder b;
     Mat4 xf = translate(far, far * 0.5, -far);
     const double c = std::cos(0.3), s = std::sin(0.3);
-    xf.at(1, 1) = c; xf.at(1, 2) = -s; xf.at(2, 1) = s; xf.at(2, 2) = c;
+    xf.at(1, 1) = c;
+    xf.at(1, 2) = -s;
+    xf.at(2, 1) = s;
+    xf.at(2, 2) = c;
     add_grid(b, 32, 64.0f, xf);
     build(b.s);
     const Vec3 n = normalize(transform_normal(xf, {0, 0, 1}));
@@ -306,7 +312,10 @@ TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
   for (int i = 0; i < 300; ++i) {
     Mat4 xf = translate(u(rng), u(rng), u(rng));
     const double c = std::cos(a(rng)), s = std::sin(a(rng));
-    xf.at(0, 0) = c; xf.at(0, 2) = s; xf.at(2, 0) = -s; xf.at(2, 2) = c;
+    xf.at(0, 0) = c;
+    xf.at(0, 2) = s;
+    xf.at(2, 0) = -s;
+    xf.at(2, 2) = c;
     add_grid(b, 3, 2.0f, xf);
   }
   build(b.s, BvhBuildOptions{.max_leaf_size = 2});
@@ -318,8 +327,10 @@ TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
     size_t disagree = 0, hits = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
       hits += h[i].prim >= 0;
-      if (h[i].prim != e[i].prim) ++disagree;
-      else if (h[i].prim >= 0) EXPECT_NEAR(h[i].t, e[i].t, 1e-4f * std::max(1.0f, e[i].t));
+      if (h[i].prim != e[i].prim)
+        ++disagree;
+      else if (h[i].prim >= 0)
+        EXPECT_NEAR(h[i].t, e[i].t, 1e-4f * std::max(1.0f, e[i].t));
     }
     EXPECT_LE(disagree, rays.size() / 10000) << ray_kind_name(kind);
     EXPECT_GT(hits, rays.size() / 20) << ray_kind_name(kind);

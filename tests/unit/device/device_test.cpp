@@ -30,7 +30,10 @@ class ScopedEnv {
     setenv(name, value.c_str(), 1);
   }
   ~ScopedEnv() {
-    if (had_) setenv(name_, old_.c_str(), 1); else unsetenv(name_);
+    if (had_)
+      setenv(name_, old_.c_str(), 1);
+    else
+      unsetenv(name_);
   }
 
  private:
@@ -98,8 +101,9 @@ TEST(KernelSources, EmbeddedIncludesExpandOnceWithLineMarkers) {
 
 TEST(KernelSources, DevelopmentFolderOverridesEmbeddedCopies) {
   const fs::path dir = temp_dir("kdir");
-  std::ofstream(dir / "fill.cl") << "__kernel void fill_int(__global int* o, const int v, const int n)"
-                                    " { if ((int)get_global_id(0) < n) o[get_global_id(0)] = v + 1; }\n";
+  std::ofstream(dir / "fill.cl")
+      << "__kernel void fill_int(__global int* o, const int v, const int n)"
+         " { if ((int)get_global_id(0) < n) o[get_global_id(0)] = v + 1; }\n";
   ScopedEnv env("LUXEL_KERNEL_DIR", dir.string());
   auto text = read_kernel_file("fill.cl");
   ASSERT_TRUE(text.is_ok());
@@ -185,7 +189,8 @@ TEST(ProgramCache, SecondContextLoadsTheBinaryFromDisk) {
 TEST(ProgramCache, FailedBuildKeepsLogAndExpandedSource) {
   const fs::path cache = temp_dir("cache-fail");
   const fs::path kdir = temp_dir("kdir-fail");
-  std::ofstream(kdir / "broken.cl") << "__kernel void broken(__global int* o) { o[0] = undeclared_thing; }\n";
+  std::ofstream(kdir / "broken.cl")
+      << "__kernel void broken(__global int* o) { o[0] = undeclared_thing; }\n";
   ScopedEnv env_cache("LUXEL_CACHE_DIR", cache.string());
   ScopedEnv env_k("LUXEL_KERNEL_DIR", kdir.string());
   auto ctx = make_context();
@@ -195,7 +200,8 @@ TEST(ProgramCache, FailedBuildKeepsLogAndExpandedSource) {
   const std::string& msg = p.status().message();
   EXPECT_NE(msg.find("broken.cl"), std::string::npos);
   EXPECT_NE(msg.find("CL_BUILD_PROGRAM_FAILURE"), std::string::npos);
-  EXPECT_NE(msg.find("undeclared_thing"), std::string::npos) << "the build log is in the message: " << msg;
+  EXPECT_NE(msg.find("undeclared_thing"), std::string::npos)
+      << "the build log is in the message: " << msg;
   size_t kept = 0;
   for (const auto& e : fs::directory_iterator(cache / "failed")) {
     kept++;

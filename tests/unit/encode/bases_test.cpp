@@ -1,12 +1,13 @@
 // Basis definitions: Gram matrices (thesis Eq. 7.3, 8.1) and the Ambient Dice
 // cosine-lobe partition of unity (§8.3, §8.3.1).
+#include "shared/bases.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "encode/basis.h"
 #include "encode/gram.h"
-#include "shared/bases.h"
 
 namespace luxel::encode {
 namespace {
@@ -55,13 +56,15 @@ TEST(EncodeBases, SgAnalyticGramMatchesQuadrature) {
       const double diag = analytic[0];  // = integral of B^2 = pi/lambda (1 - e^{-4 lambda})
       // 1e-6: the float lobe axes are unit only to ~6e-8, scaled by 2 lambda.
       EXPECT_NEAR(diag, M_PI / lambda * (1.0 - std::exp(-4.0 * lambda)), 1e-6 * diag);
-      EXPECT_LT(max_abs_diff(analytic, numeric), 2e-6 * diag) << "sg" << count << " lambda " << lambda;
+      EXPECT_LT(max_abs_diff(analytic, numeric), 2e-6 * diag)
+          << "sg" << count << " lambda " << lambda;
     }
   }
 }
 
 TEST(EncodeBases, SgHemisphereGramIsSymmetricPositive) {
-  BasisSpec s{BasisKind::kSphericalGaussian, 9, 3.4f, BasisDomain::kHemisphere, BasisDomain::kHemisphere};
+  BasisSpec s{BasisKind::kSphericalGaussian, 9, 3.4f, BasisDomain::kHemisphere,
+              BasisDomain::kHemisphere};
   const SphericalBasis sg = SphericalBasis::create(s).value();
   for (const Vec3& d : sg.directions()) EXPECT_GE(d.z, 0.0f);
   const GramMatrix g = gram(sg);  // numeric: no closed form over the hemisphere
@@ -82,8 +85,12 @@ double worst_partition_error(const std::vector<Vec3>& vertices, float (*lobe)(fl
   return worst;
 }
 
-float half_x2(float x) { return x > 0 ? 0.5f * x * x : 0.0f; }
-float five_sixth_x4(float x) { return x > 0 ? 5.0f / 6.0f * x * x * x * x : 0.0f; }
+float half_x2(float x) {
+  return x > 0 ? 0.5f * x * x : 0.0f;
+}
+float five_sixth_x4(float x) {
+  return x > 0 ? 5.0f / 6.0f * x * x * x * x : 0.0f;
+}
 
 TEST(EncodeBases, AmbientDiceIcosahedronIsPartitionOfUnity) {
   // §8.3: "at every point on the sphere the unscaled basis functions' values

@@ -1,12 +1,12 @@
 // Manifest JSON: full round trip, validation errors that name the field.
 #include "output/manifest.h"
-#include "luxel_version.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "luxel_version.h"
 #include "temp_dir.h"
 
 namespace luxel::output {

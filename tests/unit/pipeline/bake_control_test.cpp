@@ -5,10 +5,10 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "device/context.h"
 #include "pipeline/bake.h"
@@ -197,7 +197,8 @@ TEST_F(BakeControlTest, ReferenceErrorIsExactAndTracksTheEstimate) {
       ++n;
     }
     predicted = std::sqrt(predicted / double(n));
-    std::printf("  RMSE %.5f, predicted from the estimate %.5f, relMSE %.3g\n", r.rmse, predicted, r.rel_mse);
+    std::printf("  RMSE %.5f, predicted from the estimate %.5f, relMSE %.3g\n", r.rmse, predicted,
+                r.rel_mse);
     return r.rmse / predicted;
   };
   auto c = pipeline::bake(scene, vs_exact, *ctx_);
@@ -227,13 +228,15 @@ TEST_F(BakeControlTest, ReferenceErrorIsExactAndTracksTheEstimate) {
   stop.reference.reset();
   auto e = pipeline::bake(scene, stop, *ctx_);
   ASSERT_FALSE(e);
-  EXPECT_NE(e.status().message().find("settings.target_metric"), std::string::npos) << e.status().to_string();
+  EXPECT_NE(e.status().message().find("settings.target_metric"), std::string::npos)
+      << e.status().to_string();
   // A reference of the wrong size names the setting.
   pipeline::BakeSettings wrong = st;
   wrong.reference = std::make_shared<const std::vector<float>>(std::vector<float>(12, 1.0f));
   auto f = pipeline::bake(scene, wrong, *ctx_);
   ASSERT_FALSE(f);
-  EXPECT_NE(f.status().message().find("settings.reference"), std::string::npos) << f.status().to_string();
+  EXPECT_NE(f.status().message().find("settings.reference"), std::string::npos)
+      << f.status().to_string();
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 // The bake's stopping, reporting, snapshot and checkpoint rules, and its
 // progress estimate, without a device (pipeline/bake_policy.h).
-#include <gtest/gtest.h>
-
 #include "pipeline/bake_policy.h"
+
+#include <gtest/gtest.h>
 
 namespace luxel::pipeline {
 namespace {

@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
-#include <array>
 #include <cstring>
 #include <functional>
 
@@ -84,8 +84,8 @@ Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t
   v.pooled_z = mean / se;
   v.mean_ratio = 1 + mean;
   v.pooled_ok = std::fabs(v.pooled_z) <= 4.0;  // ~6e-5 two-sided
-  std::printf("  %zu texels, max |z| %.2f (bound %.2f), mean ratio %.5f, pooled z %.2f\n",
-              v.texels, v.max_z, bound, v.mean_ratio, v.pooled_z);
+  std::printf("  %zu texels, max |z| %.2f (bound %.2f), mean ratio %.5f, pooled z %.2f\n", v.texels,
+              v.max_z, bound, v.mean_ratio, v.pooled_z);
   return v;
 }
 
@@ -125,7 +125,8 @@ double texel_mean(const atlas::SampleInfo& info, uint32_t texel,
                   const std::function<double(double, double)>& f_uv) {
   const uint32_t off = info.offsets[texel];
   const uint64_t valid = uint64_t{info.words[off]} | (uint64_t{info.words[off + 1]} << 32);
-  const uint32_t tx = texel % static_cast<uint32_t>(info.width), ty = texel / static_cast<uint32_t>(info.width);
+  const uint32_t tx = texel % static_cast<uint32_t>(info.width),
+                 ty = texel / static_cast<uint32_t>(info.width);
   double sum = 0;
   int n = 0;
   for (uint32_t i = 0; i < 64; ++i) {
@@ -202,7 +203,8 @@ TEST_F(ClosedFormTest, EquirectSkyOverOpenPlane) {
   double e[3] = {0, 0, 0};
   for (int y = 0; y < h / 2; ++y) {
     const double t0 = M_PI * y / h, t1 = M_PI * (y + 1) / h;
-    const double band = (2 * M_PI / w) * 0.5 * (std::pow(std::sin(t1), 2) - std::pow(std::sin(t0), 2));
+    const double band =
+        (2 * M_PI / w) * 0.5 * (std::pow(std::sin(t1), 2) - std::pow(std::sin(t0), 2));
     for (int x = 0; x < w; ++x)
       for (int c = 0; c < 3; ++c) e[c] += sky.at(x, y, c) * band;
   }
@@ -213,7 +215,9 @@ TEST_F(ClosedFormTest, EquirectSkyOverOpenPlane) {
   st.lights.sky.rotation_degrees = 30;
   auto r = bake(s, st);
   ASSERT_NE(r.features.find("sky_image"), std::string::npos) << r.features;
-  auto expected = [&](double scale) { return [&, scale](uint32_t, int c) { return scale * e[c]; }; };
+  auto expected = [&](double scale) {
+    return [&, scale](uint32_t, int c) { return scale * e[c]; };
+  };
   EXPECT_TRUE(check(r, expected(1.0)).ok());
   EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
 }
@@ -238,7 +242,10 @@ TEST_F(ClosedFormTest, FurnaceBox) {
 // (robust ray offsets, no self-intersection), and a nearly white closed room
 // that needs many bounces (Russian roulette must stay unbiased).
 TEST_F(ClosedFormTest, FurnaceBoxAtExtremeScalesAndHighAlbedo) {
-  struct Case { float albedo, scale; int bounces; };
+  struct Case {
+    float albedo, scale;
+    int bounces;
+  };
   for (const Case c : {Case{0.5f, 1e-3f, 6}, Case{0.5f, 1e5f, 6}, Case{0.9f, 1.0f, 40}}) {
     SCOPED_TRACE(strprintf("albedo %g scale %g bounces %d", c.albedo, c.scale, c.bounces));
     const float le = 0.25f;

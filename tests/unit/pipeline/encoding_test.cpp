@@ -135,7 +135,8 @@ double representable_irradiance(const std::string& name, Vec3 n, bool non_negati
   }
   const bool sh = name.rfind("sh", 0) == 0;
   auto sol = sh ? encode::solve_naive_projection(basis, samples)
-                : (non_negative ? encode::solve_nnls(basis, samples) : encode::solve_least_squares(basis, samples));
+                : (non_negative ? encode::solve_nnls(basis, samples)
+                                : encode::solve_least_squares(basis, samples));
   EXPECT_TRUE(sol) << sol.status().to_string();
   std::vector<float> c(sol.value().coefficients.begin(), sol.value().coefficients.end());
   return b.diffuse_irradiance(c.data(), n);
@@ -159,11 +160,15 @@ TEST_F(EncodingBakeTest, UniformSkyShMomentsAreExact) {
   for (int c = 0; c < 3; ++c) {
     for (int i = 0; i < 9; ++i) {
       const double expected = l[c] * (i == 0 ? c00 : (i == 1 ? c1y : 0.0));
-      auto value = [&](size_t t) { return double(sh.coefficients[(t * 9 + size_t(i)) * 3 + size_t(c)]); };
+      auto value = [&](size_t t) {
+        return double(sh.coefficients[(t * 9 + size_t(i)) * 3 + size_t(c)]);
+      };
       const MeanTest m = mean_test(texels, value, [&](size_t) { return expected; });
       if (expected != 0) {
-        EXPECT_LT(std::fabs(m.z), 4.5) << "coefficient " << i << " channel " << c << " ratio " << m.mean_ratio;
-        EXPECT_GT(std::fabs(mean_test(texels, value, [&](size_t) { return expected * 1.02; }).z), 4.5)
+        EXPECT_LT(std::fabs(m.z), 4.5)
+            << "coefficient " << i << " channel " << c << " ratio " << m.mean_ratio;
+        EXPECT_GT(std::fabs(mean_test(texels, value, [&](size_t) { return expected * 1.02; }).z),
+                  4.5)
             << "a 2 % error must be detected (coefficient " << i << ")";
       } else {
         // A vanishing moment: the mean over texels within 4.5 standard errors of 0.
@@ -172,15 +177,17 @@ TEST_F(EncodingBakeTest, UniformSkyShMomentsAreExact) {
     }
   }
   // The irradiance of this bake (uniform first segments) is still pi L.
-  const MeanTest e = mean_test(texels, [&](size_t t) { return double(r.irradiance[t * 4 + 1]); },
-                               [&](size_t) { return M_PI * l[1]; });
+  const MeanTest e = mean_test(
+      texels, [&](size_t t) { return double(r.irradiance[t * 4 + 1]); },
+      [&](size_t) { return M_PI * l[1]; });
   std::printf("  irradiance ratio %.5f z %.2f\n", e.mean_ratio, e.z);
   EXPECT_LT(std::fabs(e.z), 4.5);
 }
 
 TEST_F(EncodingBakeTest, UniformSkyEveryBasisReconstructsItsBestIrradiance) {
   scene::Scene s = testing::open_plane();
-  const std::vector<std::string> names = {"sh1", "sh2", "sg9", "sg12", "sg12-hemi", "ambient-dice9", "ambient-dice12"};
+  const std::vector<std::string> names = {"sh1",       "sh2",           "sg9",           "sg12",
+                                          "sg12-hemi", "ambient-dice9", "ambient-dice12"};
   auto st = settings(16, 1024, 0, names);
   st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
   st.lights.sky.color = {1, 1, 1};
@@ -196,8 +203,8 @@ TEST_F(EncodingBakeTest, UniformSkyEveryBasisReconstructsItsBestIrradiance) {
     // SG and Ambient Dice are solved progressively with the non-negative
     // clamp; the reference is the full NNLS fit of the same signal.
     const double best = representable_irradiance(name, n, true);
-    const MeanTest m = mean_test(texels, [&](size_t t) { return reconstruct(e, b, t, 1, n); },
-                                 [&](size_t) { return best; });
+    const MeanTest m = mean_test(
+        texels, [&](size_t t) { return reconstruct(e, b, t, 1, n); }, [&](size_t) { return best; });
     std::printf("  %-15s E_rec / E_best %.4f (E_best / pi L = %.4f), z %.2f, residual %.3g\n",
                 name.c_str(), m.mean_ratio, best / M_PI, m.z, e.residual_rms);
     // The progressive solve at 1024 samples sits within 1 % of the converged
@@ -205,7 +212,8 @@ TEST_F(EncodingBakeTest, UniformSkyEveryBasisReconstructsItsBestIrradiance) {
     EXPECT_NEAR(m.mean_ratio, 1.0, 0.01) << name;
     for (float v : e.coefficients) EXPECT_TRUE(std::isfinite(v)) << name;
     if (name.rfind("sh", 0) != 0)
-      for (float v : e.coefficients) ASSERT_GE(v, 0.0f) << name << ": NNLS output a negative amplitude";
+      for (float v : e.coefficients)
+        ASSERT_GE(v, 0.0f) << name << ": NNLS output a negative amplitude";
   }
 }
 
@@ -232,9 +240,9 @@ TEST_F(EncodingBakeTest, PointLightShMomentsFollowTheLightDirection) {
     return light.intensity / d2 * y[i];
   };
   for (int i : {0, 1, 3}) {  // Y00, ~y, ~x (z-moment is the same by symmetry)
-    const MeanTest m = mean_test(texels,
-                                 [&](size_t t) { return double(sh.coefficients[(t * 4 + size_t(i)) * 3]); },
-                                 [&](size_t t) { return expected(t, i); });
+    const MeanTest m = mean_test(
+        texels, [&](size_t t) { return double(sh.coefficients[(t * 4 + size_t(i)) * 3]); },
+        [&](size_t t) { return expected(t, i); });
     std::printf("  sh1 c%d ratio %.5f\n", i, m.mean_ratio);
     EXPECT_NEAR(m.mean_ratio, 1.0, 0.01) << "coefficient " << i;
   }
@@ -250,17 +258,22 @@ TEST_F(EncodingBakeTest, FurnaceBoxWithBouncesReconstructsConstantRadiance) {
   const auto texels = full_texels(r);
   ASSERT_GT(texels.size(), 300u);
   const double expected = M_PI * le / (1 - a);
-  const MeanTest e = mean_test(texels, [&](size_t t) { return double(r.irradiance[t * 4]); },
-                               [&](size_t) { return expected; });
+  const MeanTest e = mean_test(
+      texels, [&](size_t t) { return double(r.irradiance[t * 4]); },
+      [&](size_t) { return expected; });
   std::printf("  irradiance ratio %.5f z %.2f\n", e.mean_ratio, e.z);
   EXPECT_LT(std::fabs(e.z), 4.5);
-  EXPECT_GT(std::fabs(mean_test(texels, [&](size_t t) { return double(r.irradiance[t * 4]); },
-                                [&](size_t) { return expected * 1.02; }).z), 4.5);
+  EXPECT_GT(std::fabs(mean_test(
+                          texels, [&](size_t t) { return double(r.irradiance[t * 4]); },
+                          [&](size_t) { return expected * 1.02; })
+                          .z),
+            4.5);
   // A wall sees L = Le / (1 - a) over its hemisphere and, by the sphere
   // fit's convention, 0 behind it: c_00 = 2 pi L Y00 = L sqrt(pi).
   const auto& sh = find(r, "sh2");
-  const MeanTest c = mean_test(texels, [&](size_t t) { return double(sh.coefficients[(t * 9) * 3]); },
-                               [&](size_t) { return le / (1 - a) * std::sqrt(M_PI); });
+  const MeanTest c = mean_test(
+      texels, [&](size_t t) { return double(sh.coefficients[(t * 9) * 3]); },
+      [&](size_t) { return le / (1 - a) * std::sqrt(M_PI); });
   std::printf("  sh2 c00 ratio %.5f z %.2f\n", c.mean_ratio, c.z);
   EXPECT_LT(std::fabs(c.z), 4.5);
 }
@@ -271,7 +284,8 @@ TEST_F(EncodingBakeTest, SameSeedGivesIdenticalCoefficients) {
   st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
   const auto a = bake(s, st), b = bake(s, st);
   ASSERT_EQ(a.encodings.size(), 2u);
-  for (size_t k = 0; k < 2; ++k) EXPECT_EQ(a.encodings[k].coefficients, b.encodings[k].coefficients);
+  for (size_t k = 0; k < 2; ++k)
+    EXPECT_EQ(a.encodings[k].coefficients, b.encodings[k].coefficients);
 }
 
 TEST_F(EncodingBakeTest, InvalidEncodingSettingsNameTheField) {
@@ -279,14 +293,17 @@ TEST_F(EncodingBakeTest, InvalidEncodingSettingsNameTheField) {
   auto st = settings(8, 4, 0, {"sh3"});
   auto r = pipeline::bake(s, st, *ctx_);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.status().message().find("settings.encodings"), std::string::npos) << r.status().to_string();
+  EXPECT_NE(r.status().message().find("settings.encodings"), std::string::npos)
+      << r.status().to_string();
   st.encodings.names = {"sg12"};
   st.encodings.sg_sharpness = -1;
   r = pipeline::bake(s, st, *ctx_);
   ASSERT_FALSE(r);
-  EXPECT_NE(r.status().message().find("settings.sg_sharpness"), std::string::npos) << r.status().to_string();
+  EXPECT_NE(r.status().message().find("settings.sg_sharpness"), std::string::npos)
+      << r.status().to_string();
   EXPECT_FALSE(pipeline::parse_encoding_list("irradiance,sh2,bogus"));
-  EXPECT_EQ(pipeline::parse_encoding_list("irradiance,sh2").value(), std::vector<std::string>{"sh2"});
+  EXPECT_EQ(pipeline::parse_encoding_list("irradiance,sh2").value(),
+            std::vector<std::string>{"sh2"});
 }
 
 }  // namespace

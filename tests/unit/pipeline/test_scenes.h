@@ -51,7 +51,8 @@ inline scene::Scene open_plane(float albedo = 0.5f) {
 }
 
 // Closed cube [-scale,scale]^3 with inward-facing walls of albedo a, each
-// emitting radiance le (irradiance inside does not depend on the scale). Faces in a 3 x 2 grid of the atlas with a margin.
+// emitting radiance le (irradiance inside does not depend on the scale). Faces in a 3 x 2 grid of
+// the atlas with a margin.
 inline scene::Scene furnace_box(float albedo, float le, float scale = 1.0f) {
   scene::Scene s;
   s.source_name = "furnace_box";
@@ -65,8 +66,8 @@ inline scene::Scene furnace_box(float albedo, float le, float scale = 1.0f) {
     const Vec3 ev = normalize(cross(n, eu)) * (2.0f * scale);  // cross(eu, ev) along n
     const Vec3 o = n * -scale - eu * 0.5f - ev * 0.5f;
     const float cu = static_cast<float>(f % 3) / 3.0f, cv = static_cast<float>(f / 3) / 2.0f;
-    add_quad(s, o, eu, ev, cu + margin, cv + margin, cu + 1.0f / 3.0f - margin,
-             cv + 0.5f - margin, 0);
+    add_quad(s, o, eu, ev, cu + margin, cv + margin, cu + 1.0f / 3.0f - margin, cv + 0.5f - margin,
+             0);
   }
   return s;
 }

@@ -1,12 +1,12 @@
 #include "gltf_builder.h"
 
+#include <stb_image_write.h>
+
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
-
-#include <stb_image_write.h>
 
 namespace luxel::test {
 
@@ -31,8 +31,8 @@ int GltfBuilder::add_view(const void* data, size_t bytes, int stride) {
   return static_cast<int>(doc["bufferViews"].size() - 1);
 }
 
-int GltfBuilder::add_accessor(int view, int component_type, size_t count, const char* type, size_t byte_offset,
-                              bool normalized) {
+int GltfBuilder::add_accessor(int view, int component_type, size_t count, const char* type,
+                              size_t byte_offset, bool normalized) {
   json a = {{"componentType", component_type}, {"count", count}, {"type", type}};
   if (view >= 0) a["bufferView"] = view;
   if (byte_offset) a["byteOffset"] = byte_offset;
@@ -42,8 +42,10 @@ int GltfBuilder::add_accessor(int view, int component_type, size_t count, const 
 }
 
 int GltfBuilder::add_floats(const std::vector<float>& values, const char* type) {
-  const size_t comps = std::strcmp(type, "VEC2") == 0 ? 2 : std::strcmp(type, "VEC3") == 0 ? 3
-                       : std::strcmp(type, "VEC4") == 0 ? 4 : 1;
+  const size_t comps = std::strcmp(type, "VEC2") == 0   ? 2
+                       : std::strcmp(type, "VEC3") == 0 ? 3
+                       : std::strcmp(type, "VEC4") == 0 ? 4
+                                                        : 1;
   const int view = add_view(values.data(), values.size() * sizeof(float));
   return add_accessor(view, kFloat, values.size() / comps, type);
 }
@@ -55,17 +57,19 @@ int GltfBuilder::add_indices(const std::vector<uint32_t>& indices, int component
       raw.push_back(static_cast<uint8_t>(i));
     } else if (component_type == kUShort) {
       const auto v = static_cast<uint16_t>(i);
-      raw.insert(raw.end(), reinterpret_cast<const uint8_t*>(&v), reinterpret_cast<const uint8_t*>(&v) + 2);
+      raw.insert(raw.end(), reinterpret_cast<const uint8_t*>(&v),
+                 reinterpret_cast<const uint8_t*>(&v) + 2);
     } else {
-      raw.insert(raw.end(), reinterpret_cast<const uint8_t*>(&i), reinterpret_cast<const uint8_t*>(&i) + 4);
+      raw.insert(raw.end(), reinterpret_cast<const uint8_t*>(&i),
+                 reinterpret_cast<const uint8_t*>(&i) + 4);
     }
   }
   const int view = add_view(raw.data(), raw.size());
   return add_accessor(view, component_type, indices.size(), "SCALAR");
 }
 
-json GltfBuilder::triangles(const std::vector<float>& positions, const std::vector<uint32_t>& indices,
-                            int index_type, bool with_uv1) {
+json GltfBuilder::triangles(const std::vector<float>& positions,
+                            const std::vector<uint32_t>& indices, int index_type, bool with_uv1) {
   json prim = {{"attributes", {{"POSITION", add_floats(positions, "VEC3")}}}};
   if (with_uv1) {
     std::vector<float> uv;
@@ -93,8 +97,12 @@ int GltfBuilder::add_node_impl(json node, bool root) {
   return index;
 }
 
-int GltfBuilder::add_node(json node) { return add_node_impl(std::move(node), true); }
-int GltfBuilder::add_child_node(json node) { return add_node_impl(std::move(node), false); }
+int GltfBuilder::add_node(json node) {
+  return add_node_impl(std::move(node), true);
+}
+int GltfBuilder::add_child_node(json node) {
+  return add_node_impl(std::move(node), false);
+}
 
 int GltfBuilder::add_material(json material) {
   doc["materials"].push_back(std::move(material));
@@ -106,7 +114,8 @@ std::string base64(const std::string& bytes) {
   std::string out;
   size_t i = 0;
   for (; i + 2 < bytes.size(); i += 3) {
-    const uint32_t v = (uint8_t(bytes[i]) << 16) | (uint8_t(bytes[i + 1]) << 8) | uint8_t(bytes[i + 2]);
+    const uint32_t v =
+        (uint8_t(bytes[i]) << 16) | (uint8_t(bytes[i + 1]) << 8) | uint8_t(bytes[i + 2]);
     out += {k[v >> 18], k[(v >> 12) & 63], k[(v >> 6) & 63], k[v & 63]};
   }
   if (i + 1 == bytes.size()) {
@@ -143,8 +152,10 @@ std::string GltfBuilder::glb() const {
   std::string b(bin.begin(), bin.end());
   while (b.size() % 4) b.push_back('\0');
   auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
-  const uint32_t total = 12 + 8 + static_cast<uint32_t>(js.size()) + (b.empty() ? 0 : 8 + static_cast<uint32_t>(b.size()));
-  std::string out = "glTF" + u32(2) + u32(total) + u32(static_cast<uint32_t>(js.size())) + "JSON" + js;
+  const uint32_t total = 12 + 8 + static_cast<uint32_t>(js.size()) +
+                         (b.empty() ? 0 : 8 + static_cast<uint32_t>(b.size()));
+  std::string out =
+      "glTF" + u32(2) + u32(total) + u32(static_cast<uint32_t>(js.size())) + "JSON" + js;
   if (!b.empty()) out += u32(static_cast<uint32_t>(b.size())) + std::string("BIN\0", 4) + b;
   return out;
 }
@@ -162,14 +173,17 @@ TempDir::~TempDir() {
 
 std::string TempDir::write(const std::string& name, const std::string& bytes) const {
   const std::string full = path_ + "/" + name;
-  std::ofstream(full, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(full, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   return full;
 }
 
 std::string encode_png(int w, int h, int channels, const std::vector<uint8_t>& pixels) {
   std::string out;
   stbi_write_png_to_func(
-      [](void* ctx, void* data, int size) { static_cast<std::string*>(ctx)->append(static_cast<char*>(data), static_cast<size_t>(size)); },
+      [](void* ctx, void* data, int size) {
+        static_cast<std::string*>(ctx)->append(static_cast<char*>(data), static_cast<size_t>(size));
+      },
       &out, w, h, channels, pixels.data(), w * channels);
   return out;
 }
@@ -186,7 +200,8 @@ uint32_t crc32(const std::string& data) {
 }
 
 std::string be32(uint32_t v) {
-  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8), static_cast<char>(v)};
+  return {static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+          static_cast<char>(v)};
 }
 
 std::string png_chunk(const std::string& type, const std::string& data) {
@@ -211,10 +226,16 @@ std::string encode_png16_gray(int w, int h, const std::vector<uint16_t>& pixels)
     b = (b + a) % 65521;
   }
   const auto len = static_cast<uint16_t>(raw.size());
-  std::string z = {'\x78', '\x01', '\x01', static_cast<char>(len & 0xFF), static_cast<char>(len >> 8),
-                   static_cast<char>(~len & 0xFF), static_cast<char>((~len >> 8) & 0xFF)};
+  std::string z = {'\x78',
+                   '\x01',
+                   '\x01',
+                   static_cast<char>(len & 0xFF),
+                   static_cast<char>(len >> 8),
+                   static_cast<char>(~len & 0xFF),
+                   static_cast<char>((~len >> 8) & 0xFF)};
   z += raw + be32((b << 16) | a);
-  const std::string ihdr = be32(static_cast<uint32_t>(w)) + be32(static_cast<uint32_t>(h)) + std::string("\x10\0\0\0\0", 5);
+  const std::string ihdr = be32(static_cast<uint32_t>(w)) + be32(static_cast<uint32_t>(h)) +
+                           std::string("\x10\0\0\0\0", 5);
   return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", z) +
          png_chunk("IEND", "");
 }

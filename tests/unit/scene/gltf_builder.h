@@ -4,29 +4,29 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace luxel::test {
 
 using nlohmann::json;
 
-constexpr int kByte = 5120, kUByte = 5121, kShort = 5122, kUShort = 5123, kUInt = 5125, kFloat = 5126;
+constexpr int kByte = 5120, kUByte = 5121, kShort = 5122, kUShort = 5123, kUInt = 5125,
+              kFloat = 5126;
 
 class GltfBuilder {
  public:
   GltfBuilder();
 
-  json doc;                   // edit freely; "buffers" is filled on output
-  std::vector<uint8_t> bin;   // the single buffer
+  json doc;                  // edit freely; "buffers" is filled on output
+  std::vector<uint8_t> bin;  // the single buffer
 
   // Appends raw bytes (4-byte aligned) as a bufferView; returns its index.
   int add_view(const void* data, size_t bytes, int stride = 0);
   // Adds an accessor on `view`; returns its index.
-  int add_accessor(int view, int component_type, size_t count, const char* type, size_t byte_offset = 0,
-                   bool normalized = false);
+  int add_accessor(int view, int component_type, size_t count, const char* type,
+                   size_t byte_offset = 0, bool normalized = false);
   // bufferView + accessor for float data (`type` VEC2/VEC3/VEC4/SCALAR).
   int add_floats(const std::vector<float>& values, const char* type);
   // bufferView + accessor for indices of the given component type.
@@ -37,12 +37,12 @@ class GltfBuilder {
   json triangles(const std::vector<float>& positions, const std::vector<uint32_t>& indices = {},
                  int index_type = kUInt, bool with_uv1 = true);
   int add_mesh(const std::string& name, const std::vector<json>& primitives);
-  int add_node(json node);    // also lists it as a root of scene 0 unless `child` is true
+  int add_node(json node);  // also lists it as a root of scene 0 unless `child` is true
   int add_child_node(json node);
   int add_material(json material);
 
   // Serializations. The buffer (if any) is buffer 0.
-  std::string gltf_embedded() const;                       // data: URI
+  std::string gltf_embedded() const;                            // data: URI
   std::string gltf_external(const std::string& bin_uri) const;  // uri = bin_uri
   std::string glb() const;
 
@@ -58,7 +58,8 @@ class TempDir {
   TempDir(const TempDir&) = delete;
   TempDir& operator=(const TempDir&) = delete;
   const std::string& path() const { return path_; }
-  std::string write(const std::string& name, const std::string& bytes) const;  // returns the full path
+  std::string write(const std::string& name,
+                    const std::string& bytes) const;  // returns the full path
 
  private:
   std::string path_;

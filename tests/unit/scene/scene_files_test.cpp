@@ -1,10 +1,10 @@
 // Real scenes: the project's bundled scenes/ (every .gltf/.glb must import)
 // and the shared benchmark scenes beside the checkout (skipped when absent).
+#include <gtest/gtest.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-
-#include <gtest/gtest.h>
 
 #include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
@@ -32,18 +32,18 @@ TEST(SceneFiles, BundledScenesImport) {
 }
 
 // Loads a shared scene or skips the test when the folder is absent.
-#define LOAD_SHARED(var, file, options)                                                   \
-  const fs::path var##_path = fs::path(LUXEL_SHARED_SCENES_DIR) / file;                   \
-  if (!fs::exists(var##_path)) GTEST_SKIP() << var##_path << " not present";              \
-  auto var = import_gltf_file(var##_path.string(), options);                              \
+#define LOAD_SHARED(var, file, options)                                      \
+  const fs::path var##_path = fs::path(LUXEL_SHARED_SCENES_DIR) / file;      \
+  if (!fs::exists(var##_path)) GTEST_SKIP() << var##_path << " not present"; \
+  auto var = import_gltf_file(var##_path.string(), options);                 \
   ASSERT_TRUE(var.is_ok()) << var.status().to_string()
 
 // The README's triangle counts are of the files; import drops degenerate and
 // zero-area triangles, which these tests print and bound.
 void expect_triangles(const Scene& scene, size_t readme_count, const char* name) {
   const SceneStats s = compute_stats(scene, 16);
-  std::printf("%s: %zu triangles imported, %zu degenerate dropped (README: %zu)\n", name, s.world_triangles,
-              s.degenerate_triangles_dropped, readme_count);
+  std::printf("%s: %zu triangles imported, %zu degenerate dropped (README: %zu)\n", name,
+              s.world_triangles, s.degenerate_triangles_dropped, readme_count);
   EXPECT_EQ(s.world_triangles + s.degenerate_triangles_dropped, readme_count);
   EXPECT_LE(s.degenerate_triangles_dropped, readme_count / 1000);
 }
@@ -83,7 +83,8 @@ TEST(SharedScenes, Sponza) {
   EXPECT_EQ(r->textures.size(), 38u);
   EXPECT_GT(compute_stats(*r, 16).alpha_masked_triangles, 0u);
   bool masked = false;
-  for (const auto& m : r->materials) masked = masked || (m.alpha_mode == AlphaMode::kMask && m.double_sided);
+  for (const auto& m : r->materials)
+    masked = masked || (m.alpha_mode == AlphaMode::kMask && m.double_sided);
   EXPECT_TRUE(masked);
 }
 

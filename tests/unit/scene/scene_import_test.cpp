@@ -1,11 +1,11 @@
 // Crafted glTF files (built in memory by GltfBuilder): good ones checked
 // numerically, bad ones checked for their status code and for a message that
 // names the thing at fault.
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
-
-#include <gtest/gtest.h>
 
 #include "gltf_builder.h"
 #include "scene/gltf_import.h"
@@ -24,11 +24,13 @@ Result<Scene> load(const std::string& bytes, const ImportOptions& options = {}) 
 }
 
 // Asserts an error with `code` whose message contains every needle.
-void expect_error(const Result<Scene>& r, StatusCode code, std::initializer_list<const char*> needles) {
+void expect_error(const Result<Scene>& r, StatusCode code,
+                  std::initializer_list<const char*> needles) {
   ASSERT_FALSE(r.is_ok());
   EXPECT_EQ(r.status().code(), code) << r.status().to_string();
-  for (const char* n : needles) EXPECT_NE(r.status().message().find(n), std::string::npos)
-      << "'" << n << "' not in: " << r.status().message();
+  for (const char* n : needles)
+    EXPECT_NE(r.status().message().find(n), std::string::npos)
+        << "'" << n << "' not in: " << r.status().message();
 }
 
 void expect_near(Vec3 a, Vec3 b, float eps = 1e-5f) {
@@ -85,8 +87,11 @@ TEST(SceneImport, HierarchyTrsMatrixAndInstancing) {
   json matrix = json::array({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1});
   const int child = b.add_child_node({{"name", "child"}, {"mesh", mesh}, {"matrix", matrix}});
   const double h = std::sqrt(0.5);
-  b.add_node({{"name", "parent"}, {"children", {child}}, {"translation", {10, 0, 0}},
-              {"rotation", {0, h, 0, h}}, {"scale", {2, 2, 2}}});
+  b.add_node({{"name", "parent"},
+              {"children", {child}},
+              {"translation", {10, 0, 0}},
+              {"rotation", {0, h, 0, h}},
+              {"scale", {2, 2, 2}}});
   b.add_node({{"name", "other"}, {"mesh", mesh}, {"translation", {0, 0, -5}}});
   auto r = load(b.gltf_embedded());
   ASSERT_TRUE(r.is_ok()) << r.status().to_string();
@@ -94,9 +99,12 @@ TEST(SceneImport, HierarchyTrsMatrixAndInstancing) {
   ASSERT_EQ(r->instances.size(), 2u);
   EXPECT_EQ(r->instances[0].name, "child");
   EXPECT_EQ(r->instances[0].mesh, r->instances[1].mesh);
-  // Vertex (1,0,0): child -> (1,1,0); scale 2 -> (2,2,0); Ry(90): x -> -z -> (0,2,-2); +T -> (10,2,-2).
-  expect_near(transform_point(r->instances[0].object_to_world, r->meshes[0].positions[1]), {10, 2, -2});
-  expect_near(transform_point(r->instances[1].object_to_world, r->meshes[0].positions[1]), {1, 0, -5});
+  // Vertex (1,0,0): child -> (1,1,0); scale 2 -> (2,2,0); Ry(90): x -> -z -> (0,2,-2); +T ->
+  // (10,2,-2).
+  expect_near(transform_point(r->instances[0].object_to_world, r->meshes[0].positions[1]),
+              {10, 2, -2});
+  expect_near(transform_point(r->instances[1].object_to_world, r->meshes[0].positions[1]),
+              {1, 0, -5});
   const SceneStats s = compute_stats(*r, 64);
   EXPECT_EQ(s.mesh_triangles, 2u);
   EXPECT_EQ(s.world_triangles, 4u);
@@ -138,21 +146,24 @@ TEST(SceneImport, NonTrianglePrimitiveSkippedWithWarning) {
   ASSERT_TRUE(r.is_ok()) << r.status().to_string();
   EXPECT_EQ(r->import_stats.skipped_primitives, 1u);
   ASSERT_EQ(r->import_stats.warnings.size(), 1u);
-  EXPECT_NE(r->import_stats.warnings[0].find("mesh 'wire' (mesh[0]) primitive 1"), std::string::npos);
+  EXPECT_NE(r->import_stats.warnings[0].find("mesh 'wire' (mesh[0]) primitive 1"),
+            std::string::npos);
 }
 
 TEST(SceneImport, QuantizedTexcoordsAndSparse) {
   GltfBuilder b;
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   const std::vector<uint16_t> uv = {0, 0, 65535, 0, 65535, 65535, 0, 32768};
-  prim["attributes"]["TEXCOORD_0"] = b.add_accessor(b.add_view(uv.data(), 16), test::kUShort, 4, "VEC2", 0, true);
+  prim["attributes"]["TEXCOORD_0"] =
+      b.add_accessor(b.add_view(uv.data(), 16), test::kUShort, 4, "VEC2", 0, true);
   // Sparse POSITION: base quad, vertex 2 replaced by (2, 2, 0).
   const uint8_t idx[4] = {2, 0, 0, 0};
   const float val[3] = {2, 2, 0};
   const int base = prim["attributes"]["POSITION"];
-  b.doc["accessors"][base]["sparse"] = {{"count", 1},
-                                        {"indices", {{"bufferView", b.add_view(idx, 4)}, {"componentType", test::kUByte}}},
-                                        {"values", {{"bufferView", b.add_view(val, 12)}}}};
+  b.doc["accessors"][base]["sparse"] = {
+      {"count", 1},
+      {"indices", {{"bufferView", b.add_view(idx, 4)}, {"componentType", test::kUByte}}},
+      {"values", {{"bufferView", b.add_view(val, 12)}}}};
   b.add_node({{"mesh", b.add_mesh("q", {prim})}});
   auto r = load(b.gltf_embedded());
   ASSERT_TRUE(r.is_ok()) << r.status().to_string();
@@ -165,21 +176,23 @@ TEST(SceneImport, MaterialsAllFieldsAndTextures) {
   GltfBuilder b;
   // 2x1 RGBA image: texel 0 = (128, 64, 255, 128), texel 1 = (0, 0, 0, 255)
   const std::string png = test::encode_png(2, 1, 4, {128, 64, 255, 128, 0, 0, 0, 255});
-  b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(png)}, {"name", "tex"}}});
+  b.doc["images"] =
+      json::array({{{"uri", "data:image/png;base64," + test::base64(png)}, {"name", "tex"}}});
   b.doc["textures"] = json::array({{{"source", 0}}});
-  const int mat = b.add_material({{"name", "full"},
-                                  {"pbrMetallicRoughness",
-                                   {{"baseColorFactor", {0.5, 0.25, 1, 1}},
-                                    {"baseColorTexture", {{"index", 0}, {"texCoord", 1}}},
-                                    {"metallicFactor", 0.3},
-                                    {"roughnessFactor", 0.7},
-                                    {"metallicRoughnessTexture", {{"index", 0}}}}},
-                                  {"emissiveFactor", {1, 0.5, 0}},
-                                  {"emissiveTexture", {{"index", 0}}},
-                                  {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 17}}}}},
-                                  {"doubleSided", true},
-                                  {"alphaMode", "MASK"},
-                                  {"alphaCutoff", 0.25}});
+  const int mat = b.add_material(
+      {{"name", "full"},
+       {"pbrMetallicRoughness",
+        {{"baseColorFactor", {0.5, 0.25, 1, 1}},
+         {"baseColorTexture", {{"index", 0}, {"texCoord", 1}}},
+         {"metallicFactor", 0.3},
+         {"roughnessFactor", 0.7},
+         {"metallicRoughnessTexture", {{"index", 0}}}}},
+       {"emissiveFactor", {1, 0.5, 0}},
+       {"emissiveTexture", {{"index", 0}}},
+       {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 17}}}}},
+       {"doubleSided", true},
+       {"alphaMode", "MASK"},
+       {"alphaCutoff", 0.25}});
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   prim["material"] = mat;
   json plain = b.triangles(kQuadPositions, kQuadIndices);  // no material: glTF default
@@ -233,10 +246,12 @@ TEST(SceneImport, MaterialsAllFieldsAndTextures) {
 TEST(SceneImport, SixteenBitGreyImageExpandsToRgba) {
   GltfBuilder b;
   const std::string png = test::encode_png16_gray(2, 1, {0x8000, 0xFFFF});
-  b.doc["images"] = json::array({{{"bufferView", b.add_view(png.data(), png.size())}, {"mimeType", "image/png"}}});
+  b.doc["images"] = json::array(
+      {{{"bufferView", b.add_view(png.data(), png.size())}, {"mimeType", "image/png"}}});
   b.doc["textures"] = json::array({{{"source", 0}}});
-  b.add_material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}},
-                                            {"metallicRoughnessTexture", {{"index", 0}}}}}});
+  b.add_material(
+      {{"pbrMetallicRoughness",
+        {{"baseColorTexture", {{"index", 0}}}, {"metallicRoughnessTexture", {{"index", 0}}}}}});
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   prim["material"] = 0;
   b.add_node({{"mesh", b.add_mesh("m", {prim})}});
@@ -267,7 +282,9 @@ TEST(SceneImport, PunctualLights) {
   b.doc["extensionsUsed"] = {"KHR_lights_punctual"};
   b.doc["extensions"]["KHR_lights_punctual"]["lights"] = json::array(
       {{{"type", "point"}, {"intensity", 100}, {"color", {1, 0.5, 0.25}}, {"name", "bulb"}},
-       {{"type", "spot"}, {"intensity", 50}, {"spot", {{"innerConeAngle", 0.1}, {"outerConeAngle", 0.5}}}},
+       {{"type", "spot"},
+        {"intensity", 50},
+        {"spot", {{"innerConeAngle", 0.1}, {"outerConeAngle", 0.5}}}},
        {{"type", "directional"}, {"intensity", 3}}});
   auto light = [](int i) { return json{{"KHR_lights_punctual", {{"light", i}}}}; };
   b.add_node({{"translation", {1, 2, 3}}, {"extensions", light(0)}});
@@ -301,7 +318,10 @@ TEST(SceneImport, DeepHierarchyWithoutRecursion) {
     json n = {{"translation", {0, 0, 1}}};
     if (i + 1 < depth) n["children"] = {i + 1};
     if (i + 1 == depth) n["mesh"] = mesh;
-    if (i == 0) b.add_node(n); else b.add_child_node(n);
+    if (i == 0)
+      b.add_node(n);
+    else
+      b.add_child_node(n);
   }
   auto r = load(b.gltf_embedded());
   ASSERT_TRUE(r.is_ok()) << r.status().to_string();
@@ -324,7 +344,8 @@ TEST(SceneImportErrors, NaNNodeTransform) {
   const int child = b.add_child_node({{"name", "far"}, {"translation", {1e300, 0, 0}}});
   b.doc["nodes"][0]["scale"] = {1e300, 1, 1};
   b.doc["nodes"][0]["children"] = {child};
-  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument, {"node 'far' (node[1])", "overflow"});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"node 'far' (node[1])", "overflow"});
   // A literal too large for a double is rejected by the JSON parser.
   std::string text = quad_scene().gltf_embedded();
   const std::string key = "\"name\":\"n\"";
@@ -343,31 +364,36 @@ TEST(SceneImportErrors, StrideSmallerThanElement) {
   GltfBuilder b = quad_scene();
   b.doc["bufferViews"][0]["byteStride"] = 8;
   expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
-               {"mesh 'quad' (mesh[0]) primitive 0: accessor 0 (POSITION): byteStride 8 is smaller than the element "
+               {"mesh 'quad' (mesh[0]) primitive 0: accessor 0 (POSITION): byteStride 8 is smaller "
+                "than the element "
                 "size 12"});
 }
 
 TEST(SceneImportErrors, StrideOverrunsView) {
   GltfBuilder b = quad_scene();
   b.doc["bufferViews"][0]["byteStride"] = 16;  // 3 * 16 + 12 = 60 > 48
-  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument, {"accessor 0 (POSITION)", "overrun"});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"accessor 0 (POSITION)", "overrun"});
 }
 
 TEST(SceneImportErrors, CountOverrunsView) {
   GltfBuilder b = quad_scene();
   b.doc["accessors"][0]["count"] = 5;
-  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument, {"accessor 0 (POSITION)", "overrun"});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"accessor 0 (POSITION)", "overrun"});
   b.doc["accessors"][0]["count"] = 0x7fffffffffffffffLL;  // overflows count * stride
   expect_error(load(b.gltf_embedded()), StatusCode::kResourceExhausted, {"accessor 0 (POSITION)"});
   ImportOptions unlimited;
   unlimited.max_accessor_elements = std::numeric_limits<uint64_t>::max();
-  expect_error(load(b.gltf_embedded(), unlimited), StatusCode::kInvalidArgument, {"accessor 0 (POSITION)", "overrun"});
+  expect_error(load(b.gltf_embedded(), unlimited), StatusCode::kInvalidArgument,
+               {"accessor 0 (POSITION)", "overrun"});
 }
 
 TEST(SceneImportErrors, ViewOverrunsBuffer) {
   GltfBuilder b = quad_scene();
   b.doc["bufferViews"][0]["byteOffset"] = 1000;
-  expect_error(load(b.gltf_embedded()), StatusCode::kDataLoss, {"bufferView 0", "overruns buffer 0"});
+  expect_error(load(b.gltf_embedded()), StatusCode::kDataLoss,
+               {"bufferView 0", "overruns buffer 0"});
 }
 
 TEST(SceneImportErrors, MissingBinAndImage) {
@@ -375,7 +401,8 @@ TEST(SceneImportErrors, MissingBinAndImage) {
   GltfBuilder b = quad_scene();
   const std::string path = dir.write("scene.gltf", b.gltf_external("missing.bin"));
   expect_error(import_gltf_file(path), StatusCode::kNotFound, {"buffer 0", "missing.bin"});
-  expect_error(import_gltf_file(dir.path() + "/nothing.gltf"), StatusCode::kNotFound, {"nothing.gltf"});
+  expect_error(import_gltf_file(dir.path() + "/nothing.gltf"), StatusCode::kNotFound,
+               {"nothing.gltf"});
   // An external buffer in a memory import without a base folder.
   expect_error(load(b.gltf_external("scene.bin")), StatusCode::kNotFound, {"scene.bin"});
 
@@ -409,14 +436,16 @@ TEST(SceneImportErrors, TruncatedBin) {
   test::TempDir dir;
   GltfBuilder b = quad_scene();
   dir.write("scene.bin", std::string(b.bin.begin(), b.bin.end() - 8));
-  expect_error(import_gltf_file(dir.write("s.gltf", b.gltf_external("scene.bin"))), StatusCode::kDataLoss,
-               {"buffer 0", "byteLength"});
+  expect_error(import_gltf_file(dir.write("s.gltf", b.gltf_external("scene.bin"))),
+               StatusCode::kDataLoss, {"buffer 0", "byteLength"});
 }
 
 TEST(SceneImportErrors, MissingLightmapUvs) {
   GltfBuilder b;
-  b.add_node({{"mesh", b.add_mesh("wall", {b.triangles(kQuadPositions, kQuadIndices, test::kUInt, false)})}});
-  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument, {"TEXCOORD_1", "mesh 'wall'"});
+  b.add_node({{"mesh", b.add_mesh("wall", {b.triangles(kQuadPositions, kQuadIndices, test::kUInt,
+                                                       false)})}});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"TEXCOORD_1", "mesh 'wall'"});
   ImportOptions relaxed;
   relaxed.require_lightmap_uvs = false;
   EXPECT_TRUE(load(b.gltf_embedded(), relaxed).is_ok());
@@ -432,7 +461,8 @@ TEST(SceneImportErrors, NodeCycleAndSeveralParents) {
   c.add_node({{"name", "p1"}, {"children", {3}}});
   c.add_node({{"name", "p2"}, {"children", {3}}});
   c.add_child_node({{"name", "shared"}});
-  expect_error(load(c.gltf_embedded()), StatusCode::kInvalidArgument, {"node 'shared' (node[3])", "several parents"});
+  expect_error(load(c.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"node 'shared' (node[3])", "several parents"});
 
   GltfBuilder d = quad_scene();
   d.doc["nodes"][0]["children"] = {0};
@@ -446,13 +476,15 @@ TEST(SceneImportErrors, BadComponentType) {
                {"accessor 0 (POSITION)", "componentType 5123", "UNSIGNED_SHORT"});
   GltfBuilder c = quad_scene();
   c.doc["accessors"][2]["componentType"] = test::kFloat;  // indices as float
-  expect_error(load(c.gltf_embedded()), StatusCode::kInvalidArgument, {"(indices)", "componentType 5126"});
+  expect_error(load(c.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"(indices)", "componentType 5126"});
 }
 
 TEST(SceneImportErrors, TruncatedGlb) {
   const std::string glb = quad_scene().glb();
   for (size_t cut : {size_t{8}, size_t{40}, glb.size() - 4}) {
-    expect_error(import_gltf_memory(glb.substr(0, cut), "", "t.glb"), StatusCode::kDataLoss, {"t.glb", "truncated"});
+    expect_error(import_gltf_memory(glb.substr(0, cut), "", "t.glb"), StatusCode::kDataLoss,
+                 {"t.glb", "truncated"});
   }
 }
 
@@ -469,7 +501,8 @@ TEST(SceneImportErrors, OversizedImageRejectedBeforeDecoding) {
   b.add_material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
   ImportOptions small;
   small.max_image_side = 32;
-  expect_error(load(b.gltf_embedded(), small), StatusCode::kResourceExhausted, {"image 0", "64 x 64"});
+  expect_error(load(b.gltf_embedded(), small), StatusCode::kResourceExhausted,
+               {"image 0", "64 x 64"});
   EXPECT_TRUE(load(b.gltf_embedded()).is_ok());
 }
 

@@ -8,15 +8,16 @@ float luxel_c_compile_check(const float* coeffs, float nx, float ny, float nz);
 
 float luxel_c_compile_check(const float* coeffs, float nx, float ny, float nz) {
   /* Touch every entry point once so each is compiled as C. */
-  const float lut0 = luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV, LUXEL_AD_LUT_SIZE_ALPHA,
-                                         0.5f, 0.5f, 0);
-  const float lut1 = luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV, LUXEL_AD_LUT_SIZE_ALPHA,
-                                         0.5f, 0.5f, 1);
-  float unused = luxel_ad_specular(coeffs, 1, luxel_ad12_directions, 12, nx, ny, nz, 0.0f, 0.0f, 1.0f, 0.5f, lut0,
-                                   lut1, 0.04f, 1.0f);
-  unused += luxel_sg_specular(coeffs, 1, luxel_ad12_directions, 12, 3.4f, nx, ny, nz, 0.0f, 0.0f, 1.0f, 0.5f,
-                              0.04f, 1.0f);
-  unused += luxel_sh_irradiance(coeffs, 1, 9, nx, ny, nz) + luxel_sh_radiance(coeffs, 1, 9, nx, ny, nz);
+  const float lut0 = luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV,
+                                         LUXEL_AD_LUT_SIZE_ALPHA, 0.5f, 0.5f, 0);
+  const float lut1 = luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV,
+                                         LUXEL_AD_LUT_SIZE_ALPHA, 0.5f, 0.5f, 1);
+  float unused = luxel_ad_specular(coeffs, 1, luxel_ad12_directions, 12, nx, ny, nz, 0.0f, 0.0f,
+                                   1.0f, 0.5f, lut0, lut1, 0.04f, 1.0f);
+  unused += luxel_sg_specular(coeffs, 1, luxel_ad12_directions, 12, 3.4f, nx, ny, nz, 0.0f, 0.0f,
+                              1.0f, 0.5f, 0.04f, 1.0f);
+  unused +=
+      luxel_sh_irradiance(coeffs, 1, 9, nx, ny, nz) + luxel_sh_radiance(coeffs, 1, 9, nx, ny, nz);
   unused += luxel_sg_irradiance(coeffs, 1, luxel_ad9_directions, 9, 3.4f, nx, ny, nz);
   unused += luxel_sg_radiance(coeffs, 1, luxel_ad9_directions, 9, 3.4f, nx, ny, nz);
   unused += luxel_ad_radiance(coeffs, 1, luxel_ad9_directions, 9, nx, ny, nz);

@@ -21,7 +21,9 @@ using luxel::Vec3;
 using luxel::encode::BasisKind;
 using luxel::encode::SphericalBasis;
 
-SphericalBasis named(const char* name) { return SphericalBasis::from_name(name).value(); }
+SphericalBasis named(const char* name) {
+  return SphericalBasis::from_name(name).value();
+}
 
 std::vector<float> flat_directions(const SphericalBasis& b) {
   std::vector<float> d;
@@ -34,10 +36,13 @@ float header_irradiance(const SphericalBasis& b, const float* c, int stride, Vec
   const std::vector<float> dirs = flat_directions(b);
   switch (b.spec().kind) {
     case BasisKind::kShL1:
-    case BasisKind::kShL2: return luxel_sh_irradiance(c, stride, b.size(), n.x, n.y, n.z);
+    case BasisKind::kShL2:
+      return luxel_sh_irradiance(c, stride, b.size(), n.x, n.y, n.z);
     case BasisKind::kSphericalGaussian:
-      return luxel_sg_irradiance(c, stride, dirs.data(), b.size(), b.spec().sharpness, n.x, n.y, n.z);
-    case BasisKind::kAmbientDice: return luxel_ad_irradiance(c, stride, dirs.data(), b.size(), n.x, n.y, n.z);
+      return luxel_sg_irradiance(c, stride, dirs.data(), b.size(), b.spec().sharpness, n.x, n.y,
+                                 n.z);
+    case BasisKind::kAmbientDice:
+      return luxel_ad_irradiance(c, stride, dirs.data(), b.size(), n.x, n.y, n.z);
   }
   return NAN;
 }
@@ -72,7 +77,8 @@ double irradiance_quadrature(const F& f, Vec3 n) {
 TEST(SdkDiffuse, MatchesEngineForRandomCoefficients) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> coeff(-1.0f, 2.0f);
-  for (const char* name : {"sh1", "sh2", "sg6", "sg9", "sg12", "sg12-hemi", "ambient-dice9", "ambient-dice12"}) {
+  for (const char* name :
+       {"sh1", "sh2", "sg6", "sg9", "sg12", "sg12-hemi", "ambient-dice9", "ambient-dice12"}) {
     const SphericalBasis basis = named(name);
     double worst = 0.0;
     for (int trial = 0; trial < 500; ++trial) {
@@ -101,17 +107,21 @@ TEST(SdkDiffuse, CanonicalVerticesAreTheEngines) {
   ASSERT_EQ(ico.size(), size_t(LUXEL_AD_SPHERE_COUNT));
   ASSERT_EQ(hemi.size(), size_t(LUXEL_AD_HEMISPHERE_COUNT));
   for (size_t i = 0; i < ico.size(); ++i)
-    for (int k = 0; k < 3; ++k) EXPECT_EQ(luxel_ad12_directions[3 * i + size_t(k)], ico[i][k]) << i << "," << k;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(luxel_ad12_directions[3 * i + size_t(k)], ico[i][k]) << i << "," << k;
   for (size_t i = 0; i < hemi.size(); ++i)
-    for (int k = 0; k < 3; ++k) EXPECT_EQ(luxel_ad9_directions[3 * i + size_t(k)], hemi[i][k]) << i << "," << k;
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(luxel_ad9_directions[3 * i + size_t(k)], hemi[i][k]) << i << "," << k;
 }
 
 TEST(SdkDiffuse, ConstantRadianceGivesPiL) {
   const float radiance = 1.7f;
   auto worst_relative = [&](const SphericalBasis& b, const std::vector<float>& c) {
     double worst = 0.0;
-    for (const Vec3& n : luxel::encode::spherical_fibonacci(200, luxel::encode::BasisDomain::kSphere))
-      worst = std::max(worst, std::abs(header_irradiance(b, c.data(), 1, n) / (M_PI * radiance) - 1.0));
+    for (const Vec3& n :
+         luxel::encode::spherical_fibonacci(200, luxel::encode::BasisDomain::kSphere))
+      worst =
+          std::max(worst, std::abs(header_irradiance(b, c.data(), 1, n) / (M_PI * radiance) - 1.0));
     return worst;
   };
   // SH: band 0 only, c_00 = L / Y_00; exact.
@@ -127,9 +137,11 @@ TEST(SdkDiffuse, ConstantRadianceGivesPiL) {
   EXPECT_LT(ad, 1e-4);
   // SG: least-squares coefficients (a constant is not in the span of the
   // lobes); measured 7.7 %, 2.0 %, 0.67 % for 6, 9, 12 lobes at lambda 3.4.
-  for (auto [name, tol] : {std::pair{"sg6", 0.09}, std::pair{"sg9", 0.025}, std::pair{"sg12", 0.008}}) {
+  for (auto [name, tol] :
+       {std::pair{"sg6", 0.09}, std::pair{"sg9", 0.025}, std::pair{"sg12", 0.008}}) {
     const SphericalBasis b = named(name);
-    const std::vector<float> c = luxel::encode::fit_least_squares(b, [&](Vec3) { return double(radiance); }).value();
+    const std::vector<float> c =
+        luxel::encode::fit_least_squares(b, [&](Vec3) { return double(radiance); }).value();
     const double err = worst_relative(b, c);
     std::printf("constant, %s: worst relative error %.3g\n", name, err);
     EXPECT_LT(err, tol) << name;
@@ -143,17 +155,19 @@ TEST(SdkDiffuse, SingleLobeMatchesQuadrature) {
   const Vec3 va = ad.directions()[0], vs = sg.directions()[0];
   std::vector<float> unit(12, 0.0f);
   unit[0] = 1.0f;
-  for (const Vec3& n : luxel::encode::spherical_fibonacci(24, luxel::encode::BasisDomain::kSphere)) {
-    const double ea = irradiance_quadrature([&](Vec3 w) { return double(luxel_ad_lobe(luxel::dot(va, w))); }, n);
-    const double es =
-        irradiance_quadrature([&](Vec3 w) { return std::exp(3.4 * (double(luxel::dot(vs, w)) - 1.0)); }, n);
+  for (const Vec3& n :
+       luxel::encode::spherical_fibonacci(24, luxel::encode::BasisDomain::kSphere)) {
+    const double ea =
+        irradiance_quadrature([&](Vec3 w) { return double(luxel_ad_lobe(luxel::dot(va, w))); }, n);
+    const double es = irradiance_quadrature(
+        [&](Vec3 w) { return std::exp(3.4 * (double(luxel::dot(vs, w)) - 1.0)); }, n);
     peak_ad = std::max(peak_ad, ea);
     peak_sg = std::max(peak_sg, es);
     worst_ad = std::max(worst_ad, std::abs(header_irradiance(ad, unit.data(), 1, n) - ea));
     worst_sg = std::max(worst_sg, std::abs(header_irradiance(sg, unit.data(), 1, n) - es));
   }
-  std::printf("single lobe vs quadrature: AD worst %.3g of peak %.3f, SG worst %.3g of peak %.3f\n", worst_ad,
-              peak_ad, worst_sg, peak_sg);
+  std::printf("single lobe vs quadrature: AD worst %.3g of peak %.3f, SG worst %.3g of peak %.3f\n",
+              worst_ad, peak_ad, worst_sg, peak_sg);
   // Eq. 8.14 errs by <= 1.2e-3 in E / pi (peak 0.26); Hill's fit 0.5 % at 3.4.
   EXPECT_LT(worst_ad, 2e-3 * M_PI);
   EXPECT_LT(worst_sg, 0.007 * peak_sg);
@@ -164,7 +178,8 @@ TEST(SdkDiffuse, CompilesAsCAndAgrees) {
   std::vector<float> c(12);
   for (int i = 0; i < 12; ++i) c[size_t(i)] = 0.1f * float(i + 1);
   const float from_c = luxel_c_compile_check(c.data(), 0.0f, 0.6f, 0.8f);
-  const float from_cpp = luxel_ad_irradiance(c.data(), 1, luxel_ad12_directions, 12, 0.0f, 0.6f, 0.8f);
+  const float from_cpp =
+      luxel_ad_irradiance(c.data(), 1, luxel_ad12_directions, 12, 0.0f, 0.6f, 0.8f);
   EXPECT_NEAR(from_c, from_cpp, 1e-6f * std::abs(from_cpp));
 }
 

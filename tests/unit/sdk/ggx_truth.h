@@ -15,7 +15,9 @@ namespace luxel_test {
 struct D3 {
   double x, y, z;
 };
-inline double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline double dot(D3 a, D3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 
 inline double hammersley_radical(uint32_t i) {
   i = (i << 16) | (i >> 16);
@@ -63,7 +65,8 @@ FresnelSplit ggx_specular_truth_split(const Radiance& radiance, D3 v, double alp
 }
 
 template <class Radiance>
-double ggx_specular_truth(const Radiance& radiance, D3 v, double alpha, double f0, double f90, int samples) {
+double ggx_specular_truth(const Radiance& radiance, D3 v, double alpha, double f0, double f90,
+                          int samples) {
   const FresnelSplit s = ggx_specular_truth_split(radiance, v, alpha, samples);
   return f0 * s.f0 + f90 * s.f90;
 }

@@ -37,7 +37,8 @@ struct Basis {
     double sum = 0.0;
     for (int i = 0; i < count(); ++i) {
       if (c[size_t(i)] == 0.0f) continue;  // single-lobe signals: skip the exp of the others
-      const double cosine = dirs[size_t(3 * i)] * l.x + dirs[size_t(3 * i + 1)] * l.y + dirs[size_t(3 * i + 2)] * l.z;
+      const double cosine =
+          dirs[size_t(3 * i)] * l.x + dirs[size_t(3 * i + 1)] * l.y + dirs[size_t(3 * i + 2)] * l.z;
       sum += c[size_t(i)] * (kind == Kind::kAmbientDice ? double(luxel_ad_lobe(float(cosine)))
                                                         : std::exp(lambda * (cosine - 1.0)));
     }
@@ -45,10 +46,11 @@ struct Basis {
   }
   // The header's estimate; `no_lut` replaces the LUT by (1, 0), a
   // deliberately wrong model the tolerances must reject.
-  double estimate(const std::vector<float>& c, D3 v, float alpha, float f0, float f90, bool no_lut = false) const {
+  double estimate(const std::vector<float>& c, D3 v, float alpha, float f0, float f90,
+                  bool no_lut = false) const {
     if (kind == Kind::kSg)
-      return luxel_sg_specular(c.data(), 1, dirs.data(), count(), lambda, 0, 0, 1, float(v.x), float(v.y),
-                               float(v.z), alpha, f0, f90);
+      return luxel_sg_specular(c.data(), 1, dirs.data(), count(), lambda, 0, 0, 1, float(v.x),
+                               float(v.y), float(v.z), alpha, f0, f90);
     const float ndv = float(v.z);
     const float lut0 = no_lut ? 1.0f
                               : luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV,
@@ -56,8 +58,8 @@ struct Basis {
     const float lut1 = no_lut ? 0.0f
                               : luxel_ad_lut_sample(luxel_ad_specular_lut, LUXEL_AD_LUT_SIZE_NDOTV,
                                                     LUXEL_AD_LUT_SIZE_ALPHA, ndv, alpha, 1);
-    return luxel_ad_specular(c.data(), 1, dirs.data(), count(), 0, 0, 1, float(v.x), float(v.y), float(v.z), alpha,
-                             lut0, lut1, f0, f90);
+    return luxel_ad_specular(c.data(), 1, dirs.data(), count(), 0, 0, 1, float(v.x), float(v.y),
+                             float(v.z), alpha, lut0, lut1, f0, f90);
   }
 };
 
@@ -78,7 +80,9 @@ struct Stats {
 // Bands of GGX alpha the docs report separately: the fit is weakest mid range.
 constexpr int kBands = 3;
 const char* const kBandName[kBands] = {"alpha <= 0.2", "0.2 < alpha <= 0.6", "alpha > 0.6"};
-int band(double alpha) { return alpha <= 0.2 ? 0 : (alpha <= 0.6 ? 1 : 2); }
+int band(double alpha) {
+  return alpha <= 0.2 ? 0 : (alpha <= 0.6 ? 1 : 2);
+}
 
 struct Measured {
   Stats all, by_band[kBands];
@@ -107,7 +111,8 @@ std::vector<Point> ground_truth(const Basis& b, const std::vector<Signal>& signa
           const double st = std::sqrt(1.0 - ndv * ndv);
           const D3 v{st * std::cos(phi), st * std::sin(phi), ndv};
           auto radiance = [&](D3 l) { return b.radiance(s.coeffs, l); };
-          const luxel_test::FresnelSplit t = luxel_test::ggx_specular_truth_split(radiance, v, alpha, kTruthSamples);
+          const luxel_test::FresnelSplit t =
+              luxel_test::ggx_specular_truth_split(radiance, v, alpha, kTruthSamples);
           points.push_back({s.coeffs, alpha, v, t.f0, t.f90});
         }
   return points;
@@ -115,8 +120,8 @@ std::vector<Point> ground_truth(const Basis& b, const std::vector<Signal>& signa
 
 // Lobe signals: absolute error per unit lobe amplitude. Constant: relative.
 // no_lut / truth_scale make deliberately wrong variants.
-Measured measure(const Basis& b, const std::vector<Point>& points, float f0, float f90, bool relative,
-                 bool no_lut = false, double truth_scale = 1.0) {
+Measured measure(const Basis& b, const std::vector<Point>& points, float f0, float f90,
+                 bool relative, bool no_lut = false, double truth_scale = 1.0) {
   Measured m;
   for (const Point& p : points) {
     const double truth = truth_scale * (f0 * p.truth_f0 + f90 * p.truth_f90);
@@ -129,17 +134,22 @@ Measured measure(const Basis& b, const std::vector<Point>& points, float f0, flo
 }
 
 void report(const char* what, const Measured& m) {
-  std::printf("%-36s all: max %.4f mean %.4f rmse %.4f (truth max %.3f)\n", what, m.all.max, m.all.mean(),
-              m.all.rmse(), m.all.truth_max);
+  std::printf("%-36s all: max %.4f mean %.4f rmse %.4f (truth max %.3f)\n", what, m.all.max,
+              m.all.mean(), m.all.rmse(), m.all.truth_max);
   for (int k = 0; k < kBands; ++k)
-    std::printf("%-36s   %-20s max %.4f mean %.4f\n", "", kBandName[k], m.by_band[k].max, m.by_band[k].mean());
+    std::printf("%-36s   %-20s max %.4f mean %.4f\n", "", kBandName[k], m.by_band[k].max,
+                m.by_band[k].mean());
 }
 
-Basis ad12() { return {Kind::kAmbientDice, std::vector<float>(luxel_ad12_directions, luxel_ad12_directions + 36)}; }
+Basis ad12() {
+  return {Kind::kAmbientDice,
+          std::vector<float>(luxel_ad12_directions, luxel_ad12_directions + 36)};
+}
 
 Basis sg12() {
   Basis b{Kind::kSg, {}, 3.4f};
-  for (const luxel::Vec3& d : luxel::encode::spherical_fibonacci(12, luxel::encode::BasisDomain::kSphere))
+  for (const luxel::Vec3& d :
+       luxel::encode::spherical_fibonacci(12, luxel::encode::BasisDomain::kSphere))
     b.dirs.insert(b.dirs.end(), {d.x, d.y, d.z});
   return b;
 }
@@ -158,8 +168,10 @@ TEST(SdkSpecular, TruthOfConstantIsDirectionalAlbedo) {
   // -> 0; single scattering loses energy as alpha grows (0.45 at alpha 1,
   // n.v 0.5, where lut_test.cpp also checks the generator's VNDF estimator).
   const D3 v{std::sqrt(0.75), 0.0, 0.5};
-  EXPECT_NEAR(luxel_test::ggx_specular_truth([](D3) { return 1.0; }, v, 0.01, 1, 1, kTruthSamples), 1.0, 2e-3);
-  EXPECT_NEAR(luxel_test::ggx_specular_truth([](D3) { return 1.0; }, v, 1.0, 1, 1, kTruthSamples), 0.4507, 2e-3);
+  EXPECT_NEAR(luxel_test::ggx_specular_truth([](D3) { return 1.0; }, v, 0.01, 1, 1, kTruthSamples),
+              1.0, 2e-3);
+  EXPECT_NEAR(luxel_test::ggx_specular_truth([](D3) { return 1.0; }, v, 1.0, 1, 1, kTruthSamples),
+              0.4507, 2e-3);
 }
 
 // Tolerances: measured value (docs/reconstruction.md) plus ~10 %. Each test
@@ -178,7 +190,8 @@ TEST(SdkSpecular, AmbientDiceSingleLobes) {
   // expected value, the mean error must break the tolerance.
   const Measured no_lut = measure(b, truth, 1.0f, 1.0f, false, true);
   const Measured off = measure(b, truth, 1.0f, 1.0f, false, false, 1.1);
-  std::printf("AD12 wrong variants: no LUT mean %.4f, truth x 1.1 mean %.4f\n", no_lut.all.mean(), off.all.mean());
+  std::printf("AD12 wrong variants: no LUT mean %.4f, truth x 1.1 mean %.4f\n", no_lut.all.mean(),
+              off.all.mean());
   EXPECT_GT(no_lut.all.mean(), tol_mean);
   EXPECT_GT(off.all.mean(), tol_mean);
 }

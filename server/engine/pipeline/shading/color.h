@@ -10,7 +10,9 @@ namespace luxel::pipeline {
 
 // Rec. 709 / sRGB-primaries luminance of linear RGB: the one scalar used to
 // weigh lights by power (thesis §6.3.2) and sky texels by brightness.
-inline double luminance(Vec3 c) { return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z; }
+inline double luminance(Vec3 c) {
+  return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+}
 
 // The exact sRGB OETF (IEC 61966-2-1), linear [0,1] -> encoded [0,1].
 inline float linear_to_srgb(float v) {

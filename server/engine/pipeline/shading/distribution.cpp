@@ -16,7 +16,8 @@ double append_cdf(const double* weights, size_t count, std::vector<float>* out) 
   for (size_t i = 0; i < count; ++i) {
     prefix += total > 0 ? weights[i] : 1.0;
     // Rounding to float is monotone, so the CDF stays non-decreasing.
-    out->push_back(i + 1 == count ? 1.0f : static_cast<float>(prefix / (total > 0 ? total : double(count))));
+    out->push_back(
+        i + 1 == count ? 1.0f : static_cast<float>(prefix / (total > 0 ? total : double(count))));
   }
   return total;
 }

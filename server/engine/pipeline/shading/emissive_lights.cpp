@@ -38,13 +38,14 @@ Result<EmitterMaterial> emitter_material(const scene::Scene& scene, size_t index
   LUXEL_RETURN_IF_ERROR(check_nonnegative(what, "emissive strength", m.emissive_strength));
   EmitterMaterial e;
   e.radiance = m.emissive_factor * m.emissive_strength;
-  if (!is_finite(e.radiance)) return invalid_argument(what + ": emissive factor * strength overflows a float");
+  if (!is_finite(e.radiance))
+    return invalid_argument(what + ": emissive factor * strength overflows a float");
   double texture_mean = 1.0;
   const int tex = m.emissive_texture.texture;
   if (tex >= 0) {
     if (tex >= static_cast<int>(scene.textures.size()))
-      return invalid_argument(strprintf("%s: emissive texture %d does not exist (%zu textures)", what.c_str(), tex,
-                                        scene.textures.size()));
+      return invalid_argument(strprintf("%s: emissive texture %d does not exist (%zu textures)",
+                                        what.c_str(), tex, scene.textures.size()));
     texture_mean = mean_luminance(scene.textures[static_cast<size_t>(tex)]);
     e.flags |= LUX_LIGHT_FLAG_TEXTURED;
   }
@@ -94,9 +95,11 @@ Status add_emissive_triangles(const scene::Scene& scene, const accel::TriangleSo
     c.light.origin = {v0.x, v0.y, v0.z, c.light.origin.w};
     c.light.axis = {e1.x, e1.y, e1.z, lux_as_float(static_cast<int32_t>(e.flags))};
     c.light.edge2 = {e2.x, e2.y, e2.z, lux_as_float(static_cast<int32_t>(t))};
-    c.light.emission = {e.radiance.x, e.radiance.y, e.radiance.z, static_cast<float>(0.5 * twice_area)};
+    c.light.emission = {e.radiance.x, e.radiance.y, e.radiance.z,
+                        static_cast<float>(0.5 * twice_area)};
     c.light.shape = {static_cast<float>(cx * n_scale), static_cast<float>(cy * n_scale),
-                 static_cast<float>(cz * n_scale), lux_as_float(static_cast<int32_t>(material))};
+                     static_cast<float>(cz * n_scale),
+                     lux_as_float(static_cast<int32_t>(material))};
     // A triangle whose area rounds to 0 in float would give the device an
     // infinite pdf; power 0 makes build_light_table drop it.
     c.power = LUX_LIGHT_AREA(c.light) > 0 ? 0.5 * twice_area * e.power_scale : 0.0;

@@ -19,8 +19,12 @@ struct LightCandidate {
   double power = 0;
 };
 
-inline void set_type(cl::LuxLight* l, int type) { l->origin.w = lux_as_float(static_cast<int32_t>(type)); }
-inline int type_of(const cl::LuxLight& l) { return LUX_LIGHT_TYPE(l); }
+inline void set_type(cl::LuxLight* l, int type) {
+  l->origin.w = lux_as_float(static_cast<int32_t>(type));
+}
+inline int type_of(const cl::LuxLight& l) {
+  return LUX_LIGHT_TYPE(l);
+}
 
 // Scene KHR_lights_punctual lights. disc_area: pi r^2 of the scene's bounding
 // sphere (directional power).

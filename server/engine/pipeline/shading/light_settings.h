@@ -20,18 +20,18 @@ inline constexpr float kMaxAngularRadiusDegrees = 90;
 struct SkySettings {
   enum class Kind { kNone, kConstant, kEquirect };
   Kind kind = Kind::kNone;
-  Vec3 color{1, 1, 1};           // multiplies the image too
+  Vec3 color{1, 1, 1};  // multiplies the image too
   float intensity = 1;
-  std::string equirect_path;     // HDR/EXR (anything OpenImageIO reads), kEquirect only
-  float rotation_degrees = 0;    // about +Y, right-handed (light.h: EQUIRECT MAPPING)
+  std::string equirect_path;   // HDR/EXR (anything OpenImageIO reads), kEquirect only
+  float rotation_degrees = 0;  // about +Y, right-handed (light.h: EQUIRECT MAPPING)
 };
 
 // A sun in addition to the scene's KHR_lights_punctual directional lights.
 struct SunSettings {
   bool enabled = false;
-  Vec3 direction{0, -1, 0};      // direction the light travels (need not be unit)
+  Vec3 direction{0, -1, 0};  // direction the light travels (need not be unit)
   Vec3 color{1, 1, 1};
-  float illuminance = 1;         // W/m^2 facing the sun (color * illuminance)
+  float illuminance = 1;                 // W/m^2 facing the sun (color * illuminance)
   float angular_radius_degrees = 0.27f;  // 0: a delta (hard shadows); the real sun is ~0.27
 };
 

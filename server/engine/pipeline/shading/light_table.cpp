@@ -32,8 +32,8 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
                                      const LightSettings& settings, const Bounds3& scene_bounds) {
   const double disc_area = bounding_disc_area(scene_bounds);
   std::vector<detail::LightCandidate> candidates;
-  LUXEL_RETURN_IF_ERROR(detail::add_punctual_lights(scene, settings.directional_angular_radius_degrees,
-                                                    disc_area, &candidates));
+  LUXEL_RETURN_IF_ERROR(detail::add_punctual_lights(
+      scene, settings.directional_angular_radius_degrees, disc_area, &candidates));
   LUXEL_RETURN_IF_ERROR(detail::add_sun(settings.sun, disc_area, &candidates));
   LUXEL_RETURN_IF_ERROR(detail::add_emissive_triangles(scene, soup, &candidates));
   auto sky = detail::load_sky(settings.sky);
@@ -58,9 +58,15 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
     }
     const int index = static_cast<int>(table.lights.size());
     switch (detail::type_of(c.light)) {
-      case LUX_LIGHT_TYPE_POINT: table.has_point = true; break;
-      case LUX_LIGHT_TYPE_SPOT: table.has_spot = true; break;
-      case LUX_LIGHT_TYPE_DIRECTIONAL: table.has_directional = true; break;
+      case LUX_LIGHT_TYPE_POINT:
+        table.has_point = true;
+        break;
+      case LUX_LIGHT_TYPE_SPOT:
+        table.has_spot = true;
+        break;
+      case LUX_LIGHT_TYPE_DIRECTIONAL:
+        table.has_directional = true;
+        break;
       case LUX_LIGHT_TYPE_TRIANGLE:
         table.has_emissive = true;
         table.triangle_light[static_cast<size_t>(LUX_LIGHT_TRIANGLE(c.light))] = index;
@@ -70,7 +76,8 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
         table.sky_is_image = sky->sky.kind == LUX_SKY_KIND_IMAGE;
         sky->sky.light = index;
         break;
-      default: LUXEL_CHECK_MSG(false, "unknown light type");
+      default:
+        LUXEL_CHECK_MSG(false, "unknown light type");
     }
     table.lights.push_back(c.light);
     powers.push_back(c.power);

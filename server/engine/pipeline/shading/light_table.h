@@ -30,9 +30,9 @@ struct LightTable {
   // Per world triangle (TriangleSoup order): its light index, or -1.
   std::vector<int32_t> triangle_light;
 
-  cl::LuxSky sky{};                      // kind NONE unless a sky with power > 0
-  std::vector<float> sky_texels;         // width * height * 3 (rgb radiance), image sky only
-  std::vector<float> sky_marginal_cdf;   // height + 1
+  cl::LuxSky sky{};                        // kind NONE unless a sky with power > 0
+  std::vector<float> sky_texels;           // width * height * 3 (rgb radiance), image sky only
+  std::vector<float> sky_marginal_cdf;     // height + 1
   std::vector<float> sky_conditional_cdf;  // height * (width + 1)
 
   // Which light types are present (after dropping): decide the FeatureSet,

@@ -10,7 +10,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-cl::float4 f4(Vec3 v, float w = 0) { return {v.x, v.y, v.z, w}; }
+cl::float4 f4(Vec3 v, float w = 0) {
+  return {v.x, v.y, v.z, w};
+}
 
 // A directional light of irradiance E (rgb, facing the light). With an
 // angular radius a > 0 it becomes a disc of uniform radiance
@@ -22,8 +24,8 @@ Status directional_candidate(const std::string& what, Vec3 direction, Vec3 irrad
   if (!is_finite(direction) || !(length(direction) > 0))
     return invalid_argument(what + ": direction must be finite and non-zero");
   if (!(angular_radius_degrees >= 0 && angular_radius_degrees < kMaxAngularRadiusDegrees))
-    return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, %g)", what.c_str(),
-                                      static_cast<double>(angular_radius_degrees),
+    return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, %g)",
+                                      what.c_str(), static_cast<double>(angular_radius_degrees),
                                       static_cast<double>(kMaxAngularRadiusDegrees)));
   set_type(&c->light, LUX_LIGHT_TYPE_DIRECTIONAL);
   c->light.axis = f4(normalize(direction), c->light.axis.w);
@@ -49,15 +51,16 @@ std::string light_label(const scene::Light& l, size_t index) {
 
 Status check_color(const std::string& what, const char* field, Vec3 c) {
   if (!is_finite(c) || c.x < 0 || c.y < 0 || c.z < 0)
-    return invalid_argument(strprintf("%s: %s (%g, %g, %g) must be finite and non-negative", what.c_str(), field,
-                                      static_cast<double>(c.x), static_cast<double>(c.y),
-                                      static_cast<double>(c.z)));
+    return invalid_argument(strprintf("%s: %s (%g, %g, %g) must be finite and non-negative",
+                                      what.c_str(), field, static_cast<double>(c.x),
+                                      static_cast<double>(c.y), static_cast<double>(c.z)));
   return Status::ok();
 }
 
 Status check_nonnegative(const std::string& what, const char* field, double v) {
   if (!std::isfinite(v) || v < 0)
-    return invalid_argument(strprintf("%s: %s %g must be finite and non-negative", what.c_str(), field, v));
+    return invalid_argument(
+        strprintf("%s: %s %g must be finite and non-negative", what.c_str(), field, v));
   return Status::ok();
 }
 
@@ -72,8 +75,8 @@ Status add_punctual_lights(const scene::Scene& scene, float directional_angular_
     if (!is_finite(value)) return invalid_argument(what + ": color * intensity overflows a float");
     LightCandidate c;
     if (l.type == scene::LightType::kDirectional) {
-      LUXEL_RETURN_IF_ERROR(
-          directional_candidate(what, l.direction, value, directional_angular_radius_degrees, disc_area, &c));
+      LUXEL_RETURN_IF_ERROR(directional_candidate(
+          what, l.direction, value, directional_angular_radius_degrees, disc_area, &c));
       out->push_back(c);
       continue;
     }
@@ -88,8 +91,10 @@ Status add_punctual_lights(const scene::Scene& scene, float directional_angular_
         return invalid_argument(what + ": direction must be finite and non-zero");
       const double inner = l.inner_cone_angle, outer = l.outer_cone_angle;
       if (!(inner >= 0 && inner <= outer && outer <= kPi / 2))
-        return invalid_argument(strprintf("%s: spot cone angles inner %g, outer %g must satisfy "
-                                          "0 <= inner <= outer <= pi/2", what.c_str(), inner, outer));
+        return invalid_argument(
+            strprintf("%s: spot cone angles inner %g, outer %g must satisfy "
+                      "0 <= inner <= outer <= pi/2",
+                      what.c_str(), inner, outer));
       set_type(&c.light, LUX_LIGHT_TYPE_SPOT);
       c.light.axis = f4(normalize(l.direction), c.light.axis.w);
       LUX_LIGHT_COS_INNER(c.light) = static_cast<float>(std::cos(inner));
@@ -106,9 +111,8 @@ Status add_sun(const SunSettings& sun, double disc_area, std::vector<LightCandid
   LUXEL_RETURN_IF_ERROR(check_color("sun", "color", sun.color));
   LUXEL_RETURN_IF_ERROR(check_nonnegative("sun", "illuminance", sun.illuminance));
   LightCandidate c;
-  LUXEL_RETURN_IF_ERROR(
-      directional_candidate("sun", sun.direction, sun.color * sun.illuminance, sun.angular_radius_degrees,
-                            disc_area, &c));
+  LUXEL_RETURN_IF_ERROR(directional_candidate("sun", sun.direction, sun.color * sun.illuminance,
+                                              sun.angular_radius_degrees, disc_area, &c));
   out->push_back(c);
   return Status::ok();
 }

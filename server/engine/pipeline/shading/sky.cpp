@@ -29,12 +29,13 @@ Result<Image> read_rgb(const std::string& path) {
   const OIIO::ImageSpec& spec = in->spec();
   const int channels = spec.nchannels;
   if (spec.width <= 0 || spec.height <= 0 || channels <= 0)
-    return invalid_argument(strprintf("%s: empty image (%d x %d, %d channels)", what.c_str(), spec.width,
-                                      spec.height, channels));
+    return invalid_argument(strprintf("%s: empty image (%d x %d, %d channels)", what.c_str(),
+                                      spec.width, spec.height, channels));
   const uint64_t texels = uint64_t(spec.width) * uint64_t(spec.height);
   if (texels > kMaxSkyTexels)
-    return resource_exhausted(strprintf("%s: %d x %d texels is more than the %llu supported", what.c_str(),
-                                        spec.width, spec.height, static_cast<unsigned long long>(kMaxSkyTexels)));
+    return resource_exhausted(strprintf("%s: %d x %d texels is more than the %llu supported",
+                                        what.c_str(), spec.width, spec.height,
+                                        static_cast<unsigned long long>(kMaxSkyTexels)));
   std::vector<float> pixels(texels * static_cast<uint64_t>(channels));
   if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
     return invalid_argument(what + ": cannot read pixels: " + in->geterror());
@@ -49,11 +50,11 @@ Result<Image> read_rgb(const std::string& path) {
     // Grey (+ alpha) images give grey; extra channels beyond RGB are ignored.
     const Vec3 c = channels >= 3 ? Vec3{p[0], p[1], p[2]} : Vec3{p[0], p[0], p[0]};
     if (!is_finite(c) || c.x < 0 || c.y < 0 || c.z < 0)
-      return invalid_argument(strprintf("%s: texel (%llu, %llu) = (%g, %g, %g) is not finite and non-negative",
-                                        what.c_str(), static_cast<unsigned long long>(i % uint64_t(spec.width)),
-                                        static_cast<unsigned long long>(i / uint64_t(spec.width)),
-                                        static_cast<double>(c.x), static_cast<double>(c.y),
-                                        static_cast<double>(c.z)));
+      return invalid_argument(
+          strprintf("%s: texel (%llu, %llu) = (%g, %g, %g) is not finite and non-negative",
+                    what.c_str(), static_cast<unsigned long long>(i % uint64_t(spec.width)),
+                    static_cast<unsigned long long>(i / uint64_t(spec.width)),
+                    static_cast<double>(c.x), static_cast<double>(c.y), static_cast<double>(c.z)));
     img.rgb[i * 3] = c.x;
     img.rgb[i * 3 + 1] = c.y;
     img.rgb[i * 3 + 2] = c.z;
@@ -80,11 +81,14 @@ Status build_image_sky(const SkySettings& s, Vec3 scale, SkyData* sky) {
     const double sin_mid = std::sin(0.5 * (theta0 + theta1));
     const double texel_solid_angle = (2 * kPi / w) * (std::cos(theta0) - std::cos(theta1));
     for (int x = 0; x < w; ++x) {
-      float* t = &sky->texels[(static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)) * 3];
+      float* t =
+          &sky->texels[(static_cast<size_t>(y) * static_cast<size_t>(w) + static_cast<size_t>(x)) *
+                       3];
       const Vec3 c{t[0] * scale.x, t[1] * scale.y, t[2] * scale.z};
       if (!is_finite(c))
-        return invalid_argument(strprintf("sky image '%s': texel (%d, %d) times color * intensity overflows a float",
-                                          s.equirect_path.c_str(), x, y));
+        return invalid_argument(
+            strprintf("sky image '%s': texel (%d, %d) times color * intensity overflows a float",
+                      s.equirect_path.c_str(), x, y));
       t[0] = c.x;
       t[1] = c.y;
       t[2] = c.z;
@@ -114,7 +118,8 @@ Result<SkyData> load_sky(const SkySettings& s) {
   LUXEL_RETURN_IF_ERROR(check_color("sky", "color", s.color));
   LUXEL_RETURN_IF_ERROR(check_nonnegative("sky", "intensity", s.intensity));
   if (!std::isfinite(s.rotation_degrees))
-    return invalid_argument(strprintf("sky: rotation %g degrees is not finite", double(s.rotation_degrees)));
+    return invalid_argument(
+        strprintf("sky: rotation %g degrees is not finite", double(s.rotation_degrees)));
   const Vec3 scale = s.color * s.intensity;
   if (!is_finite(scale)) return invalid_argument("sky: color * intensity overflows a float");
   sky.sky.radiance = {scale.x, scale.y, scale.z, 0};
@@ -125,7 +130,8 @@ Result<SkyData> load_sky(const SkySettings& s) {
     sky.mean_radiance = scale;
     return sky;
   }
-  if (s.equirect_path.empty()) return invalid_argument("sky: equirect_path is empty for an equirect sky");
+  if (s.equirect_path.empty())
+    return invalid_argument("sky: equirect_path is empty for an equirect sky");
   LUXEL_RETURN_IF_ERROR(build_image_sky(s, scale, &sky));
   return sky;
 }

@@ -75,7 +75,8 @@ TEST(LightEstimator, PointSpotAndDirectionalLightsTogether) {
   const Vec3 p{0.2f, 0, -0.1f}, n = normalize(Vec3{0.3f, 1, 0.2f});
   const Vec3 point{1, 2, 0.5f}, spot{-0.5f, 3, 0};
   b.add_point(point, {1, 0.5f, 0.25f}, 8.0f);
-  b.add_spot(spot, p - spot, {0.2f, 1, 0.4f}, 30.0f, 0.2f, 0.5f);  // aimed at p: inside the inner cone
+  b.add_spot(spot, p - spot, {0.2f, 1, 0.4f}, 30.0f, 0.2f,
+             0.5f);  // aimed at p: inside the inner cone
   b.add_directional({0.5f, -1, 0.3f}, {0.7f, 0.8f, 0.9f}, 2.0f);
   auto table = build_light_table(b.s, b.soup(), {}, unit_bounds());
   ASSERT_TRUE(table.is_ok()) << table.status().to_string();
@@ -88,8 +89,10 @@ TEST(LightEstimator, PointSpotAndDirectionalLightsTogether) {
   add(Vec3{1, 0.5f, 0.25f} * 8.0f, point);
   add(Vec3{0.2f, 1, 0.4f} * 30.0f, spot);
   const double cos_dir = dot(normalize(Vec3{-0.5f, 1, -0.3f}), n);
-  for (int c = 0; c < 3; ++c) exact[static_cast<size_t>(c)] += Vec3{0.7f, 0.8f, 0.9f}[c] * 2.0 * cos_dir;
-  expect_agrees(estimate_irradiance(table.value(), p, n, 100000, 11), exact, "point + spot + directional");
+  for (int c = 0; c < 3; ++c)
+    exact[static_cast<size_t>(c)] += Vec3{0.7f, 0.8f, 0.9f}[c] * 2.0 * cos_dir;
+  expect_agrees(estimate_irradiance(table.value(), p, n, 100000, 11), exact,
+                "point + spot + directional");
 }
 
 TEST(LightEstimator, SpotFalloffBetweenTheCones) {
@@ -142,7 +145,8 @@ double polygon_irradiance(double radiance, Vec3 p, Vec3 n, const std::vector<Vec
 }
 
 TEST(LightEstimator, LargeEmissiveTriangleMatchesLambertsFormula) {
-  const std::vector<Vec3> tri = {{-6, 1.5f, -4}, {5, 1, -5}, {1, 2, 7}};  // front face down (winding)
+  const std::vector<Vec3> tri = {
+      {-6, 1.5f, -4}, {5, 1, -5}, {1, 2, 7}};  // front face down (winding)
   const Vec3 p{0.3f, 0, 0.2f}, n = normalize(Vec3{0.2f, 1, -0.1f});
   for (bool double_sided : {false, true}) {
     SceneBuilder b;
@@ -196,9 +200,10 @@ TEST(LightEstimator, MixedLightsSumTheirIrradiance) {
   auto table = build_light_table(b.s, b.soup(), s, unit_bounds());
   ASSERT_TRUE(table.is_ok());
   ASSERT_EQ(table->lights.size(), 3u);
-  const double e = polygon_irradiance(1.0, p, n, tri) + 5.0 * dot(normalize(point), n) / dot(point, point) +
-                   kPi * 0.5;
-  expect_agrees(estimate_irradiance(table.value(), p, n, 300000, 18), {e, e, e}, "triangle + point + sky");
+  const double e = polygon_irradiance(1.0, p, n, tri) +
+                   5.0 * dot(normalize(point), n) / dot(point, point) + kPi * 0.5;
+  expect_agrees(estimate_irradiance(table.value(), p, n, 300000, 18), {e, e, e},
+                "triangle + point + sky");
 }
 
 }  // namespace

@@ -7,8 +7,8 @@
 #include <array>
 #include <cmath>
 
-#include "support/chi2.h"
 #include "shading_probe.h"
+#include "support/chi2.h"
 #include "test_scenes.h"
 
 namespace luxel::pipeline {
@@ -25,14 +25,30 @@ const double kAlpha = test_support::sidak_alpha(0.01, 4);
 struct D3 {
   double x, y, z;
 };
-D3 d3(Vec3 v) { return {v.x, v.y, v.z}; }
-D3 d3(const cl::float4& v) { return {v.x, v.y, v.z}; }
-D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-D3 operator*(D3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-D3 cross(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-D3 unit(D3 a) { return a * (1 / std::sqrt(dot(a, a))); }
+D3 d3(Vec3 v) {
+  return {v.x, v.y, v.z};
+}
+D3 d3(const cl::float4& v) {
+  return {v.x, v.y, v.z};
+}
+D3 operator-(D3 a, D3 b) {
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+D3 operator+(D3 a, D3 b) {
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+D3 operator*(D3 a, double s) {
+  return {a.x * s, a.y * s, a.z * s};
+}
+double dot(D3 a, D3 b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+D3 cross(D3 a, D3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+D3 unit(D3 a) {
+  return a * (1 / std::sqrt(dot(a, a)));
+}
 
 // Spherical cells around an axis: h = 1 - cos(theta) in [0, h_max) split in
 // `rows`, phi in `cols`; h and phi of a direction computed from the
@@ -105,8 +121,8 @@ std::vector<int> all_cells(const ConeGrid& grid) {
 // Midpoint rule with `sub` x `sub` sub-cells over the listed cells of the
 // device's lux_light_pdf_triangle (light 0) seen from p.
 Result<CellIntegral> integrate_triangle_pdf(test::LightProbe& probe, const ConeGrid& grid, D3 p,
-                                            const std::array<D3, 3>& tri, const std::vector<int>& cells,
-                                            int sub) {
+                                            const std::array<D3, 3>& tri,
+                                            const std::vector<int>& cells, int sub) {
   std::vector<int> light;
   std::vector<cl::float4> pts, hits, normals;
   std::vector<size_t> cell_of;
@@ -117,7 +133,8 @@ Result<CellIntegral> integrate_triangle_pdf(test::LightProbe& probe, const ConeG
     for (int i = 0; i < sub; ++i)
       for (int j = 0; j < sub; ++j) {
         D3 hit;
-        if (!hit_triangle(p, grid.dir(r + (i + 0.5) / sub, c + (j + 0.5) / sub), tri[0], tri[1], tri[2], &hit))
+        if (!hit_triangle(p, grid.dir(r + (i + 0.5) / sub, c + (j + 0.5) / sub), tri[0], tri[1],
+                          tri[2], &hit))
           continue;
         light.push_back(0);
         pts.push_back(f(p));
@@ -181,7 +198,8 @@ TEST(LightSampling, EmissiveTriangleDirectionsFollowTheirPdf) {
       };
       bool edge = covered(r, c) > 0 && covered(r, c) < 1;
       for (int dr = -1; dr <= 1; ++dr)
-        for (int dc = -1; dc <= 1; ++dc) edge = edge || (covered(r + dr, c + dc) > 0) != (covered(r, c) > 0);
+        for (int dc = -1; dc <= 1; ++dc)
+          edge = edge || (covered(r + dr, c + dc) > 0) != (covered(r, c) > 0);
       if (edge) edge_cells.push_back(r * grid.cols + c);
     }
   auto fine = integrate_triangle_pdf(**probe, grid, d3(p), tri, edge_cells, 128);
@@ -189,7 +207,8 @@ TEST(LightSampling, EmissiveTriangleDirectionsFollowTheirPdf) {
   std::vector<double> expected(grid.size());
   double total = 0;
   for (size_t k = 0; k < grid.size(); ++k) {
-    const bool refined = std::find(edge_cells.begin(), edge_cells.end(), int(k)) != edge_cells.end();
+    const bool refined =
+        std::find(edge_cells.begin(), edge_cells.end(), int(k)) != edge_cells.end();
     expected[k] = n * (refined ? fine->probability[k] : coarse->probability[k]);
     total += expected[k];
   }
@@ -216,7 +235,8 @@ TEST(LightSampling, SunDiscDirectionsAreUniformInItsCone) {
   const ConeGrid grid(D3{-0.3, 1, -0.2}, 1.5 * h_cone, 12, 16);
   std::vector<double> observed(grid.size()), expected(grid.size());
   for (int r = 0; r < 8; ++r)
-    for (int c = 0; c < grid.cols; ++c) expected[static_cast<size_t>(r * grid.cols + c)] = double(n) / (8 * 16);
+    for (int c = 0; c < grid.cols; ++c)
+      expected[static_cast<size_t>(r * grid.cols + c)] = double(n) / (8 * 16);
   for (size_t i = 0; i < n; ++i) {
     ASSERT_TRUE(s->ok(i));
     ASSERT_FALSE(s->is_delta(i)) << "a disc, not a delta";
@@ -276,7 +296,8 @@ TEST(LightSampling, TrianglePdfForMisMatchesTheSampledPdf) {
     ASSERT_EQ(table->triangle_light[static_cast<size_t>(tri)], s->info[i].x);
     const auto& v = m.tris[static_cast<size_t>(tri)];
     // The sampled point from the barycentrics, and from wi * dist: the same.
-    const D3 from_bary = d3(v[0]) + (d3(v[1]) - d3(v[0])) * s->bary[i].x + (d3(v[2]) - d3(v[0])) * s->bary[i].y;
+    const D3 from_bary =
+        d3(v[0]) + (d3(v[1]) - d3(v[0])) * s->bary[i].x + (d3(v[2]) - d3(v[0])) * s->bary[i].y;
     const D3 from_ray = d3(pts[i]) + d3(s->wi_pdf[i]) * s->radiance_dist[i].w;
     ASSERT_LT(std::sqrt(dot(from_bary - from_ray, from_bary - from_ray)), 1e-4);
     const D3 ng = cross(d3(v[1]) - d3(v[0]), d3(v[2]) - d3(v[0]));
@@ -302,10 +323,11 @@ TEST(LightSampling, TrianglePdfForMisMatchesTheSampledPdf) {
   const D3 n1 = cross(d3(m.tris[1][1]) - d3(m.tris[1][0]), d3(m.tris[1][2]) - d3(m.tris[1][0]));
   const D3 c1 = (d3(m.tris[1][0]) + d3(m.tris[1][1]) + d3(m.tris[1][2])) * (1.0 / 3);
   auto f = [](D3 v) { return cl::float4{float(v.x), float(v.y), float(v.z), 0}; };
-  auto sides = (*probe)->triangle_pdf({table->triangle_light[0], table->triangle_light[0], table->triangle_light[1],
-                                       table->triangle_light[1], -1},
-                                      {f(front), f(back), f(c1 + unit(n1)), f(c1 - unit(n1)), f(front)},
-                                      {f(c0), f(c0), f(c1), f(c1), f(c0)}, {f(n0), f(n0), f(n1), f(n1), f(n0)});
+  auto sides = (*probe)->triangle_pdf(
+      {table->triangle_light[0], table->triangle_light[0], table->triangle_light[1],
+       table->triangle_light[1], -1},
+      {f(front), f(back), f(c1 + unit(n1)), f(c1 - unit(n1)), f(front)},
+      {f(c0), f(c0), f(c1), f(c1), f(c0)}, {f(n0), f(n0), f(n1), f(n1), f(n0)});
   ASSERT_TRUE(sides.is_ok());
   EXPECT_GT((*sides)[0], 0.0f);
   EXPECT_EQ((*sides)[1], 0.0f) << "back of a one-sided emitter";
@@ -363,7 +385,8 @@ TEST(LightSampling, LightsAreChosenWithTheirSelectionProbability) {
       ASSERT_FLOAT_EQ(s->wi_pdf[i].w, table->select_cdf[k + 1] - table->select_cdf[k]);
     }
   }
-  for (size_t k = 0; k < lights; ++k) exp[k] = (double(table->select_cdf[k + 1]) - table->select_cdf[k]) * n;
+  for (size_t k = 0; k < lights; ++k)
+    exp[k] = (double(table->select_cdf[k + 1]) - table->select_cdf[k]) * n;
   chi2 = test_support::chi2_test(obs, exp, 1e-4);
   EXPECT_GT(chi2.p_value, 1e-4) << chi2.detail;
 }

@@ -1,11 +1,12 @@
 // build_light_table on hand-made scenes: contents, selection by power
 // (thesis §6.3.2), errors that name the culprit, feature flags.
+#include "pipeline/shading/light_table.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "pipeline/shading/color.h"
-#include "pipeline/shading/light_table.h"
 #include "shading_probe.h"
 #include "test_scenes.h"
 
@@ -23,8 +24,12 @@ Bounds3 unit_bounds() {
   return b;
 }
 
-int type_of(const cl::LuxLight& l) { return LUX_LIGHT_TYPE(l); }
-double pmf(const LightTable& t, size_t i) { return double(t.select_cdf[i + 1]) - t.select_cdf[i]; }
+int type_of(const cl::LuxLight& l) {
+  return LUX_LIGHT_TYPE(l);
+}
+double pmf(const LightTable& t, size_t i) {
+  return double(t.select_cdf[i + 1]) - t.select_cdf[i];
+}
 
 Result<LightTable> build(const SceneBuilder& b, const LightSettings& settings = {}) {
   return build_light_table(b.s, b.soup(), settings, unit_bounds());
@@ -55,8 +60,9 @@ TEST(LightTable, SelectionProbabilityIsProportionalToPower) {
       kPi * 2.0 * 2.0,  // area 2
       kPi * luminance({1.0f, 1.2f, 1.4f}) * kPi * r2,
   };
-  const int types[6] = {LUX_LIGHT_TYPE_POINT, LUX_LIGHT_TYPE_SPOT, LUX_LIGHT_TYPE_DIRECTIONAL,
-                        LUX_LIGHT_TYPE_TRIANGLE, LUX_LIGHT_TYPE_TRIANGLE, LUX_LIGHT_TYPE_SKY};
+  const int types[6] = {LUX_LIGHT_TYPE_POINT,       LUX_LIGHT_TYPE_SPOT,
+                        LUX_LIGHT_TYPE_DIRECTIONAL, LUX_LIGHT_TYPE_TRIANGLE,
+                        LUX_LIGHT_TYPE_TRIANGLE,    LUX_LIGHT_TYPE_SKY};
   double total = 0;
   for (double p : expected) total += p;
   EXPECT_NEAR(t->total_power / total, 1.0, 1e-6);
@@ -98,8 +104,8 @@ TEST(LightTable, EmissiveTrianglesRecordGeometryFlagsAndTheirWorldTriangle) {
   EXPECT_FLOAT_EQ(l.emission.x, 2);  // emissive factor x strength
   EXPECT_FLOAT_EQ(l.emission.z, 6);
   EXPECT_FLOAT_EQ(LUX_LIGHT_AREA(l), 2);  // area
-  EXPECT_FLOAT_EQ(l.axis.x, 2);  // edge1
-  EXPECT_FLOAT_EQ(l.edge2.z, 2);  // edge2
+  EXPECT_FLOAT_EQ(l.axis.x, 2);           // edge1
+  EXPECT_FLOAT_EQ(l.edge2.z, 2);          // edge2
   EXPECT_FLOAT_EQ(l.shape.y, -1) << "front normal follows the winding";
   EXPECT_EQ(LUX_LIGHT_FLAGS(l), 0);
   EXPECT_FLOAT_EQ(t->lights[1].shape.y, 1) << "a mirrored instance's front face is the other side";
@@ -128,7 +134,8 @@ TEST(LightTable, TexturedEmittersAreFlaggedAndWeighedByTheTextureMean) {
   ASSERT_TRUE(t.is_ok()) << t.status().to_string();
   ASSERT_EQ(t->lights.size(), 2u);
   EXPECT_EQ(LUX_LIGHT_FLAGS(t->lights[1]), LUX_LIGHT_FLAG_TEXTURED);
-  EXPECT_FLOAT_EQ(t->lights[1].emission.x, 1.0f) << "radiance is the constant; the caller applies the texture";
+  EXPECT_FLOAT_EQ(t->lights[1].emission.x, 1.0f)
+      << "radiance is the constant; the caller applies the texture";
   EXPECT_NEAR(pmf(t.value(), 1) / pmf(t.value(), 0), 0.5, 1e-6);
 }
 
@@ -175,7 +182,8 @@ TEST(LightTable, SunAndDirectionalDiscsStoreOneMinusCosAndDiscRadiance) {
   EXPECT_NEAR(t->lights[0].emission.x, 2.0 / (kPi * std::sin(a5) * std::sin(a5)), 1e-3);
   const cl::LuxLight& sun = t->lights[1];
   const double a = 0.27 * kPi / 180;
-  EXPECT_NEAR(LUX_LIGHT_ONE_MINUS_COS(sun) / (1 - std::cos(a)), 1.0, 1e-5) << "1 - cos kept to float precision";
+  EXPECT_NEAR(LUX_LIGHT_ONE_MINUS_COS(sun) / (1 - std::cos(a)), 1.0, 1e-5)
+      << "1 - cos kept to float precision";
   EXPECT_NEAR(sun.axis.x, std::sqrt(0.5), 1e-6) << "direction normalized";
   EXPECT_NEAR(pmf(t.value(), 1) / pmf(t.value(), 0), 500.0, 1e-3);
   device::FeatureSet f;

@@ -1,6 +1,5 @@
 #include "shading_probe.h"
 
-
 namespace luxel::pipeline::test {
 namespace {
 
@@ -31,7 +30,8 @@ device::Context& shared_context() {
 
 device::FeatureSet all_light_features() {
   device::FeatureSet f;
-  for (const char* name : {"LIGHT_POINT", "LIGHT_SPOT", "LIGHT_DIRECTIONAL", "LIGHT_EMISSIVE", "SKY", "SKY_IMAGE"})
+  for (const char* name :
+       {"LIGHT_POINT", "LIGHT_SPOT", "LIGHT_DIRECTIONAL", "LIGHT_EMISSIVE", "SKY", "SKY_IMAGE"})
     f.set(name);
   return f;
 }
@@ -78,9 +78,9 @@ Result<LightSamples> LightProbe::sample(const std::vector<cl::float4>& points,
   auto bary = ctx.alloc(n * sizeof(cl::float2), "bary");
   if (!wi_pdf || !rad || !info || !bary) return internal_error("allocating probe outputs");
   const cl_uint count = static_cast<cl_uint>(table_->lights.size());
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(lights_, cdf_, count, table_->sky, sky_texels_, sky_marginal_,
-                                         sky_conditional_, pts.value(), rnd.value(), static_cast<int>(n),
-                                         wi_pdf.value(), rad.value(), info.value(), bary.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(
+      lights_, cdf_, count, table_->sky, sky_texels_, sky_marginal_, sky_conditional_, pts.value(),
+      rnd.value(), static_cast<int>(n), wi_pdf.value(), rad.value(), info.value(), bary.value()));
   LUXEL_RETURN_IF_ERROR(ctx.launch(kernel.value(), n));
   LightSamples s;
   LUXEL_RETURN_IF_ERROR(read_back(wi_pdf.value(), &s.wi_pdf, n));
@@ -94,19 +94,21 @@ Result<LightSamples> LightProbe::sample_at(Vec3 p, const std::vector<cl::float4>
   return sample(std::vector<cl::float4>(randoms.size(), cl::float4{p.x, p.y, p.z, 0}), randoms);
 }
 
-Result<std::vector<float>> LightProbe::triangle_pdf(const std::vector<int>& light, const std::vector<cl::float4>& p,
+Result<std::vector<float>> LightProbe::triangle_pdf(const std::vector<int>& light,
+                                                    const std::vector<cl::float4>& p,
                                                     const std::vector<cl::float4>& hit,
                                                     const std::vector<cl::float4>& normal) {
   const size_t n = light.size();
   LUXEL_CHECK(p.size() == n && hit.size() == n && normal.size() == n);
   auto kernel = program_->kernel("probe_triangle_pdf");
   if (!kernel) return kernel.status();
-  auto lb = upload(light, "light"), pb = upload(p, "p"), hb = upload(hit, "hit"), nb = upload(normal, "normal");
+  auto lb = upload(light, "light"), pb = upload(p, "p"), hb = upload(hit, "hit"),
+       nb = upload(normal, "normal");
   if (!lb || !pb || !hb || !nb) return internal_error("uploading pdf queries");
   auto out = shared_context().alloc(n * sizeof(float), "pdf");
   if (!out) return out.status();
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(lights_, cdf_, lb.value(), pb.value(), hb.value(), nb.value(),
-                                         static_cast<int>(n), out.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(lights_, cdf_, lb.value(), pb.value(), hb.value(),
+                                         nb.value(), static_cast<int>(n), out.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), n));
   std::vector<float> pdf;
   LUXEL_RETURN_IF_ERROR(read_back(out.value(), &pdf, n));
@@ -121,16 +123,17 @@ Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& d
   if (!db) return db.status();
   auto out = shared_context().alloc(n * sizeof(cl::float4), "sky out");
   if (!out) return out.status();
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(table_->sky, sky_texels_, cdf_, table_->sky.light, sky_marginal_,
-                                         sky_conditional_, db.value(), static_cast<int>(n), out.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(table_->sky, sky_texels_, cdf_, table_->sky.light,
+                                         sky_marginal_, sky_conditional_, db.value(),
+                                         static_cast<int>(n), out.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), n));
   std::vector<cl::float4> r;
   LUXEL_RETURN_IF_ERROR(read_back(out.value(), &r, n));
   return r;
 }
 
-Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u, std::vector<int>* index,
-                        std::vector<float>* pmf) {
+Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u,
+                        std::vector<int>* index, std::vector<float>* pmf) {
   auto program = shared_context().programs().get(kProbe, all_light_features());
   if (!program) return program.status();
   auto kernel = program.value()->kernel("probe_sample_cdf");
@@ -140,8 +143,9 @@ Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>&
   auto ib = shared_context().alloc(u.size() * sizeof(int), "index");
   auto pb = shared_context().alloc(u.size() * sizeof(float), "pmf");
   if (!ib || !pb) return internal_error("allocating cdf outputs");
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(cb.value(), static_cast<cl_uint>(cdf.size() - 1), ub.value(),
-                                         static_cast<int>(u.size()), ib.value(), pb.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(cb.value(), static_cast<cl_uint>(cdf.size() - 1),
+                                         ub.value(), static_cast<int>(u.size()), ib.value(),
+                                         pb.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), u.size()));
   LUXEL_RETURN_IF_ERROR(read_back(ib.value(), index, u.size()));
   return read_back(pb.value(), pmf, u.size());

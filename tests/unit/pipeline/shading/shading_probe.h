@@ -34,15 +34,17 @@ struct LightSamples {
 class LightProbe {
  public:
   // Uploads the table and builds the probe program with `features`.
-  static Result<std::unique_ptr<LightProbe>> create(const LightTable& table,
-                                                    const device::FeatureSet& features = all_light_features());
+  static Result<std::unique_ptr<LightProbe>> create(
+      const LightTable& table, const device::FeatureSet& features = all_light_features());
 
   // lux_sample_light at points[i] with randoms[i] = (u_select, u.x, u.y, -).
-  Result<LightSamples> sample(const std::vector<cl::float4>& points, const std::vector<cl::float4>& randoms);
+  Result<LightSamples> sample(const std::vector<cl::float4>& points,
+                              const std::vector<cl::float4>& randoms);
   // The same point for every sample.
   Result<LightSamples> sample_at(Vec3 p, const std::vector<cl::float4>& randoms);
   // lux_light_pdf_triangle per query.
-  Result<std::vector<float>> triangle_pdf(const std::vector<int>& light, const std::vector<cl::float4>& p,
+  Result<std::vector<float>> triangle_pdf(const std::vector<int>& light,
+                                          const std::vector<cl::float4>& p,
                                           const std::vector<cl::float4>& hit,
                                           const std::vector<cl::float4>& normal);
   // lux_sky_radiance (xyz) and lux_sky_pdf (w) along each direction.
@@ -56,8 +58,8 @@ class LightProbe {
 };
 
 // lux_sample_cdf(cdf, n, u[i]) -> (index, pmf).
-Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u, std::vector<int>* index,
-                        std::vector<float>* pmf);
+Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u,
+                        std::vector<int>* index, std::vector<float>* pmf);
 
 // lux_texture_sample(pack.textures[texture], uv[i]).
 Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,

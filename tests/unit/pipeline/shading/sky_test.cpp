@@ -6,9 +6,9 @@
 #include <cmath>
 #include <fstream>
 
-#include "support/chi2.h"
 #include "pipeline/shading/color.h"
 #include "shading_probe.h"
+#include "support/chi2.h"
 #include "test_scenes.h"
 
 namespace luxel::pipeline {
@@ -38,7 +38,8 @@ std::vector<float> spot_sky() {
 // radians about +Y, written from the mapping documented in shared/light.h.
 Vec3 sky_direction(double s, double t, double rot) {
   const double theta = kPi * t, phi = 2 * kPi * (s - 0.5);
-  const double lx = std::sin(theta) * std::sin(phi), ly = std::cos(theta), lz = -std::sin(theta) * std::cos(phi);
+  const double lx = std::sin(theta) * std::sin(phi), ly = std::cos(theta),
+               lz = -std::sin(theta) * std::cos(phi);
   return {static_cast<float>(std::cos(rot) * lx + std::sin(rot) * lz), static_cast<float>(ly),
           static_cast<float>(-std::sin(rot) * lx + std::cos(rot) * lz)};
 }
@@ -47,7 +48,9 @@ struct SkyFixture : ::testing::Test {
   test::TempDir dir;
   std::string exr = dir.file("sky.exr");
   std::vector<float> rgb = spot_sky();
-  void SetUp() override { ASSERT_TRUE(test::write_rgb_image(exr, kW, kH, rgb)) << "writing " << exr; }
+  void SetUp() override {
+    ASSERT_TRUE(test::write_rgb_image(exr, kW, kH, rgb)) << "writing " << exr;
+  }
 
   Result<LightTable> table(const std::string& path, float rotation_degrees) {
     LightSettings s;
@@ -78,7 +81,8 @@ TEST_F(SkyFixture, TexelCentresGiveTheTexelAndAPdfProportionalToLuminance) {
     for (int x = 0; x < kW; ++x) {
       dirs.push_back(test::f4(sky_direction((x + 0.5) / kW, (y + 0.5) / kH, rot)));
       const float* c = &rgb[(size_t(y) * kW + size_t(x)) * 3];
-      weight_sum += luminance({c[0] * scale.x, c[1] * scale.y, c[2] * scale.z}) * std::sin(kPi * (y + 0.5) / kH);
+      weight_sum += luminance({c[0] * scale.x, c[1] * scale.y, c[2] * scale.z}) *
+                    std::sin(kPi * (y + 0.5) / kH);
     }
   auto probe = test::LightProbe::create(t.value());
   ASSERT_TRUE(probe.is_ok()) << probe.status().to_string();
@@ -120,7 +124,8 @@ TEST_F(SkyFixture, ImportanceSamplingFollowsTheSkyPdf) {
     ASSERT_FALSE(s->is_delta(i));
     const Vec3 d = test::xyz(s->wi_pdf[i]);
     ASSERT_NEAR(length(d), 1.0f, 1e-5f);
-    double u = 0.5 + std::atan2(d.x, -d.z) / (2 * kPi), v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi;
+    double u = 0.5 + std::atan2(d.x, -d.z) / (2 * kPi),
+           v = std::acos(std::clamp(d.y, -1.0f, 1.0f)) / kPi;
     const int c = std::min(int(u * cols), cols - 1), row = std::min(int(v * rows), rows - 1);
     observed[size_t(row * cols + c)] += 1;
     sampled_dirs.push_back(s->wi_pdf[i]);
@@ -175,7 +180,8 @@ TEST_F(SkyFixture, ImageSkyIrradianceMatchesTheTexelIntegral) {
   double up[3] = {0, 0, 0}, down[3] = {0, 0, 0};
   for (int y = 0; y < kH; ++y) {
     const double t0 = kPi * y / kH, t1 = kPi * (y + 1) / kH;
-    const double w = (2 * kPi / kW) * std::fabs(std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0)) / 2;
+    const double w =
+        (2 * kPi / kW) * std::fabs(std::sin(t1) * std::sin(t1) - std::sin(t0) * std::sin(t0)) / 2;
     for (int x = 0; x < kW; ++x)
       for (int c = 0; c < 3; ++c) {
         const double l = t->sky_texels[(size_t(y) * kW + size_t(x)) * 3 + size_t(c)];
@@ -205,12 +211,14 @@ TEST_F(SkyFixture, ImageSkyIrradianceMatchesTheTexelIntegral) {
     for (int c = 0; c < 3; ++c) {
       const double mean = sum[c] / n, se = std::sqrt(std::max(sum2[c] / n - mean * mean, 0.0) / n);
       const double exact = side == 0 ? up[c] : down[c];
-      EXPECT_NEAR(mean, exact, 5 * se + 1e-5 * exact) << (side == 0 ? "up" : "down") << " channel " << c;
+      EXPECT_NEAR(mean, exact, 5 * se + 1e-5 * exact)
+          << (side == 0 ? "up" : "down") << " channel " << c;
     }
   }
 }
 
-void expect_sky_error(const Result<LightTable>& t, const std::string& path, const std::string& detail) {
+void expect_sky_error(const Result<LightTable>& t, const std::string& path,
+                      const std::string& detail) {
   ASSERT_FALSE(t.is_ok()) << path;
   EXPECT_EQ(t.status().code(), StatusCode::kInvalidArgument);
   EXPECT_NE(t.status().message().find(path), std::string::npos) << t.status().to_string();

@@ -69,8 +69,12 @@ accel::TriangleSoup SceneBuilder::soup() const {
   return std::move(soup.value());
 }
 
-cl::float4 f4(Vec3 v, float w) { return {v.x, v.y, v.z, w}; }
-Vec3 xyz(const cl::float4& v) { return {v.x, v.y, v.z}; }
+cl::float4 f4(Vec3 v, float w) {
+  return {v.x, v.y, v.z, w};
+}
+Vec3 xyz(const cl::float4& v) {
+  return {v.x, v.y, v.z};
+}
 
 TempDir::TempDir() {
   static std::atomic<int> counter{0};
@@ -86,7 +90,8 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(path_, ec);
 }
 
-bool write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+bool write_rgb_image(const std::string& path, int width, int height,
+                     const std::vector<float>& rgb) {
   auto out = OIIO::ImageOutput::create(path);
   if (!out) return false;
   const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);

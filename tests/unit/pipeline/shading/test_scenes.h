@@ -24,9 +24,10 @@ struct SceneBuilder {
   // Triangles from 3 vertices each, all with `material`, under `xf`.
   void add_triangles(const std::vector<Vec3>& vertices, int material, const Mat4& xf = {});
   void add_point(Vec3 position, Vec3 color, float intensity, const std::string& name = "point");
-  void add_spot(Vec3 position, Vec3 direction, Vec3 color, float intensity, float inner, float outer,
-                const std::string& name = "spot");
-  void add_directional(Vec3 direction, Vec3 color, float lux, const std::string& name = "directional");
+  void add_spot(Vec3 position, Vec3 direction, Vec3 color, float intensity, float inner,
+                float outer, const std::string& name = "spot");
+  void add_directional(Vec3 direction, Vec3 color, float lux,
+                       const std::string& name = "directional");
 
   accel::TriangleSoup soup() const;  // aborts the test binary on failure (a test bug)
 };

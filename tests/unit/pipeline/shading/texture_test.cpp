@@ -16,7 +16,8 @@ namespace {
 
 using test::Rng;
 
-scene::Texture make_texture(const std::string& name, int w, int h, scene::ColorSpace space, Rng& rng) {
+scene::Texture make_texture(const std::string& name, int w, int h, scene::ColorSpace space,
+                            Rng& rng) {
   scene::Texture t;
   t.name = name;
   t.width = w;
@@ -48,7 +49,8 @@ std::array<double, 4> reference_sample(const TexturePack& pack, int index, doubl
   const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
   const double fx = x - x0, fy = y - y0;
   std::array<double, 4> r{};
-  const auto a = texel(x0, y0), b = texel(x0 + 1, y0), c = texel(x0, y0 + 1), d = texel(x0 + 1, y0 + 1);
+  const auto a = texel(x0, y0), b = texel(x0 + 1, y0), c = texel(x0, y0 + 1),
+             d = texel(x0 + 1, y0 + 1);
   for (size_t k = 0; k < 4; ++k)
     r[k] = (1 - fy) * ((1 - fx) * a[k] + fx * b[k]) + fy * ((1 - fx) * c[k] + fx * d[k]);
   return r;
@@ -70,7 +72,8 @@ TEST(TexturePack, PacksRgba8WithSrgbFlagsAndOffsets) {
   // R in the low byte, alpha (linear) in the high byte.
   const float* p = &s.textures[1].rgba[0];
   EXPECT_EQ(pack->texels[15], uint32_t(encode_linear8(p[0])) | uint32_t(encode_linear8(p[1])) << 8 |
-                                  uint32_t(encode_linear8(p[2])) << 16 | uint32_t(encode_linear8(p[3])) << 24);
+                                  uint32_t(encode_linear8(p[2])) << 16 |
+                                  uint32_t(encode_linear8(p[3])) << 24);
   EXPECT_EQ(pack->texels[0] >> 24, encode_linear8(s.textures[0].rgba[3]));
   EXPECT_EQ(encode_srgb8(NAN), 0);
   EXPECT_EQ(encode_srgb8(7.0f), 255);
@@ -94,8 +97,9 @@ TEST(TextureSample, BilinearWithRepeatWrapMatchesTheHostReference) {
   auto pack = pack_textures(s);
   ASSERT_TRUE(pack.is_ok());
   std::vector<cl::float2> uv;
-  for (int i = 0; i < 2000; ++i) uv.push_back({rng.uniform() * 6 - 3, rng.uniform() * 6 - 3});  // wraps both ways
-  uv.push_back({0, 0});         // corner: mixes the four corner texels
+  for (int i = 0; i < 2000; ++i)
+    uv.push_back({rng.uniform() * 6 - 3, rng.uniform() * 6 - 3});  // wraps both ways
+  uv.push_back({0, 0});            // corner: mixes the four corner texels
   uv.push_back({0.1f, 1.0f / 6});  // texel centre (0, 0) of the 5 x 3 texture
   uv.push_back({1e6f + 0.25f, -0.75f});
   for (int tex = 0; tex < 2; ++tex) {
@@ -103,12 +107,13 @@ TEST(TextureSample, BilinearWithRepeatWrapMatchesTheHostReference) {
     ASSERT_TRUE(out.is_ok()) << out.status().to_string();
     for (size_t i = 0; i < uv.size(); ++i) {
       // The device wraps uv before scaling (uv - floor(uv)); so does the reference.
-      const double u = uv[i].x - std::floor(double(uv[i].x)), v = uv[i].y - std::floor(double(uv[i].y));
+      const double u = uv[i].x - std::floor(double(uv[i].x)),
+                   v = uv[i].y - std::floor(double(uv[i].y));
       const auto ref = reference_sample(pack.value(), tex, u, v);
       const float got[4] = {(*out)[i].x, (*out)[i].y, (*out)[i].z, (*out)[i].w};
       for (size_t k = 0; k < 4; ++k)
-        ASSERT_NEAR(got[k], ref[k], 2e-5) << "texture " << tex << " uv (" << uv[i].x << ", " << uv[i].y
-                                          << ") channel " << k;
+        ASSERT_NEAR(got[k], ref[k], 2e-5)
+            << "texture " << tex << " uv (" << uv[i].x << ", " << uv[i].y << ") channel " << k;
     }
   }
   // The texel centre returns the texel itself.
@@ -148,7 +153,8 @@ TEST(TextureSample, SrgbRoundTripStaysWithinOneStep) {
   double worst_srgb = 0, worst_linear = 0;
   for (size_t i = 0; i < uv.size(); ++i) {
     const float original = t.rgba[i * 4];
-    worst_srgb = std::max(worst_srgb, double(std::fabs(linear_to_srgb((*srgb)[i].x) - linear_to_srgb(original))));
+    worst_srgb = std::max(
+        worst_srgb, double(std::fabs(linear_to_srgb((*srgb)[i].x) - linear_to_srgb(original))));
     worst_linear = std::max(worst_linear, double(std::fabs((*linear)[i].x - original)));
     ASSERT_NEAR((*srgb)[i].w, t.rgba[i * 4 + 3], 0.5 / 255 + 1e-6) << "alpha stays linear";
   }
