@@ -13,6 +13,7 @@ import unittest
 
 import luxel_client
 from luxel_client import LuxelError, collect_scene_files, luxel_pb2, make_settings, referenced_uris
+from luxel_client import scene_files
 from luxel_client.scene_files import CHUNK_SIZE, iter_chunks, sha256_file
 
 SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
@@ -79,6 +80,14 @@ class ResourceDiscoveryTest(unittest.TestCase):
             _, files = collect_scene_files(tmp / "s.gltf")
             self.assertEqual(files[1].uri, "my%20tex.png")
             self.assertEqual(files[1].path, tmp / "my tex.png")
+
+    def test_malformed_percent_escapes_are_refused_like_the_daemon(self):
+        for bad in ("a%zz.bin", "a%4.bin", "a%.bin", "a%00.bin"):
+            with self.assertRaises(LuxelError) as caught:
+                scene_files.percent_decode_uri(bad, "buffers[0].uri")
+            self.assertEqual(caught.exception.code, "INVALID_ARGUMENT")
+            self.assertIn("buffers[0].uri", str(caught.exception))
+        self.assertEqual(scene_files.percent_decode_uri("a+b%20c%C3%A9.bin", "w"), "a+b c\u00e9.bin")
 
     def test_missing_or_escaping_resources_are_refused_naming_the_field(self):
         with tempfile.TemporaryDirectory() as tmp:

@@ -59,13 +59,42 @@ def referenced_uris(gltf_json):
     return found
 
 
+_HEX = "0123456789abcdefABCDEF"
+
+
+def percent_decode_uri(uri, where):
+    """The uri's path with percent-escapes decoded, by the rule the engine,
+    the daemon and the CLI share (server/engine/common/uri.h): a '%' not
+    followed by two hex digits, and '%00', are refused; '+' stays '+'."""
+    out = bytearray()
+    raw = uri.encode("utf-8")
+    i = 0
+    while i < len(raw):
+        if raw[i] != ord("%"):
+            out.append(raw[i])
+            i += 1
+            continue
+        escape = raw[i:i + 3].decode("utf-8", "replace")
+        if len(escape) < 3 or escape[1] not in _HEX or escape[2] not in _HEX:
+            raise LuxelError("INVALID_ARGUMENT",
+                             f"{where}: uri '{uri}': malformed percent-escape '{escape}' at byte {i} "
+                             "(expected '%' and two hex digits)", local=True)
+        if escape[1:] == "00":
+            raise LuxelError("INVALID_ARGUMENT",
+                             f"{where}: uri '{uri}': '%00' at byte {i} would put a NUL byte in a file name",
+                             local=True)
+        out.append(int(escape[1:], 16))
+        i += 3
+    return out.decode("utf-8", "surrogateescape")
+
+
 def _resource_path(base_dir, uri, where):
     """Where a relative uri points on disk; refuses absolute and escaping uris,
     which the daemon could not store beside the scene either."""
     parsed = urllib.parse.urlsplit(uri)
     if parsed.scheme or parsed.netloc or uri.startswith("/"):
         raise LuxelError("INVALID_ARGUMENT", f"{where}: '{uri}' is not a relative uri", local=True)
-    relative = pathlib.PurePosixPath(urllib.parse.unquote(parsed.path))
+    relative = pathlib.PurePosixPath(percent_decode_uri(parsed.path, where))
     if ".." in relative.parts:
         raise LuxelError("INVALID_ARGUMENT", f"{where}: '{uri}' leaves the scene folder", local=True)
     path = base_dir.joinpath(*relative.parts)
