@@ -150,6 +150,16 @@ def test_main_flow(d):
         if l.get("snapshot_file"):
             check(os.path.isfile(l["snapshot_file"]), f"snapshot {l['snapshot_file']} written")
 
+    # The same bake in-process gives the same bits as through luxeld: the
+    # settings reach the engine alike on both paths (pixels compared; the
+    # files' metadata names where the scene came from).
+    local_dir = os.path.join(ARGS.work, "local")
+    luxel("bake", ARGS.scene, "--samples", 8, "--resolution", 32, "--out", local_dir, "--local")
+    for name in ("irradiance.exr", "samples.exr"):
+        diff = subprocess.run(["idiff", "-fail", "0", "-warn", "0", os.path.join(out_dir, name),
+                               os.path.join(local_dir, name)], capture_output=True, text=True)
+        check(diff.returncode == 0, f"{name}: remote and local bakes differ:\n{diff.stdout}")
+
     # list / status
     out, _ = luxel("list", "--json", *s)
     bakes = {b["bake_id"]: b for b in json_lines(out)}
