@@ -19,20 +19,6 @@
 
 namespace luxel::pipeline {
 
-const char* termination_name(Termination t) {
-  switch (t) {
-    case Termination::kSamples:
-      return "samples";
-    case Termination::kTime:
-      return "time";
-    case Termination::kError:
-      return "error";
-    case Termination::kCancelled:
-      return "cancelled";
-  }
-  return "?";
-}
-
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -182,20 +168,7 @@ Status Baker::compute_stats(BakeProgress& progress) {
   std::vector<cl::LuxAccumStats> partials(groups);
   LUXEL_RETURN_IF_ERROR(ctx_.read(a.accum.stats, partials));
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
-  double err = 0, sq = 0, rel = 0;
-  uint32_t min_spp = 0xFFFFFFFFu;
-  for (const auto& s : partials) {
-    err += s.rel_error_sum;
-    sq += s.reference.x;
-    rel += s.reference.y;
-    min_spp = std::min(min_spp, s.min_spp);
-  }
-  progress.error = err / static_cast<double>(covered);
-  if (settings_.reference) {
-    progress.rmse = std::sqrt(sq / covered);
-    progress.rel_mse = rel / covered;
-  }
-  progress.min_spp = min_spp;
+  sum_stats(partials, covered, settings_.reference != nullptr, progress);
   progress.paths = paths_done_;
   progress.mean_spp = static_cast<double>(paths_done_) / covered;
   return Status::ok();

@@ -75,6 +75,24 @@ void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
   r.sample_info_bytes = setup.info.bytes();
 }
 
+void sum_stats(const std::vector<cl::LuxAccumStats>& partials, uint32_t covered, bool has_reference,
+               BakeProgress& p) {
+  double err = 0, sq = 0, rel = 0;
+  uint32_t min_spp = 0xFFFFFFFFu;
+  for (const auto& s : partials) {
+    err += s.rel_error_sum;
+    sq += s.reference.x;
+    rel += s.reference.y;
+    min_spp = std::min(min_spp, s.min_spp);
+  }
+  p.error = err / static_cast<double>(covered);
+  if (has_reference) {
+    p.rmse = std::sqrt(sq / covered);
+    p.rel_mse = rel / covered;
+  }
+  p.min_spp = min_spp;
+}
+
 void record_final_progress(const BakeProgress& p, device::Context& ctx, BakeResult& r) {
   r.paths = p.paths;
   r.mean_spp = p.mean_spp;

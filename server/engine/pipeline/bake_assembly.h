@@ -22,6 +22,12 @@ void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean
 void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
                      const BakeCheckpoint& state, BakeResult& r);
 
+// Progress statistics from accum_stats' per-work-group partials: the mean
+// relative error over the covered texels, the minimum samples per texel and,
+// with a reference, RMSE and relMSE.
+void sum_stats(const std::vector<cl::LuxAccumStats>& partials, uint32_t covered, bool has_reference,
+               BakeProgress& p);
+
 // The final progress report's figures, and the device's timing table.
 void record_final_progress(const BakeProgress& p, device::Context& ctx, BakeResult& r);
 

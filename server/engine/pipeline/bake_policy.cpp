@@ -5,6 +5,20 @@
 
 namespace luxel::pipeline {
 
+const char* termination_name(Termination t) {
+  switch (t) {
+    case Termination::kSamples:
+      return "samples";
+    case Termination::kTime:
+      return "time";
+    case Termination::kError:
+      return "error";
+    case Termination::kCancelled:
+      return "cancelled";
+  }
+  return "?";
+}
+
 BakePolicy::BakePolicy(const BakeSettings& settings, const BakeHooks& hooks,
                        uint64_t covered_texels)
     : settings_(settings),
