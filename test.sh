@@ -9,7 +9,12 @@ build_dir=build
 cmake_args=()
 while [ $# -gt 0 ]; do
   case "$1" in
-    --sanitize) build_dir=build-asan; cmake_args+=(-DLUXEL_SANITIZE=ON); shift ;;
+    --sanitize)
+      build_dir=build-asan
+      cmake_args+=(-DLUXEL_SANITIZE=ON)
+      # PoCL's LLVM keeps compiler state until exit (tests/sanitizers/lsan.supp).
+      export LSAN_OPTIONS="suppressions=$PWD/tests/sanitizers/lsan.supp:print_suppressions=0"
+      shift ;;
     --) shift; break ;;
     *) echo "test.sh: unknown option $1" >&2; exit 2 ;;
   esac

@@ -1,4 +1,4 @@
-// bench_bake: throughput of the bake engine .
+// bench_bake: throughput of the bake engine.
 //
 //   bench_bake [--spp N] [--resolution N] [--quick] [SCENE...]
 //
