@@ -7,11 +7,11 @@
 //
 // Recorded hashes live in golden_bake_hashes.tsv, one line per
 // (device, case). Float bits depend on the OpenCL compiler and the CPU's
-// vector width, so a hash is only compared on the device it was recorded
-// on. On a device without recorded hashes every case is baked twice and the
-// two must agree bit for bit (determinism still checked), and the test
-// prints the lines to add. LUXEL_GOLDEN_RECORD=FILE appends this device's
-// lines to FILE.
+// vector width (and the host build, for what the host computes), so a hash
+// is only compared on the device and build flavour it was recorded on. On a device without recorded
+// hashes every case is baked twice and the two must agree bit for bit (determinism still checked),
+// and the test prints the lines to add. LUXEL_GOLDEN_RECORD=FILE appends this device's lines to
+// FILE.
 //
 // A change that is meant to change the bits (a new estimator, a fixed bias)
 // re-records the file in the same commit and says why in the message.
@@ -208,8 +208,11 @@ TEST(GoldenBake, SameSeedsGiveTheRecordedBits) {
   // The compiler and vector width decide the float bits, not the memory
   // size or the number of cores: key by device, platform and driver.
   const auto& info = ctx.value()->info();
-  const std::string device =
-      info.device_name + " | " + info.platform_name + " " + info.driver_version;
+  // Sanitizer builds compile the host code differently (the sky
+  // distribution's float sums came out other bits), so they are a device of
+  // their own; without recorded hashes they check determinism only.
+  const std::string device = info.device_name + " | " + info.platform_name + " " +
+                             info.driver_version + " | " + LUXEL_GOLDEN_BUILD;
   const auto golden = read_golden(LUXEL_GOLDEN_FILE);
   const auto recorded = golden.find(device);
   const bool known_device = recorded != golden.end();
