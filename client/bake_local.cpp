@@ -99,6 +99,7 @@ int run_bake(const std::vector<std::string>& args) {
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
   std::printf("features   %s\n", r.features.c_str());
+  std::printf("intersector %s\n", r.intersector.c_str());
   std::printf(
       "baked      %.2f s (+%.2f s setup), %llu paths (%.2f Mpaths/s), spp mean %.1f min %u, "
       "error %.4f, stopped by %s\n",

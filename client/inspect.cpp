@@ -112,6 +112,10 @@ int run_inspect(const std::vector<std::string>& argv) {
   auto ctx = device::Context::create(args.device);
   if (!ctx) return fail(ctx.status());
   std::printf("device     %s\n", ctx.value()->info().describe().c_str());
+  // What `luxel bake --intersector auto` uses on this device.
+  std::printf("intersector %s for bakes (auto on a %s; --intersector embree|opencl to choose)\n",
+              ctx.value()->info().is_gpu ? "opencl" : "embree",
+              ctx.value()->info().is_gpu ? "GPU" : "CPU device");
 
   auto soup = accel::build_triangle_soup(scene.value());
   if (!soup) return fail(soup.status());

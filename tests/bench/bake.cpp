@@ -3,7 +3,8 @@
 //   bench_bake [--spp N] [--resolution N] [--quick] [SCENE...]
 //
 // For each scene, in one run on one device:
-//  1. paths/s and the per-kernel breakdown at 1 and 4 bounces, peak device memory;
+//  1. paths/s and the per-kernel breakdown at 1 and 4 bounces through each
+//     ray-query backend (Embree, OpenCL), peak device memory;
 //  2. paths/s against the batch size (paths per iteration);
 //  3. ablations at 4 bounces: stream compaction off, ray-direction sorting on
 //     (time for the same number of paths, as a ratio to the default).
@@ -105,10 +106,19 @@ int main(int argc, char** argv) {
       std::printf("  %-28s %9.2f %9.3f %10.0f %8zu  %s\n", name.c_str(), r.seconds, r.mpaths_per_s,
                   r.kernel_ms, r.device_mib, r.top_kernels.c_str());
     };
+    // Both ray-query backends side by side (accel/intersector.h); the rows
+    // below use the default (auto: Embree on a CPU device).
     for (int bounces : {1, 4}) {
       auto st = base;
       st.max_bounces = bounces;
-      row(strprintf("bounces %d", bounces), bake_once(s.value(), st, *ctx.value()));
+      st.intersector = accel::IntersectorKind::kEmbree;
+      const Run embree = bake_once(s.value(), st, *ctx.value());
+      st.intersector = accel::IntersectorKind::kOpenCl;
+      const Run opencl = bake_once(s.value(), st, *ctx.value());
+      row(strprintf("bounces %d, embree", bounces), embree);
+      row(strprintf("bounces %d, opencl", bounces), opencl);
+      std::printf("  throughput embree / opencl at %d bounces: %.2fx\n", bounces,
+                  embree.mpaths_per_s / opencl.mpaths_per_s);
     }
     if (!quick) {
       for (uint32_t batch : {1u << 14, 1u << 16, 1u << 18, 1u << 20}) {

@@ -1,6 +1,7 @@
-// Agreement of the OpenCL bake engine (pipeline::bake) with an independent
-// estimator: the CPU reference path tracer of tests/reference, on the
-// bundled Cornell box (DESIGN.md, "Accuracy and error reporting": agreement
+// Agreement of the OpenCL bake engine (pipeline::bake), through each of its
+// ray-query backends (Embree on the host, OpenCL traversal), with an
+// independent estimator: the CPU reference path tracer of tests/reference,
+// on the bundled Cornell box (DESIGN.md, "Accuracy and error reporting": agreement
 // between two independent estimators within confidence bounds, z-test with
 // Šidák correction over texels; the render tests of Mitsuba 3 do the same).
 //
@@ -176,7 +177,7 @@ Summary compare_bakes(const Bakes& b, double reference_scale) {
 void print_summary(const char* title, const Bakes& b, const Summary& s) {
   const size_t w = static_cast<size_t>(b.ref.width);
   std::printf("\n%s\n", title);
-  std::printf("  %-34s %18s %18s\n", "", "engine (OpenCL)", "reference (CPU)");
+  std::printf("  %-34s %18s %18s\n", "", "engine", "reference (CPU)");
   std::printf("  %-34s %18llu %18llu\n", "paths", static_cast<unsigned long long>(b.engine_paths),
               static_cast<unsigned long long>(b.ref.paths));
   std::printf("  %-34s %18.2f %18.2f\n", "seconds", b.engine_seconds, b.ref.seconds);
@@ -213,24 +214,29 @@ class ReferenceAgreement : public ::testing::Test {
     if (!scene) return fail("import: " + scene.status().to_string());
     auto ctx = device::Context::create();
     if (!ctx) return fail("OpenCL: " + ctx.status().to_string());
-    auto bakes = std::make_unique<Bakes>();
-
     pipeline::BakeSettings settings;
     settings.atlas.resolution = kResolution;
     settings.samples_per_texel = kEngineSppPerReplica;
     settings.max_bounces = kMaxBounces;
     settings.filter = pipeline::Filter::kBox;
     settings.clamp_luminance = 0;  // unbiased
-    for (int r = 0; r < kReplicas; ++r) {
-      settings.seed = 1000u + static_cast<uint32_t>(r);
-      auto result = pipeline::bake(scene.value(), settings, *ctx.value());
-      if (!result)
-        return fail(strprintf("engine bake (seed %u): ", settings.seed) +
-                    result.status().to_string());
-      bakes->engine_seconds += result.value().seconds;
-      bakes->engine_paths += result.value().paths;
-      bakes->device = result.value().device;
-      bakes->engine.push_back(std::move(result.value()));
+    for (accel::IntersectorKind kind :
+         {accel::IntersectorKind::kEmbree, accel::IntersectorKind::kOpenCl}) {
+      auto bakes = std::make_unique<Bakes>();
+      settings.intersector = kind;
+      for (int r = 0; r < kReplicas; ++r) {
+        settings.seed = 1000u + static_cast<uint32_t>(r);
+        auto result = pipeline::bake(scene.value(), settings, *ctx.value());
+        if (!result)
+          return fail(strprintf("engine bake (%s, seed %u): ", accel::intersector_name(kind),
+                                settings.seed) +
+                      result.status().to_string());
+        bakes->engine_seconds += result.value().seconds;
+        bakes->engine_paths += result.value().paths;
+        bakes->device = result.value().device + ", " + result.value().intersector;
+        bakes->engine.push_back(std::move(result.value()));
+      }
+      (kind == accel::IntersectorKind::kEmbree ? embree_ : opencl_) = std::move(bakes);
     }
 
     // The reference lays out the same atlas itself (the engine's is checked
@@ -245,28 +251,41 @@ class ReferenceAgreement : public ::testing::Test {
     ref_settings.threads = 2;
     auto ref = reference::bake_reference(scene.value(), *atlas_, ref_settings);
     if (!ref) return fail("reference: " + ref.status().to_string());
-    bakes->ref = std::move(ref.value());
-    bakes_ = std::move(bakes);
+    embree_->ref = ref.value();
+    opencl_->ref = std::move(ref.value());
   }
   static void TearDownTestSuite() {
-    bakes_.reset();
+    embree_.reset();
+    opencl_.reset();
     atlas_.reset();
   }
   static void fail(const std::string& why) { setup_error_ = why; }
 
-  void SetUp() override { ASSERT_TRUE(bakes_) << "setup failed: " << setup_error_; }
+  void SetUp() override {
+    ASSERT_TRUE(embree_ && opencl_ && embree_->ref.width > 0) << "setup failed: " << setup_error_;
+  }
 
-  static std::unique_ptr<Bakes> bakes_;
+  static void expect_agreement(const Bakes& b, const char* title);
+
+  static std::unique_ptr<Bakes> embree_, opencl_;
   static std::unique_ptr<atlas::Atlas> atlas_;
   static std::string setup_error_;
 };
 
-std::unique_ptr<Bakes> ReferenceAgreement::bakes_;
+std::unique_ptr<Bakes> ReferenceAgreement::embree_;
+std::unique_ptr<Bakes> ReferenceAgreement::opencl_;
 std::unique_ptr<atlas::Atlas> ReferenceAgreement::atlas_;
 std::string ReferenceAgreement::setup_error_;
 
-TEST_F(ReferenceAgreement, EngineAgreesWithReferenceWithinConfidenceBounds) {
-  const Bakes& b = *bakes_;
+TEST_F(ReferenceAgreement, EmbreeBackendAgreesWithReferenceWithinConfidenceBounds) {
+  expect_agreement(*embree_, "Cornell box: engine (Embree) vs CPU reference (32x32, 3 bounces)");
+}
+
+TEST_F(ReferenceAgreement, OpenClBackendAgreesWithReferenceWithinConfidenceBounds) {
+  expect_agreement(*opencl_, "Cornell box: engine (OpenCL) vs CPU reference (32x32, 3 bounces)");
+}
+
+void ReferenceAgreement::expect_agreement(const Bakes& b, const char* title) {
   // Same texel domain: same atlas, same coverage (alpha) per texel.
   for (const auto& e : b.engine) {
     ASSERT_EQ(e.width, b.ref.width);
@@ -290,7 +309,7 @@ TEST_F(ReferenceAgreement, EngineAgreesWithReferenceWithinConfidenceBounds) {
   }
 
   const Summary s = compare_bakes(b, 1.0);
-  print_summary("Cornell box: engine vs CPU reference (32x32, 3 bounces)", b, s);
+  print_summary(title, b, s);
   // Not trivially passing: a lit lightmap, enough texels, errors small
   // enough that the per-texel test has teeth.
   EXPECT_GE(s.tested, 200u);
@@ -306,7 +325,7 @@ TEST_F(ReferenceAgreement, EngineAgreesWithReferenceWithinConfidenceBounds) {
 }
 
 TEST_F(ReferenceAgreement, DetectsDeliberateThreePercentError) {
-  const Bakes& b = *bakes_;
+  const Bakes& b = *embree_;
   const Summary s = compare_bakes(b, kInjectedError);
   print_summary("Same comparison, reference scaled by 1.03 (deliberate error)", b, s);
   EXPECT_TRUE(s.texel_test_fails() || s.pooled_test_fails())

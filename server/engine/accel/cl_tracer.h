@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "accel/bvh_builder.h"
+#include "accel/intersector.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "device/feature_set.h"
@@ -13,15 +14,16 @@
 
 namespace luxel::accel {
 
-class ClTracer {
+class ClTracer final : public Intersector {
  public:
   // Uploads the BVH (and alpha data only when the scene has masked
   // triangles) and builds kernels/intersect.cl with the matching features.
   static Result<std::unique_ptr<ClTracer>> create(device::Context& ctx, const DeviceBvh& bvh);
 
   // Features the intersection program was compiled with.
-  const device::FeatureSet& features() const { return features_; }
-  size_t device_bytes() const { return device_bytes_; }
+  const device::FeatureSet& features() const override { return features_; }
+  size_t device_bytes() const override { return device_bytes_; }
+  IntersectorKind kind() const override { return IntersectorKind::kOpenCl; }
 
   // Enqueue on device buffers; `capacity` rays are launched, the kernel reads
   // the live count from `ray_count` (one int). No host synchronisation.
@@ -39,6 +41,18 @@ class ClTracer {
   Status enqueue_any_indexed(const device::Buffer& rays, const device::Buffer& indices,
                              const device::Buffer& ray_count, uint32_t index_mask,
                              const device::Buffer& occluded, size_t capacity);
+
+  // Intersector: the indexed kernels above.
+  Status closest_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                         const device::Buffer& ray_count, uint32_t index_mask,
+                         const device::Buffer& hits, size_t capacity) override {
+    return enqueue_closest_indexed(rays, indices, ray_count, index_mask, hits, capacity);
+  }
+  Status any_indexed(const device::Buffer& rays, const device::Buffer& indices,
+                     const device::Buffer& ray_count, uint32_t index_mask,
+                     const device::Buffer& occluded, size_t capacity) override {
+    return enqueue_any_indexed(rays, indices, ray_count, index_mask, occluded, capacity);
+  }
 
   // Host-vector conveniences for tests and benchmarks (upload, trace, read back).
   Result<std::vector<cl::LuxHit>> closest(const std::vector<cl::LuxRay>& rays);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <thread>
 #include <vector>
 
@@ -62,6 +63,20 @@ void to_embree(const cl::LuxRay& r, RTCRay& e) {
   e.mask = 0xFFFFFFFFu;
   e.id = 0;
   e.flags = 0;
+}
+
+void init_hit(RTCRayHit& rh) {
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+}
+
+RTCIntersectContext make_context(bool coherent) {
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags =
+      coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  return ctx;
 }
 
 }  // namespace
@@ -156,6 +171,54 @@ void EmbreeTracer::occluded(std::span<const cl::LuxRay> rays, std::span<int> occ
       rtcOccluded1M(scene_, &ctx, batch, static_cast<unsigned>(m), sizeof(RTCRay));
       // Embree marks an occluded ray by setting tfar to -inf.
       for (size_t i = 0; i < m; ++i) occluded[s + i] = batch[i].tfar < 0.0f ? 1 : 0;
+    }
+  });
+}
+
+cl::LuxHit EmbreeTracer::to_hit(const RTCRayHit& rh) const {
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return {rh.ray.tfar, 0.0f, 0.0f, -1};
+  return {rh.ray.tfar, rh.hit.u, rh.hit.v, cl::as_int(bvh_->triangles[rh.hit.primID].v0.w)};
+}
+
+void EmbreeTracer::intersect_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
+                                     uint32_t index_mask, cl::LuxHit* hits,
+                                     unsigned threads) const {
+  parallel_chunks(count, threads, [&](size_t begin, size_t end) {
+    RTCIntersectContext ctx = make_context(false);
+    RTCRayHit batch[kStream];
+    uint32_t slot[kStream];
+    for (size_t s = begin; s < end; s += kStream) {
+      const size_t m = std::min(kStream, end - s);
+      for (size_t i = 0; i < m; ++i) {
+        slot[i] = indices[s + i] & index_mask;
+        to_embree(rays[slot[i]], batch[i].ray);
+        init_hit(batch[i]);
+      }
+      rtcIntersect1M(scene_, &ctx, batch, static_cast<unsigned>(m), sizeof(RTCRayHit));
+      for (size_t i = 0; i < m; ++i) hits[slot[i]] = to_hit(batch[i]);
+    }
+  });
+}
+
+void EmbreeTracer::occluded_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
+                                    uint32_t index_mask, int* occluded, unsigned threads) const {
+  parallel_chunks(count, threads, [&](size_t begin, size_t end) {
+    RTCIntersectContext ctx = make_context(false);
+    RTCRay batch[kStream];
+    uint32_t slot[kStream];
+    for (size_t s = begin; s < end; s += kStream) {
+      const size_t m = std::min(kStream, end - s);
+      for (size_t i = 0; i < m; ++i) {
+        slot[i] = indices[s + i] & index_mask;
+        to_embree(rays[slot[i]], batch[i]);
+      }
+      rtcOccluded1M(scene_, &ctx, batch, static_cast<unsigned>(m), sizeof(RTCRay));
+      // Embree marks an occluded ray by setting tfar to -inf; an empty
+      // interval is inactive and stays unoccluded (as intersect_any_indexed).
+      for (size_t i = 0; i < m; ++i) {
+        const cl::LuxRay& r = rays[slot[i]];
+        occluded[slot[i]] = r.dir_tmax.w > r.org_tmin.w && batch[i].tfar == -INFINITY ? 1 : 0;
+      }
     }
   });
 }

@@ -35,10 +35,20 @@ class EmbreeTracer {
   void occluded(std::span<const cl::LuxRay> rays, std::span<int> occluded, bool coherent = false,
                 unsigned threads = 0) const;
 
+  // Indexed forms, as the wavefront bake's OpenCL kernels do them (thesis
+  // §5.1, §5.4): entry i < count traces rays[indices[i] & index_mask] and
+  // writes its result at that source index. A ray with an empty interval
+  // (tmax <= tmin, "no shadow ray") is not occluded.
+  void intersect_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
+                         uint32_t index_mask, cl::LuxHit* hits, unsigned threads = 0) const;
+  void occluded_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
+                        uint32_t index_mask, int* occluded, unsigned threads = 0) const;
+
   double build_ms() const { return build_ms_; }
 
  private:
   EmbreeTracer() = default;
+  cl::LuxHit to_hit(const RTCRayHit& rh) const;
   RTCScene scene_ = nullptr;
   const DeviceBvh* bvh_ = nullptr;  // triangles, uvs and masks for ids and the alpha filter
   double build_ms_ = 0.0;

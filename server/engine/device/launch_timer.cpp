@@ -14,6 +14,13 @@ void LaunchTimer::record(const std::string& name, cl_event event) {
   pending_.emplace_back(name, event);
 }
 
+void LaunchTimer::record_host(const std::string& name, double ms) {
+  LaunchStats& s = stats_[name];
+  s.launches += 1;
+  s.total_ms += ms;
+  s.max_ms = std::max(s.max_ms, ms);
+}
+
 Status LaunchTimer::collect() {
   Status result;
   for (auto& [name, event] : pending_) {

@@ -27,6 +27,8 @@ class LaunchTimer {
 
   // Takes ownership of the event (released after collect()).
   void record(const std::string& name, cl_event event);
+  // A stage that ran on the host (the Embree intersector), timed there.
+  void record_host(const std::string& name, double ms);
   // Reads the profiling info of every recorded event; call after clFinish.
   Status collect();
   void reset();

@@ -79,6 +79,7 @@ Json to_json(const Manifest& m) {
   for (const auto& [key, value] : m.settings) j["settings"][key] = value;
   j["features"] = m.features;
   j["device"] = m.device;
+  if (!m.intersector.empty()) j["intersector"] = m.intersector;
   j["stats"] = stats_to_json(m.stats);
   if (!m.encodings_json.empty()) {
     j["encodings"] = Json::array();
@@ -296,6 +297,7 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
     LUXEL_RETURN_IF_ERROR(setting_fields.string(item.key(), m.settings[item.key()]));
   LUXEL_RETURN_IF_ERROR(f.string("features", m.features));
   LUXEL_RETURN_IF_ERROR(f.string("device", m.device));
+  if (j.contains("intersector")) LUXEL_RETURN_IF_ERROR(f.string("intersector", m.intersector));
   if (j.contains("encodings")) {
     const Json& enc = j["encodings"];
     if (!enc.is_array())

@@ -67,6 +67,7 @@ struct Manifest {
   std::map<std::string, std::string> settings;  // bake settings as given
   std::string features;                         // compiled feature list
   std::string device;                           // device description
+  std::string intersector;  // backend of the ray queries ("embree", "opencl"; empty: not recorded)
   // Directional encodings: one JSON object each (basis, directions,
   // frame, solver, file), kept as JSON text so the engine's basis description
   // passes through unchanged. Empty for irradiance-only bakes.

@@ -93,8 +93,8 @@ Status Baker::setup() {
 Status Baker::trace_shadows(bool texel_point) {
   const LiveArgs& live = b_.args().live;
   const PathArgs& g = b_.args().paths;
-  LUXEL_RETURN_IF_ERROR(s_.tracer->enqueue_any_indexed(g.shadow_rays, *live.active, *live.count,
-                                                       kSlotMask, g.occluded, s_.capacity));
+  LUXEL_RETURN_IF_ERROR(s_.tracer->any_indexed(g.shadow_rays, *live.active, *live.count, kSlotMask,
+                                               g.occluded, s_.capacity));
   return launch(texel_point ? BakeKernel::resolve_texel_shadows : BakeKernel::resolve_shadows,
                 s_.capacity);
 }
@@ -130,8 +130,8 @@ Status Baker::run_iteration(uint32_t batch) {
 
   // 5. Bounce loop: closest hit -> shade -> shadow rays -> compaction.
   for (int bounce = 0; bounce <= settings_.max_bounces; ++bounce) {
-    LUXEL_RETURN_IF_ERROR(s_.tracer->enqueue_closest_indexed(
-        a.paths.rays, *a.live.active, *a.live.count, kSlotMask, a.paths.hits, cap));
+    LUXEL_RETURN_IF_ERROR(s_.tracer->closest_indexed(a.paths.rays, *a.live.active, *a.live.count,
+                                                     kSlotMask, a.paths.hits, cap));
     LUXEL_RETURN_IF_ERROR(launch(BakeKernel::shade, cap));
     if (bounce == settings_.max_bounces) break;  // vertices past the limit only add emission
     if (nee) LUXEL_RETURN_IF_ERROR(trace_shadows(/*texel_point=*/false));

@@ -84,6 +84,7 @@ struct BakeResult {
 
   std::string features;  // compiled bake features ("light_emissive, nee, ...")
   std::string device;
+  std::string intersector;  // backend of the ray queries ("embree", "opencl")
   size_t sample_info_bytes = 0;
   size_t peak_device_bytes = 0;
   double setup_s = 0;        // import excluded: atlas, BVH, uploads, program builds

@@ -72,6 +72,7 @@ void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
   device::FeatureSet reported = setup.features;
   for (const auto& [name, value] : setup.tracer->features().values()) reported.set(name, value);
   r.features = reported.describe();
+  r.intersector = accel::intersector_name(setup.tracer->kind());
   r.sample_info_bytes = setup.info.bytes();
 }
 

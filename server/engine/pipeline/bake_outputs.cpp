@@ -65,6 +65,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.settings = settings.describe();
   m.features = result.features;
   m.device = result.device;
+  m.intersector = result.intersector;
   m.stats.seconds = result.seconds;
   m.stats.paths = result.paths;
   m.stats.mean_spp = result.mean_spp;

@@ -44,6 +44,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["paths_per_iteration"] = std::to_string(paths_per_iteration);
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
+  m["intersector"] = accel::intersector_name(intersector);
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";

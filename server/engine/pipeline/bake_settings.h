@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "accel/intersector.h"
 #include "atlas/atlas.h"
 #include "common/status.h"
 #include "pipeline/encodings.h"
@@ -59,6 +60,9 @@ struct BakeSettings {
   uint32_t paths_per_iteration = 1u << 18;  // batch size: bounds device memory
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
+  // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
+  // for GPUs (auto), or either on request (accel/intersector.h).
+  accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;
   float clamp_luminance = 0;   // firefly clamp on a path's luminance; 0 = off (unbiased)
   LightSettings lights;        // sky, sun, directional angular radius
   EncodingSettings encodings;  // directional encodings besides irradiance

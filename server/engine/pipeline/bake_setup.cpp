@@ -29,7 +29,8 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& se
   s.soup = std::move(soup.value());
   auto bvh = accel::build_bvh(s.soup);
   if (!bvh) return bvh.status();
-  auto tracer = accel::ClTracer::create(ctx, bvh.value());
+  s.bvh = std::make_unique<accel::DeviceBvh>(std::move(bvh.value()));
+  auto tracer = accel::make_intersector(settings.intersector, ctx, *s.bvh);
   if (!tracer) return tracer.status();
   s.tracer = std::move(tracer.value());
 

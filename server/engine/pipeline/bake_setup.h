@@ -6,7 +6,8 @@
 
 #include <memory>
 
-#include "accel/cl_tracer.h"
+#include "accel/bvh_builder.h"
+#include "accel/intersector.h"
 #include "accel/triangle_soup.h"
 #include "atlas/atlas.h"
 #include "atlas/sample_info.h"
@@ -25,7 +26,8 @@ struct BakeSetup {
   atlas::Atlas atlas;
   atlas::SampleInfo info;
   accel::TriangleSoup soup;
-  std::unique_ptr<accel::ClTracer> tracer;
+  std::unique_ptr<accel::DeviceBvh> bvh;       // kept: the Embree backend reads it in place
+  std::unique_ptr<accel::Intersector> tracer;  // the ray queries (settings.intersector)
   LightTable lights;
   SceneData data;
   EncodingPlan plan;

@@ -209,6 +209,24 @@ std::vector<Setting> make_schema() {
            [](BakeSettings& s, const SettingValue& v) {
              s.filter = v.text == "gaussian" ? Filter::kGaussian : Filter::kBox;
            }});
+  t.push_back({.name = "intersector",
+               .type = Type::kChoice,
+               .units = "",
+               .help = "ray queries: auto (Embree on CPU devices, OpenCL on GPUs), embree, opencl",
+               .flag = "--intersector",
+               .metavar = "I",
+               .default_value = SettingValue::of_text("auto"),
+               .choices = {"auto", "embree", "opencl"},
+               .get =
+                   [](const BakeSettings& s) {
+                     return SettingValue::of_text(accel::intersector_name(s.intersector));
+                   },
+               .set =
+                   [](BakeSettings& s, const SettingValue& v) {
+                     s.intersector = v.text == "embree"   ? accel::IntersectorKind::kEmbree
+                                     : v.text == "opencl" ? accel::IntersectorKind::kOpenCl
+                                                          : accel::IntersectorKind::kAuto;
+                   }});
   t.push_back({.name = "clamp_luminance",
                .type = Type::kFloat,
                .units = "W/m^2/sr",
