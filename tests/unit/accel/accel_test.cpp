@@ -2,11 +2,14 @@
 // known answers (no file import involved).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include "accel/bvh_builder.h"
 #include "accel/cl_tracer.h"
+#include "accel/embree_intersector.h"
 #include "accel/embree_tracer.h"
 #include "accel/ray_gen.h"
 #include "accel/triangle_soup.h"
@@ -335,6 +338,85 @@ TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
     EXPECT_LE(disagree, rays.size() / 10000) << ray_kind_name(kind);
     EXPECT_GT(hits, rays.size() / 20) << ray_kind_name(kind);
   }
+}
+
+// The wavefront's indexed queries through both backends of accel::Intersector
+// on device buffers: a shuffled active list with octant tags above the slot
+// mask, a live count below the list's length, empty-interval "no shadow"
+// rays. Results land at the source slots; slots not in the list keep what
+// they held.
+TEST_F(AccelTest, IndexedQueriesAgreeAcrossBackends) {
+  SceneBuilder b;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-10, 10);
+  for (int i = 0; i < 80; ++i) add_grid(b, 3, 2.0f, translate(u(rng), u(rng), u(rng)));
+  build(b.s);
+  auto rays = make_rays(soup_, RayKind::kIncoherent, 6000, 23);
+  for (size_t i = 0; i < rays.size(); i += 7) rays[i].dir_tmax.w = -1.0f;  // empty interval
+  for (size_t i = 3; i < rays.size(); i += 11) rays[i].dir_tmax.w = 2.0f;  // short shadow rays
+  constexpr uint32_t kMask = 0x1FFFFFFFu;
+  std::vector<uint32_t> list(rays.size());
+  std::iota(list.begin(), list.end(), 0u);
+  std::shuffle(list.begin(), list.end(), rng);
+  for (size_t i = 0; i < list.size(); ++i) list[i] |= static_cast<uint32_t>(i % 8) << 29;
+  const int live = static_cast<int>(rays.size() * 3 / 4);
+
+  auto up = [&](const auto& v, const char* name) {
+    auto r = ctx_->upload(v, name, CL_MEM_READ_WRITE);
+    EXPECT_TRUE(r.is_ok()) << r.status().to_string();
+    return std::move(r.value());
+  };
+  const LuxHit sentinel{-7.0f, 0.0f, 0.0f, -99};
+  struct Out {
+    std::vector<LuxHit> hits;
+    std::vector<int> occluded;
+  };
+  auto run = [&](IntersectorKind kind) {
+    auto x = make_intersector(kind, *ctx_, bvh_);
+    EXPECT_TRUE(x.is_ok()) << x.status().to_string();
+    EXPECT_EQ(x.value()->kind(), kind);
+    auto r = up(rays, "rays");
+    auto l = up(list, "list");
+    auto n = up(std::vector<int>{live}, "count");
+    auto h = up(std::vector<LuxHit>(rays.size(), sentinel), "hits");
+    auto o = up(std::vector<int>(rays.size(), -5), "occluded");
+    EXPECT_TRUE(x.value()->closest_indexed(r, l, n, kMask, h, list.size()).is_ok());
+    EXPECT_TRUE(x.value()->any_indexed(r, l, n, kMask, o, list.size()).is_ok());
+    Out out{std::vector<LuxHit>(rays.size()), std::vector<int>(rays.size())};
+    EXPECT_TRUE(ctx_->read(h, out.hits).is_ok());
+    EXPECT_TRUE(ctx_->read(o, out.occluded).is_ok());
+    EXPECT_TRUE(ctx_->finish().is_ok());
+    return out;
+  };
+  const Out e = run(IntersectorKind::kEmbree);
+  const Out c = run(IntersectorKind::kOpenCl);
+  std::vector<char> listed(rays.size(), 0);
+  for (int i = 0; i < live; ++i) listed[list[static_cast<size_t>(i)] & kMask] = 1;
+  size_t disagree = 0, hits = 0, blocked = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (!listed[i]) {
+      EXPECT_EQ(e.hits[i].prim, -99) << "slot " << i << " not in the list was written";
+      EXPECT_EQ(e.occluded[i], -5) << "slot " << i;
+      EXPECT_EQ(c.occluded[i], -5) << "slot " << i;
+      continue;
+    }
+    const bool empty = !(rays[i].dir_tmax.w > rays[i].org_tmin.w);
+    if (empty) {
+      EXPECT_EQ(e.occluded[i], 0) << "an empty interval is no shadow ray (slot " << i << ")";
+      EXPECT_EQ(c.occluded[i], 0) << "slot " << i;
+      EXPECT_LT(e.hits[i].prim, 0) << "slot " << i;
+      continue;
+    }
+    hits += e.hits[i].prim >= 0;
+    blocked += e.occluded[i] == 1;
+    if (e.hits[i].prim != c.hits[i].prim || e.occluded[i] != c.occluded[i])
+      ++disagree;
+    else if (e.hits[i].prim >= 0)
+      EXPECT_NEAR(e.hits[i].t, c.hits[i].t, 1e-4f * std::max(1.0f, c.hits[i].t)) << "slot " << i;
+  }
+  EXPECT_LE(disagree, rays.size() / 1000);
+  EXPECT_GT(hits, rays.size() / 20);
+  EXPECT_GT(blocked, rays.size() / 20);
 }
 
 TEST_F(AccelTest, BvhStatsAreConsistent) {
