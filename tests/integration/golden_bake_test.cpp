@@ -81,6 +81,18 @@ pipeline::BakeSettings base_settings() {
   return s;
 }
 
+// The foliage scene at 64^2, 2 bounces, under a constant sky and a sun (its
+// own point, spot and directional lights stay on).
+void foliage_sun_and_sky(pipeline::BakeSettings& s) {
+  s.atlas.resolution = 64;
+  s.max_bounces = 2;
+  s.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+  s.lights.sky.color = {0.4f, 0.5f, 0.7f};
+  s.lights.sun.enabled = true;
+  s.lights.sun.direction = {0.3f, -1.0f, 0.2f};
+  s.lights.sun.illuminance = 5.0f;
+}
+
 // A small equirect sky with structure in every direction.
 std::string write_sky_image() {
   output::Image img;
@@ -119,13 +131,7 @@ std::vector<GoldenCase> golden_cases(const std::string& sky_path) {
        }},
       {"foliage_lights_sun_sky", "foliage_instanced.glb",
        [](S& s) {
-         s.atlas.resolution = 64;
-         s.max_bounces = 2;
-         s.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
-         s.lights.sky.color = {0.4f, 0.5f, 0.7f};
-         s.lights.sun.enabled = true;
-         s.lights.sun.direction = {0.3f, -1.0f, 0.2f};
-         s.lights.sun.illuminance = 5.0f;
+         foliage_sun_and_sky(s);
          s.lights.directional_angular_radius_degrees = 0.5f;
        }},
       {"foliage_sky_image", "foliage_instanced.glb",
@@ -172,13 +178,7 @@ std::vector<GoldenCase> golden_cases(const std::string& sky_path) {
       {"foliage_lights_sun_sky_embree", "foliage_instanced.glb",
        [](S& s) {
          s.intersector = accel::IntersectorKind::kEmbree;
-         s.atlas.resolution = 64;
-         s.max_bounces = 2;
-         s.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
-         s.lights.sky.color = {0.4f, 0.5f, 0.7f};
-         s.lights.sun.enabled = true;
-         s.lights.sun.direction = {0.3f, -1.0f, 0.2f};
-         s.lights.sun.illuminance = 5.0f;
+         foliage_sun_and_sky(s);
          s.sort_directions = true;
        }},
       {"cornell_resumed_embree", "cornell_box.gltf",
