@@ -107,12 +107,22 @@ inline uint lux_nested_uniform_scramble(uint x, uint seed) {
 }
 
 /* Sobol dimension 1 (direction numbers v_{k+1} = v_k ^ (v_k >> 1)); dimension
- * 0 is the van der Corput sequence, reverse_bits(index). */
+ * 0 is the van der Corput sequence, reverse_bits(index).
+ *
+ * Direction number v_k has bit 31 - j set iff C(k, j) is odd, which by
+ * Lucas' theorem means j is a bit-subset of k. So bit 31 - j of the result
+ * is the XOR of index bit k over the supersets k of j: a superset (zeta)
+ * transform over the 5 bits of a bit position, one shift-XOR per bit, then
+ * a reversal. The same bits as the 32-step loop over direction numbers
+ * (tests/unit/kernels/sampling/sequence_test.cpp), without its branches. */
 inline uint lux_sobol_dim1(uint index) {
-  uint result = 0u;
-  for (uint v = 0x80000000u; index != 0u; index >>= 1, v ^= v >> 1)
-    if (index & 1u) result ^= v;
-  return result;
+  uint c = index;
+  c ^= (c >> 1) & 0x55555555u;
+  c ^= (c >> 2) & 0x33333333u;
+  c ^= (c >> 4) & 0x0f0f0f0fu;
+  c ^= (c >> 8) & 0x00ff00ffu;
+  c ^= (c >> 16) & 0x0000ffffu;
+  return lux_reverse_bits(c);
 }
 
 inline float lux_sample_1d(uint index, uint dimension, uint seed) {

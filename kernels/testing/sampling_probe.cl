@@ -22,6 +22,14 @@ __kernel void probe_hash(__global const uint* in, const uint count, __global uin
   out[i] = lux_hash_u32(in[i]);
 }
 
+#if !LUX_SEQUENCE_RANDOM /* the Sobol build only */
+__kernel void probe_sobol_dim1(__global const uint* in, const uint count, __global uint* out) {
+  const uint i = get_global_id(0);
+  if (i >= count) return;
+  out[i] = lux_sobol_dim1(in[i]);
+}
+#endif
+
 /* Warps, selected by `warp`. out = (point, density at the point):
  *   0 cosine hemisphere   1 uniform hemisphere   2 uniform sphere (w = 0)
  *   3 uniform cone(param = cos_max)              4 triangle: (b1, b2, 0, 0) */

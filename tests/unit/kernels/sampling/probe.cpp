@@ -69,10 +69,19 @@ Result<std::vector<float2>> Probe::sequence(Build build, const std::vector<uint4
 }
 
 Result<std::vector<uint32_t>> Probe::hash(const std::vector<uint32_t>& values) {
-  auto k = kernel(Build::kSobolSpecular, "probe_hash");
+  return u32_function("probe_hash", values);
+}
+
+Result<std::vector<uint32_t>> Probe::sobol_dim1(const std::vector<uint32_t>& values) {
+  return u32_function("probe_sobol_dim1", values);
+}
+
+Result<std::vector<uint32_t>> Probe::u32_function(const char* name,
+                                                  const std::vector<uint32_t>& values) {
+  auto k = kernel(Build::kSobolSpecular, name);
   if (!k) return k.status();
-  auto in = ctx_->upload(values, "hash input");
-  auto out = ctx_->alloc(values.size() * sizeof(uint32_t), "hash output");
+  auto in = ctx_->upload(values, std::string(name) + " input");
+  auto out = ctx_->alloc(values.size() * sizeof(uint32_t), std::string(name) + " output");
   if (!in) return in.status();
   if (!out) return out.status();
   LUXEL_RETURN_IF_ERROR(k->set_args(in.value(), uint32_t(values.size()), out.value()));

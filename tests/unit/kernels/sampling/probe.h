@@ -62,6 +62,8 @@ class Probe {
 
   Result<std::vector<float2>> sequence(Build build, const std::vector<uint4>& queries);
   Result<std::vector<uint32_t>> hash(const std::vector<uint32_t>& in);
+  // lux_sobol_dim1 of every input (Sobol dimension 1 before scrambling).
+  Result<std::vector<uint32_t>> sobol_dim1(const std::vector<uint32_t>& in);
   Result<std::vector<float4>> warp(Warp warp, float param, size_t count);
   Result<std::vector<float>> cosine_hemisphere_pdf(const std::vector<float4>& dirs);
   Result<std::vector<float4>> onb(const std::vector<float4>& normals,
@@ -78,6 +80,8 @@ class Probe {
   Probe() = default;
   Status init();
   Result<device::Kernel> kernel(Build build, const char* name);
+  // Runs a uint -> uint probe kernel (in, count, out) over the values.
+  Result<std::vector<uint32_t>> u32_function(const char* name, const std::vector<uint32_t>& values);
   template <typename T>
   Result<std::vector<T>> read_back(const device::Buffer& buffer, size_t count);
 

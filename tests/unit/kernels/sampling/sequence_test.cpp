@@ -308,6 +308,29 @@ TEST_F(SequenceTest, PaddedDimensionsPairLikeIndependentSamples) {
   }
 }
 
+// The shift-XOR form of Sobol dimension 1 in sequence.h against the
+// definition: XOR of the direction numbers v_{k+1} = v_k ^ (v_k >> 1),
+// v_0 = 2^31, over the set bits k of the index.
+TEST_F(SequenceTest, SobolDimensionOneMatchesItsDirectionNumbers) {
+  auto reference = [](uint32_t index) {
+    uint32_t result = 0;
+    for (uint32_t v = 0x80000000u; index != 0; index >>= 1, v ^= v >> 1)
+      if (index & 1u) result ^= v;
+    return result;
+  };
+  std::vector<uint32_t> in = {0u, 1u, 2u, 3u, 0xFFFFFFFFu, 0x80000000u, 0x7FFFFFFFu};
+  for (uint32_t k = 0; k < 32; ++k) in.push_back(1u << k);
+  std::mt19937 rng(11);
+  while (in.size() < (1u << 16)) in.push_back(static_cast<uint32_t>(rng()));
+  auto out = probe().sobol_dim1(in);
+  ASSERT_TRUE(out) << out.status().to_string();
+  size_t wrong = 0;
+  for (size_t i = 0; i < in.size(); ++i)
+    if (out.value()[i] != reference(in[i]) && ++wrong < 5)
+      ADD_FAILURE() << "index " << in[i] << ": " << out.value()[i] << " != " << reference(in[i]);
+  EXPECT_EQ(wrong, 0u);
+}
+
 TEST_F(SequenceTest, HashAvalanches) {
   // Flipping any input bit flips each output bit with probability 1/2.
   const size_t n = 1 << 15;
