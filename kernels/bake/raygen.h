@@ -56,6 +56,7 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   path.pad = (uint)tri;
   path.radiance = (float4)(0.0f);
   path.prev_pos = (float4)(s.p, 0.0f);
+  path.prev_normal = (float4)(s.ns, 0.0f);
 
   float3 t, b;
   lux_onb(s.ns, &t, &b);

@@ -33,7 +33,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     float w = 1.0f;
     if (prev_pdf > 0.0f && params.sky_light >= 0)
       w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_cdf, params.sky_light, sky_marginal,
-                                                    sky_conditional, dir));
+                                                    sky_conditional, dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
 #endif
     path.alive = 0u;
@@ -124,6 +124,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   }
   path.throughput = (float4)(throughput, pdf);
   path.prev_pos = (float4)(sf.p, 0.0f);
+  path.prev_normal = (float4)(sf.ns, 0.0f);
   path.alive = ok ? 1u : 0u;
   paths[slot] = path;
   rays[slot] =

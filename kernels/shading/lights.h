@@ -99,11 +99,12 @@ inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, flo
 }
 
 /* Solid-angle pdf with which lux_sample_light produces direction `dir` from
- * the sky, including the sky's selection probability (for MIS when a BSDF
- * ray escapes). sky_light: the sky's light index (LuxSky.light). */
+ * the sky at a point with normal n, including the sky's selection
+ * probability (for MIS when a BSDF ray escapes: n is the normal that vertex
+ * used for its light sample). sky_light: the sky's light index (LuxSky.light). */
 inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_light,
                          const __global float* sky_marginal, const __global float* sky_conditional,
-                         float3 dir) {
+                         float3 dir, float3 n) {
   if (sky_light < 0) return 0.0f;
   const float select = lux_cdf_pmf(select_cdf, (uint)sky_light);
 #if LUX_SKY_IMAGE
@@ -118,11 +119,15 @@ inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_l
   }
 #endif
 #if LUX_SKY
-  if (sky.kind == LUX_SKY_KIND_CONSTANT) return select / (4.0f * M_PI_F);
+  if (sky.kind == LUX_SKY_KIND_CONSTANT) {
+    const float cos_n = dot(normalize(dir), n);
+    return cos_n > 0.0f ? select * cos_n * M_1_PI_F : 0.0f;
+  }
 #endif
   (void)sky_marginal;
   (void)sky_conditional;
   (void)dir;
+  (void)n;
   return 0.0f;
 }
 
@@ -214,7 +219,7 @@ inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u,
 #if LUX_SKY || LUX_SKY_IMAGE
 inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_texels,
                                  const __global float* sky_marginal,
-                                 const __global float* sky_conditional, float2 u,
+                                 const __global float* sky_conditional, float3 n, float2 u,
                                  LuxLightSample* s) {
   s->dist = INFINITY;
   s->mis = 1;
@@ -234,8 +239,15 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
 #endif
 #if LUX_SKY
   if (sky.kind == LUX_SKY_KIND_CONSTANT) {
-    s->wi = lux_uniform_sphere(u);
-    s->pdf = 1.0f / (4.0f * M_PI_F);
+    /* Cosine-weighted about the receiver's normal: the constant sky below
+     * the surface adds nothing, and L cos / pdf = pi L is then the same for
+     * every sample (zero variance where nothing occludes). */
+    const float3 l = lux_cosine_hemisphere(u);
+    if (!(l.z > 0.0f)) return 0;
+    float3 t, b;
+    lux_onb(n, &t, &b);
+    s->wi = lux_to_world(l, t, b, n);
+    s->pdf = l.z * M_1_PI_F;
     s->radiance = sky.radiance.xyz;
     return 1;
   }
@@ -248,14 +260,15 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
 #endif
 
 /* Next-event estimation: pick a light by power with u_select, sample it with
- * u from shading point p. Returns 0 when the sample carries nothing (no
+ * u from shading point p with normal n (the constant sky is sampled about n;
+ * lux_sky_pdf needs the same n). Returns 0 when the sample carries nothing (no
  * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
  * light type). */
 inline int lux_sample_light(const __global LuxLight* lights, const __global float* select_cdf,
                             uint light_count, LuxSky sky, const __global float* sky_texels,
                             const __global float* sky_marginal,
-                            const __global float* sky_conditional, float3 p, float u_select,
-                            float2 u, LuxLightSample* out) {
+                            const __global float* sky_conditional, float3 p, float3 n,
+                            float u_select, float2 u, LuxLightSample* out) {
   out->wi = (float3)(0.0f, 1.0f, 0.0f);
   out->dist = 0.0f;
   out->radiance = (float3)(0.0f);
@@ -295,7 +308,7 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
 #endif
 #if LUX_SKY || LUX_SKY_IMAGE
     case LUX_LIGHT_TYPE_SKY:
-      ok = lux_lights_sample_sky(sky, sky_texels, sky_marginal, sky_conditional, u, out);
+      ok = lux_lights_sample_sky(sky, sky_texels, sky_marginal, sky_conditional, n, u, out);
       break;
 #endif
     default:

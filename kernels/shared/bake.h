@@ -52,14 +52,17 @@ typedef struct LuxMaterial {
 #define LUX_MATERIAL_DOUBLE_SIDED 1
 #define LUX_MATERIAL_EMISSIVE 2
 
-/* State of one path, 80 bytes.
- *   throughput.w: solid-angle pdf of the last BSDF sample (0 = no MIS, e.g.
- *                 the first segment from a texel when no light can be hit)
- *   prev_pos.w:   unused */
+/* State of one path, 96 bytes.
+ *   throughput.w:  solid-angle pdf of the last BSDF sample (0 = no MIS, e.g.
+ *                  the first segment from a texel when no light can be hit)
+ *   prev_pos.w:    unused
+ *   prev_normal:   the normal the previous vertex sampled its light about
+ *                  (MIS of an escaping ray against the sky's pdf); w unused */
 typedef struct LuxPath {
   float4 throughput;
   float4 radiance;
   float4 prev_pos;
+  float4 prev_normal;
   uint texel;
   uint sample_index; /* index into the texel's progressive sequence (§6.2) */
   uint seed;         /* per-texel decorrelation seed */

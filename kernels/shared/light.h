@@ -47,7 +47,8 @@
  *   LUX_LIGHT_SPOT         spot lights
  *   LUX_LIGHT_DIRECTIONAL  directional lights and the bake-settings sun
  *   LUX_LIGHT_EMISSIVE     emissive triangles
- *   LUX_SKY                a constant-colour sky (uniform sphere sampling)
+ *   LUX_SKY                a constant-colour sky (cosine-weighted about the
+ *                          receiver's normal)
  *   LUX_SKY_IMAGE          an equirectangular sky, importance sampled
  *
  * EQUIRECT MAPPING. A world direction d is first rotated by -rotation about

@@ -30,7 +30,7 @@ Estimate estimate_irradiance(const LightTable& table, Vec3 p, Vec3 n, size_t cou
   Rng rng(seed);
   std::vector<cl::float4> r(count);
   for (auto& v : r) v = rng.uniform4();
-  auto s = (*probe)->sample_at(p, r);
+  auto s = (*probe)->sample_at(p, r, n);
   EXPECT_TRUE(s.is_ok()) << s.status().to_string();
   if (!s.is_ok()) return {};
   std::array<double, 3> sum{}, sum2{};

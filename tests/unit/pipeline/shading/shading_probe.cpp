@@ -62,8 +62,11 @@ Result<std::unique_ptr<LightProbe>> LightProbe::create(const LightTable& table,
 }
 
 Result<LightSamples> LightProbe::sample(const std::vector<cl::float4>& points,
-                                        const std::vector<cl::float4>& randoms) {
+                                        const std::vector<cl::float4>& randoms,
+                                        std::vector<cl::float4> normals) {
   LUXEL_CHECK(points.size() == randoms.size());
+  if (normals.empty()) normals.assign(points.size(), cl::float4{0, 1, 0, 0});
+  LUXEL_CHECK(normals.size() == points.size());
   device::Context& ctx = shared_context();
   const size_t n = points.size();
   auto kernel = program_->kernel("probe_sample_lights");
@@ -72,15 +75,18 @@ Result<LightSamples> LightProbe::sample(const std::vector<cl::float4>& points,
   if (!pts) return pts.status();
   auto rnd = upload(randoms, "randoms");
   if (!rnd) return rnd.status();
+  auto nrm = upload(normals, "normals");
+  if (!nrm) return nrm.status();
   auto wi_pdf = ctx.alloc(n * sizeof(cl::float4), "wi pdf");
   auto rad = ctx.alloc(n * sizeof(cl::float4), "radiance dist");
   auto info = ctx.alloc(n * sizeof(cl::int4), "info");
   auto bary = ctx.alloc(n * sizeof(cl::float2), "bary");
   if (!wi_pdf || !rad || !info || !bary) return internal_error("allocating probe outputs");
   const cl_uint count = static_cast<cl_uint>(table_->lights.size());
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(
-      lights_, cdf_, count, table_->sky, sky_texels_, sky_marginal_, sky_conditional_, pts.value(),
-      rnd.value(), static_cast<int>(n), wi_pdf.value(), rad.value(), info.value(), bary.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(lights_, cdf_, count, table_->sky, sky_texels_,
+                                         sky_marginal_, sky_conditional_, pts.value(), nrm.value(),
+                                         rnd.value(), static_cast<int>(n), wi_pdf.value(),
+                                         rad.value(), info.value(), bary.value()));
   LUXEL_RETURN_IF_ERROR(ctx.launch(kernel.value(), n));
   LightSamples s;
   LUXEL_RETURN_IF_ERROR(read_back(wi_pdf.value(), &s.wi_pdf, n));
@@ -90,8 +96,9 @@ Result<LightSamples> LightProbe::sample(const std::vector<cl::float4>& points,
   return s;
 }
 
-Result<LightSamples> LightProbe::sample_at(Vec3 p, const std::vector<cl::float4>& randoms) {
-  return sample(std::vector<cl::float4>(randoms.size(), cl::float4{p.x, p.y, p.z, 0}), randoms);
+Result<LightSamples> LightProbe::sample_at(Vec3 p, const std::vector<cl::float4>& randoms, Vec3 n) {
+  return sample(std::vector<cl::float4>(randoms.size(), cl::float4{p.x, p.y, p.z, 0}), randoms,
+                std::vector<cl::float4>(randoms.size(), cl::float4{n.x, n.y, n.z, 0}));
 }
 
 Result<std::vector<float>> LightProbe::triangle_pdf(const std::vector<int>& light,
@@ -115,7 +122,7 @@ Result<std::vector<float>> LightProbe::triangle_pdf(const std::vector<int>& ligh
   return pdf;
 }
 
-Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& dirs) {
+Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& dirs, Vec3 nrm) {
   const size_t n = dirs.size();
   auto kernel = program_->kernel("probe_sky");
   if (!kernel) return kernel.status();
@@ -123,9 +130,9 @@ Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& d
   if (!db) return db.status();
   auto out = shared_context().alloc(n * sizeof(cl::float4), "sky out");
   if (!out) return out.status();
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(table_->sky, sky_texels_, cdf_, table_->sky.light,
-                                         sky_marginal_, sky_conditional_, db.value(),
-                                         static_cast<int>(n), out.value()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(
+      table_->sky, sky_texels_, cdf_, table_->sky.light, sky_marginal_, sky_conditional_,
+      db.value(), static_cast<int>(n), cl::float4{nrm.x, nrm.y, nrm.z, 0}, out.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), n));
   std::vector<cl::float4> r;
   LUXEL_RETURN_IF_ERROR(read_back(out.value(), &r, n));

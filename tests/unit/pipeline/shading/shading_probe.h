@@ -37,18 +37,22 @@ class LightProbe {
   static Result<std::unique_ptr<LightProbe>> create(
       const LightTable& table, const device::FeatureSet& features = all_light_features());
 
-  // lux_sample_light at points[i] with randoms[i] = (u_select, u.x, u.y, -).
+  // lux_sample_light at points[i] with normal normals[i] (empty: +Y) and
+  // randoms[i] = (u_select, u.x, u.y, -).
   Result<LightSamples> sample(const std::vector<cl::float4>& points,
-                              const std::vector<cl::float4>& randoms);
-  // The same point for every sample.
-  Result<LightSamples> sample_at(Vec3 p, const std::vector<cl::float4>& randoms);
+                              const std::vector<cl::float4>& randoms,
+                              std::vector<cl::float4> normals = {});
+  // The same point and normal for every sample.
+  Result<LightSamples> sample_at(Vec3 p, const std::vector<cl::float4>& randoms,
+                                 Vec3 n = {0, 1, 0});
   // lux_light_pdf_triangle per query.
   Result<std::vector<float>> triangle_pdf(const std::vector<int>& light,
                                           const std::vector<cl::float4>& p,
                                           const std::vector<cl::float4>& hit,
                                           const std::vector<cl::float4>& normal);
-  // lux_sky_radiance (xyz) and lux_sky_pdf (w) along each direction.
-  Result<std::vector<cl::float4>> sky(const std::vector<cl::float4>& dirs);
+  // lux_sky_radiance (xyz) and lux_sky_pdf (w) along each direction, from a
+  // point with normal n.
+  Result<std::vector<cl::float4>> sky(const std::vector<cl::float4>& dirs, Vec3 n = {0, 1, 0});
 
  private:
   LightProbe() = default;

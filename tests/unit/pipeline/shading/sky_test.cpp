@@ -254,5 +254,60 @@ TEST_F(SkyFixture, ABlackSkyIsDropped) {
   EXPECT_EQ(t->sky.kind, LUX_SKY_KIND_NONE);
 }
 
+// The constant sky is sampled cosine-weighted about the receiver's normal:
+// in the normal's frame, cos^2 theta and phi are uniform (chi-square over a
+// 10 x 12 grid), no sample goes below the surface, and lux_sky_pdf along the
+// sampled direction is the sampled pdf, cos / pi (MIS consistency).
+TEST(ConstantSky, SamplesTheCosineHemisphereAboutTheNormal) {
+  LightSettings settings;
+  settings.sky.kind = SkySettings::Kind::kConstant;
+  settings.sky.color = {0.2f, 0.4f, 0.8f};
+  auto t = build_light_table(scene::Scene{}, accel::TriangleSoup{}, settings, Bounds3{});
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  auto probe = test::LightProbe::create(t.value());
+  ASSERT_TRUE(probe.is_ok()) << probe.status().to_string();
+  const Vec3 n = normalize(Vec3{0.3f, -0.8f, 0.5f});
+  const size_t count = 200000;
+  Rng rng(31);
+  std::vector<cl::float4> r(count);
+  for (auto& v : r) v = rng.uniform4();
+  auto s = (*probe)->sample_at({1, 2, 3}, r, n);
+  ASSERT_TRUE(s.is_ok()) << s.status().to_string();
+  // A frame about n for the grid (any will do: phi is uniform).
+  const Vec3 a = std::fabs(n.x) > 0.5f ? Vec3{0, 1, 0} : Vec3{1, 0, 0};
+  const Vec3 tx = normalize(cross(a, n)), ty = cross(n, tx);
+  constexpr int kRows = 10, kCols = 12;
+  std::vector<double> observed(kRows * kCols),
+      expected(kRows * kCols, double(count) / (kRows * kCols));
+  std::vector<cl::float4> dirs;
+  std::vector<float> sampled;
+  for (size_t i = 0; i < count; ++i) {
+    ASSERT_TRUE(s->ok(i));
+    ASSERT_TRUE(s->mis(i));
+    const Vec3 d = test::xyz(s->wi_pdf[i]);
+    const double cos_t = dot(d, n);
+    ASSERT_GT(cos_t, 0.0) << "a sky sample below the surface";
+    ASSERT_NEAR(s->wi_pdf[i].w, cos_t / kPi, 1e-4 * (1 + cos_t / kPi));
+    const double phi = std::atan2(double(dot(d, ty)), double(dot(d, tx))) + kPi;
+    const int row = std::min(kRows - 1, int(cos_t * cos_t * kRows));
+    const int col = std::min(kCols - 1, int(phi / (2 * kPi) * kCols));
+    observed[size_t(row * kCols + col)] += 1;
+    if (i < 2000) {
+      dirs.push_back(s->wi_pdf[i]);
+      sampled.push_back(s->wi_pdf[i].w);
+    }
+  }
+  const auto chi2 = test_support::chi2_test(observed, expected, 1e-4);
+  EXPECT_GT(chi2.p_value, 1e-4) << chi2.detail;
+  auto pdf = (*probe)->sky(dirs, n);
+  ASSERT_TRUE(pdf.is_ok()) << pdf.status().to_string();
+  for (size_t k = 0; k < dirs.size(); ++k)
+    ASSERT_NEAR((*pdf)[k].w / sampled[k], 1.0, 1e-4) << "direction " << k;
+  // Below the surface the pdf is 0: the sky is never sampled there.
+  auto below = (*probe)->sky({cl::float4{-n.x, -n.y, -n.z, 0}}, n);
+  ASSERT_TRUE(below.is_ok());
+  EXPECT_EQ((*below)[0].w, 0.0f);
+}
+
 }  // namespace
 }  // namespace luxel::pipeline
