@@ -17,6 +17,7 @@
 #define lux_as_int(x) as_int(x)
 #define lux_as_uint(x) as_uint(x)
 #else
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -41,24 +42,16 @@ struct alignas(16) uint4 {
 typedef uint32_t uint;
 typedef uint64_t ulong;
 inline float as_float(int32_t v) {
-  float f;
-  std::memcpy(&f, &v, 4);
-  return f;
+  return std::bit_cast<float>(v);
 }
 inline float as_float(uint32_t v) {
-  float f;
-  std::memcpy(&f, &v, 4);
-  return f;
+  return std::bit_cast<float>(v);
 }
 inline int32_t as_int(float v) {
-  int32_t i;
-  std::memcpy(&i, &v, 4);
-  return i;
+  return std::bit_cast<int32_t>(v);
 }
 inline uint32_t as_uint(float v) {
-  uint32_t i;
-  std::memcpy(&i, &v, 4);
-  return i;
+  return std::bit_cast<uint32_t>(v);
 }
 }  // namespace luxel::cl
 #define lux_as_float(x) ::luxel::cl::as_float(x)
