@@ -32,7 +32,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     const float3 l = lux_sky_radiance(sky, sky_texels, dir);
     float w = 1.0f;
     if (prev_pdf > 0.0f && params.sky_light >= 0)
-      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_cdf, params.sky_light, sky_marginal,
+      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_marginal,
                                                     sky_conditional, dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
 #endif
@@ -57,7 +57,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     if (prev_pdf > 0.0f && s.light >= 0)
       w = lux_power_heuristic(
           prev_pdf,
-          lux_light_pdf_triangle(lights, light_cdf, s.light, path.prev_pos.xyz, s.p, s.ng_winding));
+          lux_light_pdf_triangle(lights, light_select, s.light, path.prev_pos.xyz, s.p, s.ng_winding));
     path.radiance.xyz += throughput * le * w;
   }
 #endif

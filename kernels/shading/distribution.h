@@ -4,11 +4,14 @@
  * cdf[n] = 1 (built on the host by pipeline/shading/distribution.h). The
  * probability of cell i is cdf[i+1] - cdf[i]; sampling and pdf evaluation
  * both read that same float difference, so a sample's pmf and the pmf the
- * MIS code evaluates later are always identical. Used for light selection by
- * power (thesis §6.3.2) and for the equirect sky (2D: marginal over rows,
- * one conditional per row). */
+ * MIS code evaluates later are always identical. Used for the equirect sky
+ * (2D: marginal over rows, one conditional per row). Light selection by power
+ * (thesis §6.3.2) uses an alias table instead (lux_sample_alias): O(1) in the
+ * number of lights, where the binary search is O(log n). */
 #ifndef LUXEL_SHADING_DISTRIBUTION_H
 #define LUXEL_SHADING_DISTRIBUTION_H
+
+#include "shared/light.h"
 
 /* The largest float below 1: u is clamped to it so u = 1 cannot run off the
  * end of the table. */
@@ -37,6 +40,18 @@ inline float lux_cdf_remap(const __global float* cdf, uint i, float u) {
   const float width = cdf[i + 1] - cdf[i];
   const float t = width > 0.0f ? (u - cdf[i]) / width : 0.5f;
   return clamp(t, 0.0f, LUX_ONE_MINUS_EPSILON);
+}
+
+/* Alias-table selection (shared/light.h, LuxAliasEntry): one cell read and
+ * at most one more for the pmf of the alias, whatever the table's size.
+ * *pmf is the chosen entry's probability; n >= 1. */
+inline uint lux_sample_alias(const __global LuxAliasEntry* table, uint n, float u, float* pmf) {
+  const float scaled = clamp(u, 0.0f, LUX_ONE_MINUS_EPSILON) * (float)n;
+  const uint cell = min((uint)scaled, n - 1u);
+  const LuxAliasEntry e = table[cell];
+  const uint chosen = scaled - (float)cell < e.threshold ? cell : e.alias;
+  *pmf = chosen == cell ? e.pmf : table[chosen].pmf;
+  return chosen;
 }
 
 /* Probability of cell i. */

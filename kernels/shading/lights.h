@@ -3,7 +3,8 @@
  *
  * A light is chosen with probability proportional to its power (§6.3.2:
  * "probability proportional to its intensity, omitting any spatial
- * considerations") through the table's select_cdf, then a point or direction
+ * considerations") in O(1) through the table's alias entries
+ * (shading/distribution.h, lux_sample_alias), then a point or direction
  * on it is sampled. Layout, units, feature macros and the equirect mapping
  * are documented in shared/light.h.
  *
@@ -102,11 +103,11 @@ inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, flo
  * the sky at a point with normal n, including the sky's selection
  * probability (for MIS when a BSDF ray escapes: n is the normal that vertex
  * used for its light sample). sky_light: the sky's light index (LuxSky.light). */
-inline float lux_sky_pdf(LuxSky sky, const __global float* select_cdf, int sky_light,
+inline float lux_sky_pdf(LuxSky sky, const __global LuxAliasEntry* light_select, int sky_light,
                          const __global float* sky_marginal, const __global float* sky_conditional,
                          float3 dir, float3 n) {
   if (sky_light < 0) return 0.0f;
-  const float select = lux_cdf_pmf(select_cdf, (uint)sky_light);
+  const float select = light_select[sky_light].pmf;
 #if LUX_SKY_IMAGE
   if (sky.kind == LUX_SKY_KIND_IMAGE) {
     const float3 l = lux_sky_to_local(sky, normalize(dir));
@@ -264,8 +265,9 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
  * lux_sky_pdf needs the same n). Returns 0 when the sample carries nothing (no
  * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
  * light type). */
-inline int lux_sample_light(const __global LuxLight* lights, const __global float* select_cdf,
-                            uint light_count, LuxSky sky, const __global float* sky_texels,
+inline int lux_sample_light(const __global LuxLight* lights,
+                            const __global LuxAliasEntry* light_select, uint light_count,
+                            LuxSky sky, const __global float* sky_texels,
                             const __global float* sky_marginal,
                             const __global float* sky_conditional, float3 p, float3 n,
                             float u_select, float2 u, LuxLightSample* out) {
@@ -280,7 +282,7 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
   out->bary = (float2)(0.0f);
   if (light_count == 0u) return 0;
   float select;
-  const uint index = lux_sample_cdf(select_cdf, light_count, u_select, &select);
+  const uint index = lux_sample_alias(light_select, light_count, u_select, &select);
   if (!(select > 0.0f)) return 0;
   const LuxLight light = lights[index];
   out->light = (int)index;
@@ -331,7 +333,7 @@ inline int lux_sample_light(const __global LuxLight* lights, const __global floa
  * triangle to `light`). light_normal: the hit triangle's geometric normal
  * (any length, either sign). 0 for the back of a one-sided emitter. */
 inline float lux_light_pdf_triangle(const __global LuxLight* lights,
-                                    const __global float* select_cdf, int light, float3 p,
+                                    const __global LuxAliasEntry* light_select, int light, float3 p,
                                     float3 hit_point, float3 light_normal) {
 #if LUX_LIGHT_EMISSIVE
   if (light < 0) return 0.0f;
@@ -345,10 +347,10 @@ inline float lux_light_pdf_triangle(const __global LuxLight* lights,
     return 0.0f;
   const float cos_l = fabs(dot(normalize(light_normal), wi));
   if (!(cos_l > 0.0f)) return 0.0f;
-  return lux_cdf_pmf(select_cdf, (uint)light) * d2 / (LUX_LIGHT_AREA(l) * cos_l);
+  return light_select[light].pmf * d2 / (LUX_LIGHT_AREA(l) * cos_l);
 #else
   (void)lights;
-  (void)select_cdf;
+  (void)light_select;
   (void)light;
   (void)p;
   (void)hit_point;

@@ -38,13 +38,13 @@
   X(buffer, uint, sample_offsets, "sample-info offsets") /* §4.2 */ \
   X(buffer, uint, sample_words, "sample-info words")
 
-/* Lights (§6.1): the light table with its selection cdf, and the sky. */
-#define LUX_GROUP_lights(X)                          \
-  X(buffer, LuxLight, lights, "lights")              \
-  X(buffer, float, light_cdf, "light cdf")           \
-  X(value, LuxSky, sky, "sky")                       \
-  X(buffer, float, sky_texels, "sky texels")         \
-  X(buffer, float, sky_marginal, "sky marginal cdf") \
+/* Lights (§6.1): the light table with its selection alias table, and the sky. */
+#define LUX_GROUP_lights(X)                                 \
+  X(buffer, LuxLight, lights, "lights")                     \
+  X(buffer, LuxAliasEntry, light_select, "light selection") \
+  X(value, LuxSky, sky, "sky")                              \
+  X(buffer, float, sky_texels, "sky texels")                \
+  X(buffer, float, sky_marginal, "sky marginal cdf")        \
   X(buffer, float, sky_conditional, "sky conditional cdf")
 
 /* Material textures (kernels/shared/texture.h). */

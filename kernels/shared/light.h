@@ -113,6 +113,22 @@ typedef struct LuxLight {
  * Distribution: marginal cdf over rows (height + 1 floats) and one
  * conditional cdf per row (height * (width + 1) floats), weights
  * luminance * sin(theta) so samples follow radiance per solid angle. */
+/* One entry of the light-selection alias table (Walker 1977; built with
+ * Vose's method, IEEE TSE 17(9), 1991), 16 bytes. With u in [0, 1) and n
+ * entries, cell i = floor(u n) keeps light i when the fraction u n - i is
+ * below `threshold`, else it takes light `alias`: O(1) whatever n is.
+ *   threshold  in [0, 1]
+ *   alias      light index taken above the threshold
+ *   pmf        probability that light i (this entry's own index) is chosen,
+ *              computed on the host from the float thresholds exactly as the
+ *              sampler realises them, so NEE and MIS read one value */
+typedef struct LuxAliasEntry {
+  float threshold;
+  uint alias;
+  float pmf;
+  uint pad;
+} LuxAliasEntry;
+
 typedef struct LuxSky {
   int kind;
   int width;

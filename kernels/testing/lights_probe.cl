@@ -9,20 +9,18 @@
  * = (u_select, u.x, u.y). out_wi_pdf: wi, pdf (pdf 0 when nothing was sampled).
  * out_radiance_dist: radiance, dist. out_info: light, triangle,
  * is_delta | mis << 1, returned value. */
-__kernel void probe_sample_lights(__global const LuxLight* lights, __global const float* select_cdf,
-                                  const uint light_count, const LuxSky sky,
-                                  __global const float* sky_texels,
-                                  __global const float* sky_marginal,
-                                  __global const float* sky_conditional,
-                                  __global const float4* points, __global const float4* normals,
-                                  __global const float4* randoms, const int count,
-                                  __global float4* out_wi_pdf, __global float4* out_radiance_dist,
-                                  __global int4* out_info, __global float2* out_bary) {
+__kernel void probe_sample_lights(
+    __global const LuxLight* lights, __global const LuxAliasEntry* light_select,
+    const uint light_count, const LuxSky sky, __global const float* sky_texels,
+    __global const float* sky_marginal, __global const float* sky_conditional,
+    __global const float4* points, __global const float4* normals, __global const float4* randoms,
+    const int count, __global float4* out_wi_pdf, __global float4* out_radiance_dist,
+    __global int4* out_info, __global float2* out_bary) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   const float4 r = randoms[i];
   LuxLightSample s;
-  const int ok = lux_sample_light(lights, select_cdf, light_count, sky, sky_texels, sky_marginal,
+  const int ok = lux_sample_light(lights, light_select, light_count, sky, sky_texels, sky_marginal,
                                   sky_conditional, points[i].xyz, normals[i].xyz, r.x, r.yz, &s);
   out_wi_pdf[i] = ok ? (float4)(s.wi, s.pdf) : (float4)(0.0f);
   out_radiance_dist[i] = ok ? (float4)(s.radiance, s.dist) : (float4)(0.0f);
@@ -31,20 +29,21 @@ __kernel void probe_sample_lights(__global const LuxLight* lights, __global cons
 }
 
 /* lux_light_pdf_triangle for (light[i], p[i], hit[i], normal[i]). */
-__kernel void probe_triangle_pdf(__global const LuxLight* lights, __global const float* select_cdf,
+__kernel void probe_triangle_pdf(__global const LuxLight* lights,
+                                 __global const LuxAliasEntry* light_select,
                                  __global const int* light, __global const float4* p,
                                  __global const float4* hit, __global const float4* normal,
                                  const int count, __global float* out) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   out[i] =
-      lux_light_pdf_triangle(lights, select_cdf, light[i], p[i].xyz, hit[i].xyz, normal[i].xyz);
+      lux_light_pdf_triangle(lights, light_select, light[i], p[i].xyz, hit[i].xyz, normal[i].xyz);
 }
 
 /* lux_sky_radiance and lux_sky_pdf along dirs[i] from a point with normal n:
  * out = radiance, pdf. */
 __kernel void probe_sky(const LuxSky sky, __global const float* sky_texels,
-                        __global const float* select_cdf, const int sky_light,
+                        __global const LuxAliasEntry* light_select, const int sky_light,
                         __global const float* sky_marginal, __global const float* sky_conditional,
                         __global const float4* dirs, const int count, const float4 n,
                         __global float4* out) {
@@ -53,7 +52,7 @@ __kernel void probe_sky(const LuxSky sky, __global const float* sky_texels,
   const float3 d = dirs[i].xyz;
   out[i] =
       (float4)(lux_sky_radiance(sky, sky_texels, d),
-               lux_sky_pdf(sky, select_cdf, sky_light, sky_marginal, sky_conditional, d, n.xyz));
+               lux_sky_pdf(sky, light_select, sky_light, sky_marginal, sky_conditional, d, n.xyz));
 }
 
 /* lux_sample_cdf over n cells for u[i]. */
@@ -73,4 +72,15 @@ __kernel void probe_texture(__global const uint* texels, __global const LuxTextu
   const int i = (int)get_global_id(0);
   if (i >= count) return;
   out[i] = lux_texture_sample(texels, textures[texture], uv[i]);
+}
+
+/* lux_sample_alias over an n-entry table for u[i]. */
+__kernel void probe_sample_alias(__global const LuxAliasEntry* table, const uint n,
+                                 __global const float* u, const int count, __global int* index,
+                                 __global float* pmf) {
+  const int i = get_global_id(0);
+  if (i >= count) return;
+  float p;
+  index[i] = (int)lux_sample_alias(table, n, u[i], &p);
+  pmf[i] = p;
 }

@@ -57,7 +57,7 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   const bool image_sky = s.features.has("SKY_IMAGE");
   l.sky = s.lights.sky;
   LUXEL_RETURN_IF_ERROR(a.upload(l.lights, s.lights.lights, "lights", nee));
-  LUXEL_RETURN_IF_ERROR(a.upload(l.light_cdf, s.lights.select_cdf, "light cdf", nee));
+  LUXEL_RETURN_IF_ERROR(a.upload(l.light_select, s.lights.select, "light selection", nee));
   LUXEL_RETURN_IF_ERROR(a.upload(l.sky_texels, s.lights.sky_texels, "sky texels", image_sky));
   LUXEL_RETURN_IF_ERROR(
       a.upload(l.sky_marginal, s.lights.sky_marginal_cdf, "sky marginal cdf", image_sky));

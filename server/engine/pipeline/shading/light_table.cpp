@@ -1,5 +1,5 @@
 // build_light_table: gathers the lights, drops the powerless ones and builds
-// the selection CDF by power (thesis §6.3.2).
+// the selection alias table by power (thesis §6.3.2).
 #include "pipeline/shading/light_table.h"
 
 #include <cmath>
@@ -23,7 +23,7 @@ double bounding_disc_area(const Bounds3& b) {
 }  // namespace
 
 size_t LightTable::bytes() const {
-  return lights.size() * sizeof(cl::LuxLight) + select_cdf.size() * sizeof(float) +
+  return lights.size() * sizeof(cl::LuxLight) + select.size() * sizeof(cl::LuxAliasEntry) +
          triangle_light.size() * sizeof(int32_t) + sizeof(cl::LuxSky) +
          (sky_texels.size() + sky_marginal_cdf.size() + sky_conditional_cdf.size()) * sizeof(float);
 }
@@ -83,11 +83,7 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
     powers.push_back(c.power);
     table.total_power += c.power;
   }
-  if (powers.empty()) {
-    table.select_cdf = {0.0f};
-  } else {
-    append_cdf(powers, &table.select_cdf);
-  }
+  if (!powers.empty()) table.select = build_alias_table(powers);
   if (table.has_sky) {
     table.sky = sky->sky;
     table.sky_texels = std::move(sky->texels);

@@ -1,5 +1,5 @@
 // The light table a bake uploads for next-event estimation (thesis §6.1):
-// every light as a cl::LuxLight, a selection CDF by power (§6.3.2), the map
+// every light as a cl::LuxLight, an alias table selecting by power (§6.3.2), the map
 // from world triangles to emissive lights, and the sky with its importance-
 // sampling distribution. Device side: kernels/shading/lights.h; layout and
 // units: kernels/shared/light.h.
@@ -24,9 +24,10 @@ struct LightTable {
   // triangles (TriangleSoup order), the sky last. Lights with zero power are
   // left out (counted in dropped_zero_power).
   std::vector<cl::LuxLight> lights;
-  // lights.size() + 1 floats: cdf[0] = 0, cdf[n] = 1; light i is chosen with
-  // probability cdf[i+1] - cdf[i], proportional to its power. {0} when empty.
-  std::vector<float> select_cdf;
+  // One alias entry per light (pipeline/shading/distribution.h): light i is
+  // chosen with probability select[i].pmf, proportional to its power. Empty
+  // when there are no lights.
+  std::vector<cl::LuxAliasEntry> select;
   // Per world triangle (TriangleSoup order): its light index, or -1.
   std::vector<int32_t> triangle_light;
 

@@ -10,6 +10,7 @@ namespace luxel::cl {
 
 static_assert(sizeof(LuxLight) == 80 && alignof(LuxLight) == 16);
 static_assert(offsetof(LuxLight, shape) == 64);
+static_assert(sizeof(LuxAliasEntry) == 16 && offsetof(LuxAliasEntry, pmf) == 8);
 static_assert(sizeof(LuxSky) == 48 && alignof(LuxSky) == 16);
 static_assert(offsetof(LuxSky, light) == 12 && offsetof(LuxSky, radiance) == 16 &&
               offsetof(LuxSky, rotation) == 32);

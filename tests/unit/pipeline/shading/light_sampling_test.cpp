@@ -371,7 +371,7 @@ TEST(LightSampling, LightsAreChosenWithTheirSelectionProbability) {
   auto chi2 = test_support::chi2_test(observed, expected, 1e-4);
   EXPECT_GT(chi2.p_value, 1e-4) << chi2.detail;
 
-  // Through lux_sample_light: the light index follows select_cdf, and the
+  // Through lux_sample_light: the light index follows the alias table, and the
   // returned pdf carries the selection probability.
   const size_t n = 100000;
   auto s = (*test::LightProbe::create(table.value()))->sample_at({0.5f, 1, 0.5f}, randoms(n, 6));
@@ -382,11 +382,10 @@ TEST(LightSampling, LightsAreChosenWithTheirSelectionProbability) {
     ASSERT_LT(k, lights);
     obs[k] += 1;
     if (s->ok(i) && s->is_delta(i)) {
-      ASSERT_FLOAT_EQ(s->wi_pdf[i].w, table->select_cdf[k + 1] - table->select_cdf[k]);
+      ASSERT_EQ(s->wi_pdf[i].w, table->select[k].pmf);
     }
   }
-  for (size_t k = 0; k < lights; ++k)
-    exp[k] = (double(table->select_cdf[k + 1]) - table->select_cdf[k]) * n;
+  for (size_t k = 0; k < lights; ++k) exp[k] = double(table->select[k].pmf) * n;
   chi2 = test_support::chi2_test(obs, exp, 1e-4);
   EXPECT_GT(chi2.p_value, 1e-4) << chi2.detail;
 }

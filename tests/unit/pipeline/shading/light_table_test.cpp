@@ -28,7 +28,7 @@ int type_of(const cl::LuxLight& l) {
   return LUX_LIGHT_TYPE(l);
 }
 double pmf(const LightTable& t, size_t i) {
-  return double(t.select_cdf[i + 1]) - t.select_cdf[i];
+  return double(t.select[i].pmf);
 }
 
 Result<LightTable> build(const SceneBuilder& b, const LightSettings& settings = {}) {
@@ -66,9 +66,7 @@ TEST(LightTable, SelectionProbabilityIsProportionalToPower) {
   double total = 0;
   for (double p : expected) total += p;
   EXPECT_NEAR(t->total_power / total, 1.0, 1e-6);
-  ASSERT_EQ(t->select_cdf.size(), 7u);
-  EXPECT_EQ(t->select_cdf.front(), 0.0f);
-  EXPECT_EQ(t->select_cdf.back(), 1.0f);
+  ASSERT_EQ(t->select.size(), 6u);
   for (size_t i = 0; i < 6; ++i) {
     EXPECT_EQ(type_of(t->lights[i]), types[i]) << i;
     EXPECT_NEAR(pmf(t.value(), i) / (expected[i] / total), 1.0, 1e-5) << "light " << i;
@@ -78,7 +76,8 @@ TEST(LightTable, SelectionProbabilityIsProportionalToPower) {
   EXPECT_EQ(t->sky.kind, LUX_SKY_KIND_CONSTANT);
   EXPECT_EQ(t->sky.light, 5);
   EXPECT_EQ(t->triangle_light, (std::vector<int32_t>{3, 4}));
-  EXPECT_EQ(t->bytes(), 6 * sizeof(cl::LuxLight) + 7 * 4 + 2 * 4 + sizeof(cl::LuxSky));
+  EXPECT_EQ(t->bytes(),
+            6 * sizeof(cl::LuxLight) + 6 * sizeof(cl::LuxAliasEntry) + 2 * 4 + sizeof(cl::LuxSky));
 }
 
 TEST(LightTable, EmissiveTrianglesRecordGeometryFlagsAndTheirWorldTriangle) {
@@ -153,7 +152,9 @@ TEST(LightTable, PowerlessLightsAreDroppedAndCounted) {
   ASSERT_TRUE(t.is_ok()) << t.status().to_string();
   EXPECT_EQ(t->lights.size(), 1u);
   EXPECT_EQ(t->dropped_zero_power, 4u);
-  EXPECT_EQ(t->select_cdf, (std::vector<float>{0, 1}));
+  ASSERT_EQ(t->select.size(), 1u);
+  EXPECT_EQ(t->select[0].pmf, 1.0f);
+  EXPECT_EQ(t->select[0].threshold, 1.0f);
   EXPECT_FALSE(t->has_sky || t->has_emissive);
   EXPECT_EQ(t->sky.kind, LUX_SKY_KIND_NONE);
   EXPECT_EQ(t->sky.light, -1);
@@ -162,7 +163,7 @@ TEST(LightTable, PowerlessLightsAreDroppedAndCounted) {
   auto empty = build(SceneBuilder());
   ASSERT_TRUE(empty.is_ok());
   EXPECT_TRUE(empty->lights.empty());
-  EXPECT_EQ(empty->select_cdf, (std::vector<float>{0}));
+  EXPECT_TRUE(empty->select.empty());
 }
 
 TEST(LightTable, SunAndDirectionalDiscsStoreOneMinusCosAndDiscRadiance) {

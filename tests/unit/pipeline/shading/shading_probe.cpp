@@ -46,7 +46,7 @@ Result<std::unique_ptr<LightProbe>> LightProbe::create(const LightTable& table,
   auto lights = upload(table.lights, "lights");
   if (!lights) return lights.status();
   p->lights_ = std::move(lights.value());
-  auto cdf = upload(table.select_cdf, "select cdf");
+  auto cdf = upload(table.select, "light selection");
   if (!cdf) return cdf.status();
   p->cdf_ = std::move(cdf.value());
   auto texels = upload(table.sky_texels, "sky texels");
@@ -139,23 +139,41 @@ Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& d
   return r;
 }
 
-Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u,
-                        std::vector<int>* index, std::vector<float>* pmf) {
+namespace {
+
+// One probe kernel over a table: (table, n, u, count, index, pmf).
+template <typename T>
+Status probe_table_sampler(const char* kernel_name, const std::vector<T>& table, cl_uint n,
+                           const std::vector<float>& u, std::vector<int>* index,
+                           std::vector<float>* pmf) {
   auto program = shared_context().programs().get(kProbe, all_light_features());
   if (!program) return program.status();
-  auto kernel = program.value()->kernel("probe_sample_cdf");
+  auto kernel = program.value()->kernel(kernel_name);
   if (!kernel) return kernel.status();
-  auto cb = upload(cdf, "cdf"), ub = upload(u, "u");
-  if (!cb || !ub) return internal_error("uploading cdf queries");
+  auto cb = upload(table, "table"), ub = upload(u, "u");
+  if (!cb || !ub) return internal_error("uploading table queries");
   auto ib = shared_context().alloc(u.size() * sizeof(int), "index");
   auto pb = shared_context().alloc(u.size() * sizeof(float), "pmf");
-  if (!ib || !pb) return internal_error("allocating cdf outputs");
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(cb.value(), static_cast<cl_uint>(cdf.size() - 1),
-                                         ub.value(), static_cast<int>(u.size()), ib.value(),
-                                         pb.value()));
+  if (!ib || !pb) return internal_error("allocating table outputs");
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(cb.value(), n, ub.value(), static_cast<int>(u.size()),
+                                         ib.value(), pb.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), u.size()));
   LUXEL_RETURN_IF_ERROR(read_back(ib.value(), index, u.size()));
   return read_back(pb.value(), pmf, u.size());
+}
+
+}  // namespace
+
+Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u,
+                        std::vector<int>* index, std::vector<float>* pmf) {
+  return probe_table_sampler("probe_sample_cdf", cdf, static_cast<cl_uint>(cdf.size() - 1), u,
+                             index, pmf);
+}
+
+Status probe_sample_alias(const std::vector<cl::LuxAliasEntry>& table, const std::vector<float>& u,
+                          std::vector<int>* index, std::vector<float>* pmf) {
+  return probe_table_sampler("probe_sample_alias", table, static_cast<cl_uint>(table.size()), u,
+                             index, pmf);
 }
 
 Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,

@@ -65,6 +65,10 @@ class LightProbe {
 Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>& u,
                         std::vector<int>* index, std::vector<float>* pmf);
 
+// lux_sample_alias(table, n, u[i]) -> (index, pmf).
+Status probe_sample_alias(const std::vector<cl::LuxAliasEntry>& table, const std::vector<float>& u,
+                          std::vector<int>* index, std::vector<float>* pmf);
+
 // lux_texture_sample(pack.textures[texture], uv[i]).
 Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,
                                               const std::vector<cl::float2>& uv);
