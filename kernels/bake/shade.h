@@ -32,8 +32,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     const float3 l = lux_sky_radiance(sky, sky_texels, dir);
     float w = 1.0f;
     if (prev_pdf > 0.0f && params.sky_light >= 0)
-      w = lux_power_heuristic(prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_marginal,
-                                                    sky_conditional, dir, path.prev_normal.xyz));
+      w = lux_power_heuristic(
+          prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_marginal, sky_conditional,
+                                dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
 #endif
     path.alive = 0u;
@@ -56,8 +57,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     float w = 1.0f;
     if (prev_pdf > 0.0f && s.light >= 0)
       w = lux_power_heuristic(
-          prev_pdf,
-          lux_light_pdf_triangle(lights, light_select, s.light, path.prev_pos.xyz, s.p, s.ng_winding));
+          prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light, path.prev_pos.xyz, s.p,
+                                           s.ng_winding));
     path.radiance.xyz += throughput * le * w;
   }
 #endif
