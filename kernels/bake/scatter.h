@@ -81,8 +81,8 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   const float u_sel = lux_sample_1d(index, dim + LUX_DIM_LIGHT_SELECT, seed);
   const float2 u_pt = lux_sample_2d(index, dim + LUX_DIM_LIGHT_POINT, seed);
   LuxLightSample ls;
-  if (!lux_sample_light(lights, light_select, params.light_count, sky, sky_texels, sky_marginal,
-                        sky_conditional, s->p, n, u_sel, u_pt, &ls))
+  if (!lux_sample_light(lights, light_select, params.light_count, sky, sky_texels, sky_block_cdfs,
+                        sky_texel_cdfs, s->p, n, u_sel, u_pt, &ls))
     return;
   if (!(ls.pdf > 0.0f) || dot(ls.wi, s->ng) <= 0.0f) return;
   float3 radiance = ls.radiance;

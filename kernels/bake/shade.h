@@ -33,7 +33,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     float w = 1.0f;
     if (prev_pdf > 0.0f && params.sky_light >= 0)
       w = lux_power_heuristic(
-          prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_marginal, sky_conditional,
+          prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_block_cdfs, sky_texel_cdfs,
                                 dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
 #endif

@@ -81,6 +81,84 @@ inline float3 lux_sky_texel(const LuxSky sky, const __global float* texels, floa
 }
 #endif
 
+#if LUX_SKY_IMAGE
+/* The octahedral cell of a unit local-frame normal on a side x side grid
+ * (Cigolle et al., JCGT 3(2), 2014, §3.1; pipeline/shading/sky_distribution.h
+ * builds one sky distribution per cell and mirrors this lookup). */
+inline uint lux_sky_normal_bin(float3 n, int side) {
+  const float l1 = fabs(n.x) + fabs(n.y) + fabs(n.z);
+  float2 p = l1 > 0.0f ? (float2)(n.x, n.z) / l1 : (float2)(0.0f);
+  if (n.y < 0.0f) {
+    const float2 sgn = (float2)(p.x >= 0.0f ? 1.0f : -1.0f, p.y >= 0.0f ? 1.0f : -1.0f);
+    p = (1.0f - fabs(p.yx)) * sgn;
+  }
+  const float2 uv = p * 0.5f + 0.5f;
+  const int ix = clamp((int)(uv.x * (float)side), 0, side - 1);
+  const int iy = clamp((int)(uv.y * (float)side), 0, side - 1);
+  return (uint)(iy * side + ix);
+}
+
+/* Two-level sampling of the image sky for a receiver with world normal n
+ * (pipeline/shading/sky_distribution.h; layout in shared/light.h): a block
+ * from the table of n's normal cell, then a texel of the block, each level
+ * reusing the fraction of its random number left inside the chosen cell
+ * (pbrt's SampleContinuous). Returns image (s, t) and the density with
+ * respect to (s, t); 0 when n's cell sees no light at all. */
+inline __global const float* lux_sky_block_table(const LuxSky sky,
+                                                 const __global float* sky_block_cdfs, float3 n) {
+  const uint bin = lux_sky_normal_bin(lux_sky_to_local(sky, n), sky.normal_bins);
+  const size_t size = (size_t)(sky.blocks_y + 1) + (size_t)sky.blocks_y * (sky.blocks_x + 1);
+  return sky_block_cdfs + (size_t)bin * size;
+}
+
+inline __global const float* lux_sky_texel_table(const LuxSky sky,
+                                                 const __global float* sky_texel_cdfs, uint block) {
+  const size_t size =
+      (size_t)(sky.block_height + 1) + (size_t)sky.block_height * (sky.block_width + 1);
+  return sky_texel_cdfs + (size_t)block * size;
+}
+
+inline float2 lux_sky_sample_st(const LuxSky sky, const __global float* sky_block_cdfs,
+                                const __global float* sky_texel_cdfs, float3 n, float2 u,
+                                float* pdf_st) {
+  const uint nbx = (uint)sky.blocks_x, nby = (uint)sky.blocks_y;
+  const uint bw = (uint)sky.block_width, bh = (uint)sky.block_height;
+  float ux = clamp(u.x, 0.0f, LUX_ONE_MINUS_EPSILON), uy = clamp(u.y, 0.0f, LUX_ONE_MINUS_EPSILON);
+  float p_by, p_bx, p_ty, p_tx;
+  const __global float* blocks = lux_sky_block_table(sky, sky_block_cdfs, n);
+  const uint by = lux_sample_cdf(blocks, nby, uy, &p_by);
+  uy = lux_cdf_remap(blocks, by, uy);
+  const __global float* block_row = blocks + (nby + 1u) + by * (nbx + 1u);
+  const uint bx = lux_sample_cdf(block_row, nbx, ux, &p_bx);
+  ux = lux_cdf_remap(block_row, bx, ux);
+  const __global float* texels = lux_sky_texel_table(sky, sky_texel_cdfs, by * nbx + bx);
+  const uint ty = lux_sample_cdf(texels, bh, uy, &p_ty);
+  uy = lux_cdf_remap(texels, ty, uy);
+  const __global float* texel_row = texels + (bh + 1u) + ty * (bw + 1u);
+  const uint tx = lux_sample_cdf(texel_row, bw, ux, &p_tx);
+  ux = lux_cdf_remap(texel_row, tx, ux);
+  *pdf_st = p_by * p_bx * p_ty * p_tx * (float)sky.width * (float)sky.height;
+  return (float2)(((float)(bx * bw + tx) + ux) / (float)sky.width,
+                  ((float)(by * bh + ty) + uy) / (float)sky.height);
+}
+
+/* The density lux_sky_sample_st has at (s, t) for normal n. */
+inline float lux_sky_pdf_st(const LuxSky sky, const __global float* sky_block_cdfs,
+                            const __global float* sky_texel_cdfs, float3 n, float2 st) {
+  const uint nbx = (uint)sky.blocks_x, nby = (uint)sky.blocks_y;
+  const uint bw = (uint)sky.block_width, bh = (uint)sky.block_height;
+  const uint x = min((uint)max(st.x * (float)sky.width, 0.0f), (uint)sky.width - 1u);
+  const uint y = min((uint)max(st.y * (float)sky.height, 0.0f), (uint)sky.height - 1u);
+  const uint bx = x / bw, by = y / bh, tx = x - bx * bw, ty = y - by * bh;
+  const __global float* blocks = lux_sky_block_table(sky, sky_block_cdfs, n);
+  const __global float* block_row = blocks + (nby + 1u) + by * (nbx + 1u);
+  const __global float* texels = lux_sky_texel_table(sky, sky_texel_cdfs, by * nbx + bx);
+  const __global float* texel_row = texels + (bh + 1u) + ty * (bw + 1u);
+  return lux_cdf_pmf(blocks, by) * lux_cdf_pmf(block_row, bx) * lux_cdf_pmf(texels, ty) *
+         lux_cdf_pmf(texel_row, tx) * (float)sky.width * (float)sky.height;
+}
+#endif
+
 /* Radiance arriving from direction `dir` (towards the sky), for rays that
  * escape the scene. */
 inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, float3 dir) {
@@ -104,7 +182,7 @@ inline float3 lux_sky_radiance(LuxSky sky, const __global float* sky_texels, flo
  * probability (for MIS when a BSDF ray escapes: n is the normal that vertex
  * used for its light sample). sky_light: the sky's light index (LuxSky.light). */
 inline float lux_sky_pdf(LuxSky sky, const __global LuxAliasEntry* light_select, int sky_light,
-                         const __global float* sky_marginal, const __global float* sky_conditional,
+                         const __global float* sky_block_cdfs, const __global float* sky_texel_cdfs,
                          float3 dir, float3 n) {
   if (sky_light < 0) return 0.0f;
   const float select = light_select[sky_light].pmf;
@@ -114,8 +192,8 @@ inline float lux_sky_pdf(LuxSky sky, const __global LuxAliasEntry* light_select,
     const float sin_t = sqrt(max(1.0f - l.y * l.y, 0.0f));
     if (!(sin_t > 0.0f)) return 0.0f;
     /* d(omega) = sin(theta) d(theta) d(phi) = 2 pi^2 sin(theta) ds dt */
-    const float pdf_st = lux_pdf_2d(sky_marginal, sky_conditional, (uint)sky.width,
-                                    (uint)sky.height, lux_sky_local_to_st(l));
+    const float pdf_st =
+        lux_sky_pdf_st(sky, sky_block_cdfs, sky_texel_cdfs, n, lux_sky_local_to_st(l));
     return select * pdf_st / (2.0f * M_PI_F * M_PI_F * sin_t);
   }
 #endif
@@ -125,8 +203,8 @@ inline float lux_sky_pdf(LuxSky sky, const __global LuxAliasEntry* light_select,
     return cos_n > 0.0f ? select * cos_n * M_1_PI_F : 0.0f;
   }
 #endif
-  (void)sky_marginal;
-  (void)sky_conditional;
+  (void)sky_block_cdfs;
+  (void)sky_texel_cdfs;
   (void)dir;
   (void)n;
   return 0.0f;
@@ -219,16 +297,15 @@ inline int lux_lights_sample_triangle(const LuxLight* light, float3 p, float2 u,
 
 #if LUX_SKY || LUX_SKY_IMAGE
 inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_texels,
-                                 const __global float* sky_marginal,
-                                 const __global float* sky_conditional, float3 n, float2 u,
+                                 const __global float* sky_block_cdfs,
+                                 const __global float* sky_texel_cdfs, float3 n, float2 u,
                                  LuxLightSample* s) {
   s->dist = INFINITY;
   s->mis = 1;
 #if LUX_SKY_IMAGE
   if (sky.kind == LUX_SKY_KIND_IMAGE) {
     float pdf_st;
-    const float2 st = lux_sample_grid_2d(sky_marginal, sky_conditional, (uint)sky.width,
-                                         (uint)sky.height, u, &pdf_st);
+    const float2 st = lux_sky_sample_st(sky, sky_block_cdfs, sky_texel_cdfs, n, u, &pdf_st);
     const float theta = M_PI_F * st.y, phi = 2.0f * M_PI_F * (st.x - 0.5f);
     const float sin_t = sin(theta);
     if (!(pdf_st > 0.0f) || !(sin_t > 0.0f)) return 0;
@@ -254,8 +331,8 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
   }
 #endif
   (void)sky_texels;
-  (void)sky_marginal;
-  (void)sky_conditional;
+  (void)sky_block_cdfs;
+  (void)sky_texel_cdfs;
   return 0;
 }
 #endif
@@ -268,8 +345,8 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
 inline int lux_sample_light(const __global LuxLight* lights,
                             const __global LuxAliasEntry* light_select, uint light_count,
                             LuxSky sky, const __global float* sky_texels,
-                            const __global float* sky_marginal,
-                            const __global float* sky_conditional, float3 p, float3 n,
+                            const __global float* sky_block_cdfs,
+                            const __global float* sky_texel_cdfs, float3 p, float3 n,
                             float u_select, float2 u, LuxLightSample* out) {
   out->wi = (float3)(0.0f, 1.0f, 0.0f);
   out->dist = 0.0f;
@@ -310,7 +387,7 @@ inline int lux_sample_light(const __global LuxLight* lights,
 #endif
 #if LUX_SKY || LUX_SKY_IMAGE
     case LUX_LIGHT_TYPE_SKY:
-      ok = lux_lights_sample_sky(sky, sky_texels, sky_marginal, sky_conditional, n, u, out);
+      ok = lux_lights_sample_sky(sky, sky_texels, sky_block_cdfs, sky_texel_cdfs, n, u, out);
       break;
 #endif
     default:
@@ -320,8 +397,8 @@ inline int lux_sample_light(const __global LuxLight* lights,
   (void)u;
   (void)sky;
   (void)sky_texels;
-  (void)sky_marginal;
-  (void)sky_conditional;
+  (void)sky_block_cdfs;
+  (void)sky_texel_cdfs;
   if (!ok || !(out->pdf > 0.0f)) return 0;
   out->pdf *= select;
   return 1;

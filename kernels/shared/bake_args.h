@@ -44,8 +44,8 @@
   X(buffer, LuxAliasEntry, light_select, "light selection") \
   X(value, LuxSky, sky, "sky")                              \
   X(buffer, float, sky_texels, "sky texels")                \
-  X(buffer, float, sky_marginal, "sky marginal cdf")        \
-  X(buffer, float, sky_conditional, "sky conditional cdf")
+  X(buffer, float, sky_block_cdfs, "sky block cdfs")        \
+  X(buffer, float, sky_texel_cdfs, "sky texel cdfs")
 
 /* Material textures (kernels/shared/texture.h). */
 #define LUX_GROUP_textures(X)                 \

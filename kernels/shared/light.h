@@ -102,17 +102,6 @@ typedef struct LuxLight {
 #define LUX_LIGHT_ONE_MINUS_COS(l) ((l).shape.z)      /* directional disc: 1 - cos(a) */
 #define LUX_LIGHT_MATERIAL(l) lux_as_int((l).shape.w) /* triangle */
 
-/* The sky (environment), passed to kernels by value. 48 bytes.
- *   kind        LUX_SKY_KIND_*
- *   width/height  equirect image size (0 for a constant sky)
- *   light       index of the sky's entry in the light table, -1 if none
- *   radiance    constant sky: its radiance (rgb). Image sky: the
- *               colour * intensity already multiplied into the texels
- *   rotation    x = sin, y = cos of the rotation about +Y
- * Image texels: width * height * 3 floats (rgb, radiance), row 0 = up.
- * Distribution: marginal cdf over rows (height + 1 floats) and one
- * conditional cdf per row (height * (width + 1) floats), weights
- * luminance * sin(theta) so samples follow radiance per solid angle. */
 /* One entry of the light-selection alias table (Walker 1977; built with
  * Vose's method, IEEE TSE 17(9), 1991), 16 bytes. With u in [0, 1) and n
  * entries, cell i = floor(u n) keeps light i when the fraction u n - i is
@@ -129,11 +118,42 @@ typedef struct LuxAliasEntry {
   uint pad;
 } LuxAliasEntry;
 
+/* The sky (environment), passed to kernels by value. 80 bytes.
+ *   kind        LUX_SKY_KIND_*
+ *   width/height  equirect image size (0 for a constant sky)
+ *   light       index of the sky's entry in the light table, -1 if none
+ *   blocks_x/blocks_y, block_width/block_height  image sky: the image is cut
+ *               into blocks_x x blocks_y blocks of block_width x
+ *               block_height texels (the last row and column may reach past
+ *               the image; those texels have weight 0)
+ *   normal_bins image sky: side of the octahedral grid of receiver normals
+ *   radiance    constant sky: its radiance (rgb). Image sky: the
+ *               colour * intensity already multiplied into the texels
+ *   rotation    x = sin, y = cos of the rotation about +Y
+ * Image texels: width * height * 3 floats (rgb, radiance), row 0 = up.
+ * Importance sampling (pipeline/shading/sky_distribution.h), two levels:
+ *   sky block cdfs  per normal cell b (normal_bins^2 of them), at
+ *               b * (blocks_y + 1 + blocks_y * (blocks_x + 1)): a marginal cdf
+ *               over block rows, then one conditional cdf per block row.
+ *               Weights: the block's radiance mass times a bound of the
+ *               cosine any normal of the cell can have with the block.
+ *   sky texel cdfs  per block k = by * blocks_x + bx, at
+ *               k * (block_height + 1 + block_height * (block_width + 1)):
+ *               the same over the block's texels, weights luminance x
+ *               sin(theta), the same for every normal. */
 typedef struct LuxSky {
   int kind;
   int width;
   int height;
   int light;
+  int blocks_x;
+  int blocks_y;
+  int block_width;
+  int block_height;
+  int normal_bins;
+  int pad0;
+  int pad1;
+  int pad2;
   float4 radiance;
   float4 rotation;
 } LuxSky;

@@ -12,7 +12,7 @@
 __kernel void probe_sample_lights(
     __global const LuxLight* lights, __global const LuxAliasEntry* light_select,
     const uint light_count, const LuxSky sky, __global const float* sky_texels,
-    __global const float* sky_marginal, __global const float* sky_conditional,
+    __global const float* sky_block_cdfs, __global const float* sky_texel_cdfs,
     __global const float4* points, __global const float4* normals, __global const float4* randoms,
     const int count, __global float4* out_wi_pdf, __global float4* out_radiance_dist,
     __global int4* out_info, __global float2* out_bary) {
@@ -20,8 +20,8 @@ __kernel void probe_sample_lights(
   if (i >= count) return;
   const float4 r = randoms[i];
   LuxLightSample s;
-  const int ok = lux_sample_light(lights, light_select, light_count, sky, sky_texels, sky_marginal,
-                                  sky_conditional, points[i].xyz, normals[i].xyz, r.x, r.yz, &s);
+  const int ok = lux_sample_light(lights, light_select, light_count, sky, sky_texels, sky_block_cdfs,
+                                  sky_texel_cdfs, points[i].xyz, normals[i].xyz, r.x, r.yz, &s);
   out_wi_pdf[i] = ok ? (float4)(s.wi, s.pdf) : (float4)(0.0f);
   out_radiance_dist[i] = ok ? (float4)(s.radiance, s.dist) : (float4)(0.0f);
   out_info[i] = (int4)(s.light, s.triangle, s.is_delta | (s.mis << 1), ok);
@@ -44,7 +44,7 @@ __kernel void probe_triangle_pdf(__global const LuxLight* lights,
  * out = radiance, pdf. */
 __kernel void probe_sky(const LuxSky sky, __global const float* sky_texels,
                         __global const LuxAliasEntry* light_select, const int sky_light,
-                        __global const float* sky_marginal, __global const float* sky_conditional,
+                        __global const float* sky_block_cdfs, __global const float* sky_texel_cdfs,
                         __global const float4* dirs, const int count, const float4 n,
                         __global float4* out) {
   const int i = (int)get_global_id(0);
@@ -52,7 +52,7 @@ __kernel void probe_sky(const LuxSky sky, __global const float* sky_texels,
   const float3 d = dirs[i].xyz;
   out[i] =
       (float4)(lux_sky_radiance(sky, sky_texels, d),
-               lux_sky_pdf(sky, light_select, sky_light, sky_marginal, sky_conditional, d, n.xyz));
+               lux_sky_pdf(sky, light_select, sky_light, sky_block_cdfs, sky_texel_cdfs, d, n.xyz));
 }
 
 /* lux_sample_cdf over n cells for u[i]. */

@@ -60,9 +60,9 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   LUXEL_RETURN_IF_ERROR(a.upload(l.light_select, s.lights.select, "light selection", nee));
   LUXEL_RETURN_IF_ERROR(a.upload(l.sky_texels, s.lights.sky_texels, "sky texels", image_sky));
   LUXEL_RETURN_IF_ERROR(
-      a.upload(l.sky_marginal, s.lights.sky_marginal_cdf, "sky marginal cdf", image_sky));
+      a.upload(l.sky_block_cdfs, s.lights.sky_block_cdfs, "sky block cdfs", image_sky));
   LUXEL_RETURN_IF_ERROR(
-      a.upload(l.sky_conditional, s.lights.sky_conditional_cdf, "sky conditional cdf", image_sky));
+      a.upload(l.sky_texel_cdfs, s.lights.sky_texel_cdfs, "sky texel cdfs", image_sky));
 
   TextureArgs& t = args.textures;
   if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE")) {

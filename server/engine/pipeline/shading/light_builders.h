@@ -41,8 +41,8 @@ Status add_emissive_triangles(const scene::Scene& scene, const accel::TriangleSo
 // The sky and its importance-sampling distribution.
 struct SkyData {
   cl::LuxSky sky{};
-  std::vector<float> texels, marginal, conditional;
-  double mean_luminance = 0;  // over the sphere (solid-angle weighted)
+  std::vector<float> texels, block_cdfs, texel_cdfs;  // pipeline/shading/sky_distribution.h
+  double mean_luminance = 0;                          // over the sphere (solid-angle weighted)
   Vec3 mean_radiance;
 };
 Result<SkyData> load_sky(const SkySettings& settings);

@@ -25,7 +25,7 @@ double bounding_disc_area(const Bounds3& b) {
 size_t LightTable::bytes() const {
   return lights.size() * sizeof(cl::LuxLight) + select.size() * sizeof(cl::LuxAliasEntry) +
          triangle_light.size() * sizeof(int32_t) + sizeof(cl::LuxSky) +
-         (sky_texels.size() + sky_marginal_cdf.size() + sky_conditional_cdf.size()) * sizeof(float);
+         (sky_texels.size() + sky_block_cdfs.size() + sky_texel_cdfs.size()) * sizeof(float);
 }
 
 Result<LightTable> build_light_table(const scene::Scene& scene, const accel::TriangleSoup& soup,
@@ -87,8 +87,8 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
   if (table.has_sky) {
     table.sky = sky->sky;
     table.sky_texels = std::move(sky->texels);
-    table.sky_marginal_cdf = std::move(sky->marginal);
-    table.sky_conditional_cdf = std::move(sky->conditional);
+    table.sky_block_cdfs = std::move(sky->block_cdfs);
+    table.sky_texel_cdfs = std::move(sky->texel_cdfs);
   } else {
     table.sky = cl::LuxSky{};
     table.sky.kind = LUX_SKY_KIND_NONE;

@@ -31,10 +31,13 @@ struct LightTable {
   // Per world triangle (TriangleSoup order): its light index, or -1.
   std::vector<int32_t> triangle_light;
 
-  cl::LuxSky sky{};                        // kind NONE unless a sky with power > 0
-  std::vector<float> sky_texels;           // width * height * 3 (rgb radiance), image sky only
-  std::vector<float> sky_marginal_cdf;     // height + 1
-  std::vector<float> sky_conditional_cdf;  // height * (width + 1)
+  cl::LuxSky sky{};               // kind NONE unless a sky with power > 0
+  std::vector<float> sky_texels;  // width * height * 3 (rgb radiance), image sky only
+  // Two-level importance sampling (pipeline/shading/sky_distribution.h;
+  // layout in kernels/shared/light.h): blocks per cell of receiver normals,
+  // texels per block.
+  std::vector<float> sky_block_cdfs;
+  std::vector<float> sky_texel_cdfs;
 
   // Which light types are present (after dropping): decide the FeatureSet,
   // so kernels carry no code for absent types (see add_light_features).

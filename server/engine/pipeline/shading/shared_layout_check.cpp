@@ -11,9 +11,10 @@ namespace luxel::cl {
 static_assert(sizeof(LuxLight) == 80 && alignof(LuxLight) == 16);
 static_assert(offsetof(LuxLight, shape) == 64);
 static_assert(sizeof(LuxAliasEntry) == 16 && offsetof(LuxAliasEntry, pmf) == 8);
-static_assert(sizeof(LuxSky) == 48 && alignof(LuxSky) == 16);
-static_assert(offsetof(LuxSky, light) == 12 && offsetof(LuxSky, radiance) == 16 &&
-              offsetof(LuxSky, rotation) == 32);
+static_assert(sizeof(LuxSky) == 80 && alignof(LuxSky) == 16);
+static_assert(offsetof(LuxSky, light) == 12 && offsetof(LuxSky, block_height) == 28 &&
+              offsetof(LuxSky, normal_bins) == 32 && offsetof(LuxSky, radiance) == 48 &&
+              offsetof(LuxSky, rotation) == 64);
 static_assert(sizeof(LuxTexture) == 16 && offsetof(LuxTexture, flags) == 12);
 
 }  // namespace luxel::cl

@@ -1,14 +1,13 @@
 // The sky: a constant radiance, or an equirectangular HDR image read with
-// OpenImageIO plus the 2D distribution that importance-samples it (pbrt's
-// Distribution2D, weights luminance x sin(theta) so that the solid-angle pdf
-// follows radiance).
+// OpenImageIO plus the 2D distributions that importance-sample it, one per
+// cell of receiver normals (pipeline/shading/sky_distribution.h).
 #include <OpenImageIO/imageio.h>
 
 #include <cmath>
 
 #include "pipeline/shading/color.h"
-#include "pipeline/shading/distribution.h"
 #include "pipeline/shading/light_builders.h"
+#include "pipeline/shading/sky_distribution.h"
 
 namespace luxel::pipeline::detail {
 namespace {
@@ -72,13 +71,10 @@ Status build_image_sky(const SkySettings& s, Vec3 scale, SkyData* sky) {
   sky->sky.height = h;
   sky->texels = std::move(image->rgb);
 
-  std::vector<double> row_weights(static_cast<size_t>(w)), row_totals(static_cast<size_t>(h));
-  sky->conditional.reserve(static_cast<size_t>(h) * static_cast<size_t>(w + 1));
   double lum_integral = 0;  // integral of luminance over the sphere
   Vec3 rgb_integral;
   for (int y = 0; y < h; ++y) {
     const double theta0 = kPi * y / h, theta1 = kPi * (y + 1) / h;
-    const double sin_mid = std::sin(0.5 * (theta0 + theta1));
     const double texel_solid_angle = (2 * kPi / w) * (std::cos(theta0) - std::cos(theta1));
     for (int x = 0; x < w; ++x) {
       float* t =
@@ -92,14 +88,20 @@ Status build_image_sky(const SkySettings& s, Vec3 scale, SkyData* sky) {
       t[0] = c.x;
       t[1] = c.y;
       t[2] = c.z;
-      const double lum = luminance(c);
-      row_weights[static_cast<size_t>(x)] = lum * sin_mid;
-      lum_integral += lum * texel_solid_angle;
+      lum_integral += luminance(c) * texel_solid_angle;
       rgb_integral = rgb_integral + c * static_cast<float>(texel_solid_angle);
     }
-    row_totals[static_cast<size_t>(y)] = append_cdf(row_weights, &sky->conditional);
   }
-  append_cdf(row_totals, &sky->marginal);
+  if (lum_integral > 0) {  // a black sky is dropped by the light table
+    SkyDistributions d = build_sky_distributions(sky->texels, w, h);
+    sky->sky.blocks_x = d.blocks_x;
+    sky->sky.blocks_y = d.blocks_y;
+    sky->sky.block_width = d.block_width;
+    sky->sky.block_height = d.block_height;
+    sky->sky.normal_bins = d.normal_bins;
+    sky->block_cdfs = std::move(d.block_cdfs);
+    sky->texel_cdfs = std::move(d.texel_cdfs);
+  }
   sky->mean_luminance = lum_integral / (4 * kPi);
   sky->mean_radiance = rgb_integral * static_cast<float>(1.0 / (4 * kPi));
   return Status::ok();

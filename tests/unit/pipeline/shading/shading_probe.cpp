@@ -52,12 +52,12 @@ Result<std::unique_ptr<LightProbe>> LightProbe::create(const LightTable& table,
   auto texels = upload(table.sky_texels, "sky texels");
   if (!texels) return texels.status();
   p->sky_texels_ = std::move(texels.value());
-  auto marginal = upload(table.sky_marginal_cdf, "sky marginal");
+  auto marginal = upload(table.sky_block_cdfs, "sky marginal");
   if (!marginal) return marginal.status();
-  p->sky_marginal_ = std::move(marginal.value());
-  auto conditional = upload(table.sky_conditional_cdf, "sky conditional");
+  p->sky_block_cdfs_ = std::move(marginal.value());
+  auto conditional = upload(table.sky_texel_cdfs, "sky conditional");
   if (!conditional) return conditional.status();
-  p->sky_conditional_ = std::move(conditional.value());
+  p->sky_texel_cdfs_ = std::move(conditional.value());
   return p;
 }
 
@@ -84,7 +84,7 @@ Result<LightSamples> LightProbe::sample(const std::vector<cl::float4>& points,
   if (!wi_pdf || !rad || !info || !bary) return internal_error("allocating probe outputs");
   const cl_uint count = static_cast<cl_uint>(table_->lights.size());
   LUXEL_RETURN_IF_ERROR(kernel->set_args(lights_, cdf_, count, table_->sky, sky_texels_,
-                                         sky_marginal_, sky_conditional_, pts.value(), nrm.value(),
+                                         sky_block_cdfs_, sky_texel_cdfs_, pts.value(), nrm.value(),
                                          rnd.value(), static_cast<int>(n), wi_pdf.value(),
                                          rad.value(), info.value(), bary.value()));
   LUXEL_RETURN_IF_ERROR(ctx.launch(kernel.value(), n));
@@ -131,7 +131,7 @@ Result<std::vector<cl::float4>> LightProbe::sky(const std::vector<cl::float4>& d
   auto out = shared_context().alloc(n * sizeof(cl::float4), "sky out");
   if (!out) return out.status();
   LUXEL_RETURN_IF_ERROR(kernel->set_args(
-      table_->sky, sky_texels_, cdf_, table_->sky.light, sky_marginal_, sky_conditional_,
+      table_->sky, sky_texels_, cdf_, table_->sky.light, sky_block_cdfs_, sky_texel_cdfs_,
       db.value(), static_cast<int>(n), cl::float4{nrm.x, nrm.y, nrm.z, 0}, out.value()));
   LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), n));
   std::vector<cl::float4> r;

@@ -58,7 +58,7 @@ class LightProbe {
   LightProbe() = default;
   const LightTable* table_ = nullptr;
   const device::Program* program_ = nullptr;
-  device::Buffer lights_, cdf_, sky_texels_, sky_marginal_, sky_conditional_;
+  device::Buffer lights_, cdf_, sky_texels_, sky_block_cdfs_, sky_texel_cdfs_;
 };
 
 // lux_sample_cdf(cdf, n, u[i]) -> (index, pmf).
