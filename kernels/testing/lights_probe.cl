@@ -20,8 +20,9 @@ __kernel void probe_sample_lights(
   if (i >= count) return;
   const float4 r = randoms[i];
   LuxLightSample s;
-  const int ok = lux_sample_light(lights, light_select, light_count, sky, sky_texels, sky_block_cdfs,
-                                  sky_texel_cdfs, points[i].xyz, normals[i].xyz, r.x, r.yz, &s);
+  const int ok =
+      lux_sample_light(lights, light_select, light_count, sky, sky_texels, sky_block_cdfs,
+                       sky_texel_cdfs, points[i].xyz, normals[i].xyz, r.x, r.yz, &s);
   out_wi_pdf[i] = ok ? (float4)(s.wi, s.pdf) : (float4)(0.0f);
   out_radiance_dist[i] = ok ? (float4)(s.radiance, s.dist) : (float4)(0.0f);
   out_info[i] = (int4)(s.light, s.triangle, s.is_delta | (s.mis << 1), ok);
