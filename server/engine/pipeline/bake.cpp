@@ -78,7 +78,7 @@ Status Baker::setup() {
     if (!compaction) return compaction.status();
     compaction_ = std::move(compaction.value());
   }
-  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, s_.params.texel_count);
+  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, s_.params.covered_count);
   if (!offsets) return offsets.status();
   offset_buffer_ = std::move(offsets.value());
   auto kernels = BakeKernels::create(ctx_, s_.features);
@@ -108,13 +108,14 @@ Status Baker::run_iteration(uint32_t batch) {
   a.params.paths = batch;
   a.params.first_path = paths_done_;
 
-  // 1. Texel domain, 2. radix sort by texel (only the bits the texel range
-  // needs), 3. offset buffer (Listing 3.1).
+  // 1. Texel domain, 2. radix sort by texel (keys are covered slots, which
+  // ascend with texels; only the bits the slot range needs), 3. offset
+  // buffer over slots (Listing 3.1).
   LUXEL_RETURN_IF_ERROR(launch(BakeKernel::texel_domain, cap));
   const int32_t count = static_cast<int32_t>(batch);
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.batch_count, &count, sizeof count));
   LUXEL_RETURN_IF_ERROR(sort_->enqueue(a.paths.keys, device::Buffer(), b_.batch_count, cap, 0,
-                                       RadixSort::bits_for(a.params.texel_count - 1)));
+                                       RadixSort::bits_for(a.params.covered_count - 1)));
   LUXEL_RETURN_IF_ERROR(
       offset_buffer_->enqueue(a.paths.keys, b_.batch_count, a.paths.offsets, b_.path_count));
 
@@ -185,7 +186,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
-    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, *hooks.resume));
+    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, *hooks.resume, s_.info.covered_texels));
     paths_done_ = hooks.resume->paths_done;
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
@@ -246,7 +247,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       BakeSnapshot snap;
       snap.width = s_.atlas.width;
       snap.height = s_.atlas.height;
-      fill_irradiance(s_, state.value().mean, snap.irradiance);
+      fill_irradiance(s_, state.value().mean, 0, snap.irradiance);
       // The image's own statistics (error, min spp), not those of the last
       // progress report.
       LUXEL_RETURN_IF_ERROR(compute_stats(progress));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "pipeline/sample_slice.h"
 #include "pipeline/shading/texture_pack.h"
 
 namespace luxel::pipeline {
@@ -46,10 +47,12 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   LUXEL_RETURN_IF_ERROR(a.upload(g.materials, s.data.materials, "materials"));
   LUXEL_RETURN_IF_ERROR(a.upload(g.atlas_uvs, s.data.atlas_uvs, "atlas uvs"));
   LUXEL_RETURN_IF_ERROR(a.upload(g.instance_first, s.data.instance_first, "instance table"));
-  LUXEL_RETURN_IF_ERROR(a.upload(g.covered, s.info.covered_texels, "covered texels"));
-  // The sample-info buffer (§4.2): per-texel offsets plus the packed words.
-  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_offsets, s.info.offsets, "sample-info offsets"));
-  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_words, s.info.words, "sample-info words"));
+  // The covered texels and their sample-info records (§4.2), per covered
+  // slot: offsets[slot] is the first word of covered[slot]'s record.
+  const SampleSlice slice = slice_sample_info(s.info, 0, s.info.covered_texels.size());
+  LUXEL_RETURN_IF_ERROR(a.upload(g.covered, slice.covered, "covered texels"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_offsets, slice.offsets, "sample-info offsets"));
+  LUXEL_RETURN_IF_ERROR(a.upload(g.sample_words, slice.words, "sample-info words"));
 
   // Lights, sky and textures only when the features use them.
   LightArgs& l = args.lights;
@@ -75,9 +78,10 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   return a.upload(t.texels, pack.value().texels, "texture texels");
 }
 
-Status allocate_paths(Allocator& a, size_t p, size_t texels, PathArgs& g) {
+// slots: covered texels (the offset buffer is indexed by covered slot).
+Status allocate_paths(Allocator& a, size_t p, size_t slots, PathArgs& g) {
   LUXEL_RETURN_IF_ERROR(a.alloc(g.keys, p * 4, "path texel keys"));
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.offsets, (texels + 1) * 4, "offset buffer"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.offsets, (slots + 1) * 4, "offset buffer"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.paths, p * sizeof(cl::LuxPath), "paths"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.rays, p * sizeof(cl::LuxRay), "rays"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.hits, p * sizeof(cl::LuxHit), "hits"));
@@ -88,13 +92,15 @@ Status allocate_paths(Allocator& a, size_t p, size_t texels, PathArgs& g) {
   return a.alloc(g.tagged, p * 4, "tagged slots");
 }
 
+// Per-texel state exists only for covered texels, indexed by covered slot.
 Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& settings,
                       AccumArgs& g) {
+  const size_t c = s.params.covered_count;
   const size_t t = s.params.texel_count;
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.mean, t * 16, "accumulated mean"));
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.m2, t * 16, "accumulated M2"));
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.weight, t * 8, "accumulated weight"));
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.spp, t * 4, "samples per texel"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.mean, c * 16, "accumulated mean"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.m2, c * 16, "accumulated M2"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.weight, c * 8, "accumulated weight"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.spp, c * 4, "samples per texel"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.nonfinite, 4, "non-finite counter"));
   const size_t groups = (s.params.covered_count + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
   LUXEL_RETURN_IF_ERROR(a.alloc(g.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
@@ -106,10 +112,11 @@ Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& sett
   return a.upload(g.reference, *settings.reference, "reference lightmap");
 }
 
-// Directional encodings: one sample record per path, the state per texel.
+// Directional encodings: one sample record per path, the state per covered
+// texel.
 Status allocate_encodings(Allocator& a, const BakeSetup& s, EncodingArgs& g) {
   const size_t p = s.capacity;
-  const size_t t = s.params.texel_count;
+  const size_t t = s.params.covered_count;
   const bool basis = !s.plan.empty();
   LUXEL_RETURN_IF_ERROR(
       a.alloc(g.basis_samples, basis ? p * sizeof(cl::LuxBasisSample) : 16, "basis samples"));
@@ -133,7 +140,7 @@ Result<BakeBuffers> BakeBuffers::create(device::Context& ctx, const scene::Scene
   LUXEL_RETURN_IF_ERROR(a.alloc(b.count_b, 4, "live count b"));
   LUXEL_RETURN_IF_ERROR(a.alloc(b.active_a, p * 4, "active paths a"));
   LUXEL_RETURN_IF_ERROR(a.alloc(b.active_b, p * 4, "active paths b"));
-  LUXEL_RETURN_IF_ERROR(allocate_paths(a, p, setup.params.texel_count, b.args_.paths));
+  LUXEL_RETURN_IF_ERROR(allocate_paths(a, p, setup.params.covered_count, b.args_.paths));
   LUXEL_RETURN_IF_ERROR(allocate_accum(a, setup, settings, b.args_.accum));
   LUXEL_RETURN_IF_ERROR(allocate_encodings(a, setup, b.args_.encodings));
   const AccumArgs& acc = b.args_.accum;
@@ -146,20 +153,21 @@ Result<BakeBuffers> BakeBuffers::create(device::Context& ctx, const scene::Scene
 
 Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c) const {
   const cl::LuxBakeParams& p = args_.params;
-  const size_t t = p.texel_count;
+  const size_t n = p.covered_count;
   const AccumArgs& acc = args_.accum;
   c.width = p.width;
   c.height = p.height;
-  c.mean.resize(t);
-  c.m2.resize(t);
-  c.weight.resize(t);
-  c.spp.resize(t);
+  c.per_texel = false;
+  c.mean.resize(n);
+  c.m2.resize(n);
+  c.weight.resize(n);
+  c.spp.resize(n);
   uint32_t nonfinite = 0;
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.mean, c.mean));
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.m2, c.m2));
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.weight, c.weight));
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.spp, c.spp));
-  c.basis.resize(p.encoding_count == 0 ? 0 : t * p.basis_stride);
+  c.basis.resize(p.encoding_count == 0 ? 0 : n * p.basis_stride);
   if (!c.basis.empty()) LUXEL_RETURN_IF_ERROR(ctx.read(args_.encodings.basis_state, c.basis));
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.nonfinite, &nonfinite, sizeof nonfinite));
   LUXEL_RETURN_IF_ERROR(ctx.finish());
@@ -167,25 +175,32 @@ Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c) const {
   return Status::ok();
 }
 
-Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c) {
+Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c,
+                                  const std::vector<uint32_t>& covered) {
   const cl::LuxBakeParams& p = args_.params;
   if (c.width != p.width || c.height != p.height)
     return invalid_argument(strprintf("checkpoint is for a %ux%u lightmap, this bake is %ux%u",
                                       c.width, c.height, p.width, p.height));
+  // Version-1/2 checkpoints hold whole images: keep the covered texels.
+  const BakeCheckpoint compact = c.per_texel ? compact_checkpoint(c, covered) : BakeCheckpoint{};
+  const BakeCheckpoint& k = c.per_texel ? compact : c;
+  const size_t n = p.covered_count;
+  if (k.mean.size() != n || k.m2.size() != n || k.weight.size() != n || k.spp.size() != n)
+    return invalid_argument(
+        strprintf("checkpoint holds %zu covered texels, this bake has %zu", k.mean.size(), n));
   const AccumArgs& acc = args_.accum;
   const uint32_t nonfinite = static_cast<uint32_t>(c.nonfinite);
-  LUXEL_RETURN_IF_ERROR(ctx.write(acc.mean, c.mean.data(), c.mean.size() * sizeof(cl::float4)));
-  LUXEL_RETURN_IF_ERROR(ctx.write(acc.m2, c.m2.data(), c.m2.size() * sizeof(cl::float4)));
-  LUXEL_RETURN_IF_ERROR(
-      ctx.write(acc.weight, c.weight.data(), c.weight.size() * sizeof(cl::float2)));
-  LUXEL_RETURN_IF_ERROR(ctx.write(acc.spp, c.spp.data(), c.spp.size() * sizeof(uint32_t)));
-  const size_t basis_size = p.encoding_count == 0 ? 0 : size_t{p.texel_count} * p.basis_stride;
-  if (c.basis.size() != basis_size)
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.mean, k.mean.data(), n * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.m2, k.m2.data(), n * sizeof(cl::float4)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.weight, k.weight.data(), n * sizeof(cl::float2)));
+  LUXEL_RETURN_IF_ERROR(ctx.write(acc.spp, k.spp.data(), n * sizeof(uint32_t)));
+  const size_t basis_size = p.encoding_count == 0 ? 0 : n * p.basis_stride;
+  if (k.basis.size() != basis_size)
     return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",
-                                      c.basis.size(), basis_size));
+                                      k.basis.size(), basis_size));
   if (basis_size > 0)
     LUXEL_RETURN_IF_ERROR(
-        ctx.write(args_.encodings.basis_state, c.basis.data(), basis_size * sizeof(cl::float4)));
+        ctx.write(args_.encodings.basis_state, k.basis.data(), basis_size * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx.write(acc.nonfinite, &nonfinite, sizeof nonfinite));
   return ctx.finish();
 }

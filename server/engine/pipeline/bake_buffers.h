@@ -36,9 +36,12 @@ class BakeBuffers {
   size_t device_bytes() const { return device_bytes_; }
 
   // The accumulation state (mean, M2, weights, samples, encodings, dropped
-  // count) to and from a checkpoint; width/height are checked on restore.
+  // count) to and from a checkpoint, per covered slot; width/height and the
+  // covered count are checked on restore. covered: the setup's covered
+  // texels, to compact a whole-image (version 1-2) checkpoint.
   Status read_state(device::Context& ctx, BakeCheckpoint& c) const;
-  Status restore_state(device::Context& ctx, const BakeCheckpoint& c);
+  Status restore_state(device::Context& ctx, const BakeCheckpoint& c,
+                       const std::vector<uint32_t>& covered);
 
  private:
   BakeArgs args_;

@@ -25,17 +25,25 @@ struct BakeCheckpoint {
   uint64_t nonfinite = 0;
   std::vector<double> series;  // ErrorSample fields flattened, series_stride per point
   size_t series_stride = 7;    // 7 (with rmse, rel_mse); 5 in version-1 files
+  // Per covered texel, in the order of SampleInfo::covered_texels (version
+  // 3). Versions 1-2 stored whole images (per_texel): the bake keeps the
+  // covered texels on restore (compact_checkpoint).
+  bool per_texel = false;
   std::vector<cl::float4> mean, m2;
   std::vector<cl::float2> weight;
   std::vector<uint32_t> spp;
-  // Directional encodings: texels * stride float4 (empty without encodings).
+  // Directional encodings: entries * stride float4 (empty without encodings).
   std::vector<cl::float4> basis;
 };
 
-// Binary, little-endian, "LUXCKPT2" magic (version 1, without the basis
-// state, is still read), 128-bit checksum at the end.
+// Binary, little-endian, "LUXCKPT3" magic (versions 1, without the basis
+// state, and 2, whole images, are still read), 128-bit checksum at the end.
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
 // NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
 Result<BakeCheckpoint> read_checkpoint(const std::string& path);
+
+// A whole-image (per_texel) checkpoint's state at the given texels (the
+// per-slot form); other fields are copied.
+BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uint32_t>& texels);
 
 }  // namespace luxel::pipeline
