@@ -2,7 +2,9 @@
 // the device buffers (bake_buffers) and kernels (bake_kernels), runs the
 // wavefront stages of one iteration in order, and asks the policy
 // (bake_policy) when to report, snapshot, checkpoint and stop; the result is
-// put together by bake_assembly.
+// put together by bake_assembly. When the per-texel state does not fit the
+// device-memory budget, the covered texels are baked in tiles, one after
+// another (pipeline/tile_plan.h has the turn policy).
 #include "pipeline/bake.h"
 
 #include <chrono>
@@ -16,6 +18,7 @@
 #include "pipeline/primitives/offset_buffer.h"
 #include "pipeline/primitives/radix_sort.h"
 #include "pipeline/primitives/stream_compaction.h"
+#include "pipeline/tile_plan.h"
 
 namespace luxel::pipeline {
 
@@ -40,9 +43,13 @@ class Baker {
     LUXEL_RETURN_IF_ERROR(kernels_.bind(k, b_.args()));
     return ctx_.launch(kernels_[k], global, local);
   }
+  Status plan_memory();
   Status run_iteration(uint32_t batch);
   Status trace_shadows(bool texel_point);
   Status compute_stats(BakeProgress& p);
+  // The whole bake's progress from the current tile's (identity untiled).
+  BakeProgress globalize(const BakeProgress& tile) const;
+  bool tiled() const { return plan_.tiles.size() > 1; }
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -60,16 +67,26 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
-  uint64_t paths_done_ = 0;
+  TilePlan plan_;
+  size_t budget_ = 0;
+  uint64_t paths_done_ = 0;  // of the current tile (of the bake, untiled)
+
+  // Tiled bakes: the finished tiles' share of the progress statistics.
+  struct Done {
+    size_t slots = 0;                // covered slots of the finished tiles
+    uint64_t paths = 0;              // their paths
+    double error_sum = 0;            // sum of their texels' relative errors
+    double sq_sum = 0, rel_sum = 0;  // with a reference: RMSE^2 and relMSE sums
+    uint32_t min_spp = 0xFFFFFFFFu;
+  } done_;
+  // With a reference: the RMSE^2 and relMSE sums of each tile while black.
+  std::vector<std::pair<double, double>> black_ref_;
 };
 
 Status Baker::setup() {
   auto setup = prepare_bake(scene_, settings_, ctx_);
   if (!setup) return setup.status();
   s_ = std::move(setup.value());
-  auto buffers = BakeBuffers::create(ctx_, scene_, s_, settings_);
-  if (!buffers) return buffers.status();
-  b_ = std::move(buffers.value());
   auto sort = RadixSort::create(ctx_, s_.capacity);
   if (!sort) return sort.status();
   sort_ = std::move(sort.value());
@@ -78,13 +95,83 @@ Status Baker::setup() {
     if (!compaction) return compaction.status();
     compaction_ = std::move(compaction.value());
   }
-  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, s_.params.covered_count);
+  LUXEL_RETURN_IF_ERROR(plan_memory());
+  auto buffers =
+      BakeBuffers::create(ctx_, scene_, s_, settings_, {plan_.max_slots, plan_.max_words});
+  if (!buffers) return buffers.status();
+  b_ = std::move(buffers.value());
+  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, static_cast<uint32_t>(plan_.max_slots));
   if (!offsets) return offsets.status();
   offset_buffer_ = std::move(offsets.value());
   auto kernels = BakeKernels::create(ctx_, s_.features);
   if (!kernels) return kernels.status();
   kernels_ = std::move(kernels.value());
   return Status::ok();
+}
+
+// The tiles of the covered texels under the device-memory budget.
+Status Baker::plan_memory() {
+  const device::DeviceInfo& info = ctx_.info();
+  budget_ = settings_.device_memory_budget_mib > 0
+                ? static_cast<size_t>(settings_.device_memory_budget_mib * 1048576.0)
+                : default_memory_budget(info.global_mem_bytes);
+  auto fixed = BakeBuffers::fixed_bytes(ctx_, scene_, s_, settings_);
+  if (!fixed) return fixed.status();
+  MemoryModel m;
+  m.budget = budget_;
+  m.max_alloc = info.max_alloc_bytes;
+  m.fixed = fixed.value() + s_.tracer->device_bytes() + sort_->device_bytes() +
+            (compaction_ ? compaction_->device_bytes() : 0);
+  m.per_slot = BakeBuffers::per_slot_bytes(s_);
+  m.largest_per_slot = BakeBuffers::largest_per_slot_bytes(s_);
+  // The Gaussian filter gathers neighbours' paths of the same iteration,
+  // across tile edges too.
+  m.tileable = settings_.filter != Filter::kGaussian;
+  m.why_not =
+      "settings.filter 'gaussian' gathers the paths of neighbouring texels, which may lie "
+      "in another tile (use the box filter, or a larger budget)";
+  auto plan = plan_tiles(s_.info, m);
+  if (!plan) return plan.status();
+  plan_ = std::move(plan.value());
+  if (!tiled() || !settings_.reference) return Status::ok();
+  const std::vector<float>& ref = *settings_.reference;
+  for (const Tile& t : plan_.tiles) {
+    double sq = 0, rel = 0;
+    for (size_t k = t.begin; k < t.end; ++k) {
+      const float* r = &ref[size_t{s_.info.covered_texels[k]} * 4];
+      for (int c = 0; c < 3; ++c) {
+        const double r2 = double{r[c]} * r[c];
+        sq += r2 / 3.0;
+        rel += r2 / (r2 + 1e-2) / 3.0;
+      }
+    }
+    black_ref_.push_back({sq, rel});
+  }
+  return Status::ok();
+}
+
+BakeProgress Baker::globalize(const BakeProgress& tile) const {
+  if (!tiled()) return tile;
+  BakeProgress p = tile;
+  const double n = b_.args().params.covered_count;
+  const double all = static_cast<double>(s_.info.covered_texels.size());
+  const size_t black = s_.info.covered_texels.size() - done_.slots - b_.args().params.covered_count;
+  double sq_black = 0, rel_black = 0;
+  for (size_t i = plan_.tiles.size(); i-- > 0 && plan_.tiles[i].begin >= done_.slots + n;) {
+    if (i < black_ref_.size()) {
+      sq_black += black_ref_[i].first;
+      rel_black += black_ref_[i].second;
+    }
+  }
+  p.paths = done_.paths + tile.paths;
+  p.mean_spp = static_cast<double>(p.paths) / all;
+  p.min_spp = black > 0 ? 0 : std::min(done_.min_spp, tile.min_spp);
+  p.error = (done_.error_sum + tile.error * n + static_cast<double>(black)) / all;
+  if (settings_.reference) {
+    p.rmse = std::sqrt((done_.sq_sum + tile.rmse * tile.rmse * n + sq_black) / all);
+    p.rel_mse = (done_.rel_sum + tile.rel_mse * n + rel_black) / all;
+  }
+  return p;
 }
 
 // Any-hit queries for the active list's shadow rays, then their results: into
@@ -180,9 +267,16 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   const auto t_setup = Clock::now();
   ctx_.timer().reset();
   LUXEL_RETURN_IF_ERROR(setup());
+  if (hooks.resume && tiled())
+    return resource_exhausted(strprintf(
+        "cannot resume: this bake is baked in %zu tiles under settings.device_memory_budget_mib "
+        "(%zu MiB), and only bakes in one tile write checkpoints",
+        plan_.tiles.size(), budget_ >> 20));
   BakeResult result;
-  BakeProgress progress;
+  begin_result(s_, result);
+  BakeProgress progress;  // the whole bake's
   double resumed_elapsed = 0;
+  LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
@@ -201,8 +295,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto elapsed = [&] { return resumed_elapsed + seconds_since(t_start); };
   auto last_report = Clock::now(), last_snapshot = last_report, last_checkpoint = last_report;
   // Statistics, then the progress callback; false: the host cancels.
+  // `tile_progress` gets the current tile's own figures (the error rule's).
+  BakeProgress tile_progress;
   auto report = [&](bool final_report) -> Result<bool> {
-    LUXEL_RETURN_IF_ERROR(compute_stats(progress));
+    LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
+    const uint32_t iteration = progress.iteration;
+    progress = globalize(tile_progress);
+    progress.iteration = iteration;
     progress.elapsed_s = elapsed();
     policy.estimate(progress, final_report);
     // The final report after a stopping rule repeats the last point: replace it.
@@ -216,74 +315,110 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto cancelled = [&] { return hooks.cancel && hooks.cancel->load(); };
 
   Termination why = Termination::kSamples;
-  for (;;) {
-    const uint64_t batch = policy.next_batch(s_.capacity, paths_done_);
-    {
-      std::unique_lock<std::mutex> turn;
-      if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
-      LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
-      LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  for (size_t ti = 0; ti < plan_.tiles.size(); ++ti) {
+    const Tile& tile = plan_.tiles[ti];
+    // The tile's stopping rules (tile_plan.h): its texels' samples, its
+    // share of the time budget, the target error on its texels.
+    BakeSettings tile_settings = settings_;
+    if (tiled() && settings_.time_budget_s > 0)
+      tile_settings.time_budget_s = settings_.time_budget_s * static_cast<double>(tile.end) /
+                                    static_cast<double>(s_.info.covered_texels.size());
+    const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin);
+    if (ti > 0) {
+      LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));
+      paths_done_ = 0;
     }
-    ++progress.iteration;
-    if (auto stop = policy.stop_after_iteration(paths_done_, elapsed(), cancelled())) {
-      why = *stop;
-      break;
-    }
-    if (policy.report_due(seconds_since(last_report))) {
-      auto keep_going = report(false);
-      if (!keep_going) return keep_going.status();
-      if (policy.error_reached(progress)) {
-        why = Termination::kError;
+    for (;;) {
+      const uint64_t batch = tile_policy.next_batch(s_.capacity, paths_done_);
+      {
+        std::unique_lock<std::mutex> turn;
+        if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+        LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
+        LUXEL_RETURN_IF_ERROR(ctx_.finish());
+      }
+      ++progress.iteration;
+      if (auto stop = tile_policy.stop_after_iteration(paths_done_, elapsed(), cancelled())) {
+        why = *stop;
         break;
       }
-      if (!keep_going.value()) {
-        why = Termination::kCancelled;
-        break;
+      if (policy.report_due(seconds_since(last_report))) {
+        auto keep_going = report(false);
+        if (!keep_going) return keep_going.status();
+        if (tile_policy.error_reached(tile_progress)) {
+          why = Termination::kError;
+          break;
+        }
+        if (!keep_going.value()) {
+          why = Termination::kCancelled;
+          break;
+        }
+      }
+      if (policy.snapshot_due(seconds_since(last_snapshot))) {
+        auto state = read_state();
+        if (!state) return state.status();
+        BakeSnapshot snap;
+        snap.width = s_.atlas.width;
+        snap.height = s_.atlas.height;
+        snap.irradiance = result.irradiance;  // the finished tiles (zero untiled)
+        fill_irradiance(s_, state.value().mean, tile.begin, snap.irradiance);
+        // The image's own statistics (error, min spp), not those of the last
+        // progress report.
+        LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
+        snap.progress = globalize(tile_progress);
+        snap.progress.iteration = progress.iteration;
+        snap.progress.elapsed_s = elapsed();
+        hooks.on_snapshot(snap);
+        last_snapshot = Clock::now();
+      }
+      const bool requested = hooks.checkpoint_now && hooks.checkpoint_now->load();
+      // Checkpoints hold the device state of the whole atlas: bakes in
+      // tiles write none.
+      if (!tiled() && policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
+        auto state = read_state();
+        if (!state) return state.status();
+        BakeCheckpoint& c = state.value();
+        c.fingerprint = hooks.fingerprint;
+        c.iteration = progress.iteration;
+        c.elapsed_s = elapsed();
+        series_to_checkpoint(result.series, c);
+        hooks.on_checkpoint(c);
+        last_checkpoint = Clock::now();
+        // A host that checkpoints to stop (daemon shutdown) cancels in the
+        // hook: stop here rather than trace an iteration the checkpoint lacks.
+        if (cancelled()) {
+          why = Termination::kCancelled;
+          break;
+        }
       }
     }
-    if (policy.snapshot_due(seconds_since(last_snapshot))) {
-      auto state = read_state();
-      if (!state) return state.status();
-      BakeSnapshot snap;
-      snap.width = s_.atlas.width;
-      snap.height = s_.atlas.height;
-      fill_irradiance(s_, state.value().mean, 0, snap.irradiance);
-      // The image's own statistics (error, min spp), not those of the last
-      // progress report.
-      LUXEL_RETURN_IF_ERROR(compute_stats(progress));
-      snap.progress = progress;
-      snap.progress.elapsed_s = elapsed();
-      hooks.on_snapshot(snap);
-      last_snapshot = Clock::now();
+    // The tile's state into the result; its statistics into done_.
+    const bool last = ti + 1 == plan_.tiles.size() || why == Termination::kCancelled;
+    if (last) {
+      result.seconds = elapsed();
+      auto final_report = report(true);
+      if (!final_report) return final_report.status();
+    } else {
+      LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
     }
-    const bool requested = hooks.checkpoint_now && hooks.checkpoint_now->load();
-    if (policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
-      auto state = read_state();
-      if (!state) return state.status();
-      BakeCheckpoint& c = state.value();
-      c.fingerprint = hooks.fingerprint;
-      c.iteration = progress.iteration;
-      c.elapsed_s = elapsed();
-      series_to_checkpoint(result.series, c);
-      hooks.on_checkpoint(c);
-      last_checkpoint = Clock::now();
-      // A host that checkpoints to stop (daemon shutdown) cancels in the
-      // hook: stop here rather than trace an iteration the checkpoint lacks.
-      if (cancelled()) {
-        why = Termination::kCancelled;
-        break;
-      }
+    auto state = read_state();
+    if (!state) return state.status();
+    write_state(s_, state.value(), tile.begin, result);
+    const double n = static_cast<double>(tile.end - tile.begin);
+    done_.slots = tile.end;
+    done_.paths += paths_done_;
+    done_.error_sum += tile_progress.error * n;
+    if (settings_.reference) {
+      done_.sq_sum += tile_progress.rmse * tile_progress.rmse * n;
+      done_.rel_sum += tile_progress.rel_mse * n;
     }
+    done_.min_spp = std::min(done_.min_spp, tile_progress.min_spp);
+    if (last) break;
   }
-  result.seconds = elapsed();
-  auto final_report = report(true);
-  if (!final_report) return final_report.status();
-
-  auto state = read_state();
-  if (!state) return state.status();
-  assemble_result(s_, settings_, state.value(), result);
+  finish_result(s_, settings_, result);
   record_final_progress(progress, ctx_, result);
   result.termination = why;
+  result.tiles = plan_.tiles.size();
+  result.device_memory_budget = budget_;
   result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() + sort_->device_bytes() +
                              (compaction_ ? compaction_->device_bytes() : 0);
   return result;
