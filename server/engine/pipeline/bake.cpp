@@ -50,6 +50,12 @@ class Baker {
   // The whole bake's progress from the current tile's (identity untiled).
   BakeProgress globalize(const BakeProgress& tile) const;
   bool tiled() const { return plan_.tiles.size() > 1; }
+  // Restores a checkpoint: finished tiles into the result, the current
+  // tile onto the device (loaded); returns the current tile's index.
+  Result<size_t> resume_tiles(const BakeCheckpoint& c, BakeResult& result);
+  // A checkpoint of the whole atlas from the current tile's state.
+  BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile) const;
+  static void append_state(BakeCheckpoint& to, const BakeCheckpoint& from);
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -78,7 +84,12 @@ class Baker {
     double error_sum = 0;            // sum of their texels' relative errors
     double sq_sum = 0, rel_sum = 0;  // with a reference: RMSE^2 and relMSE sums
     uint32_t min_spp = 0xFFFFFFFFu;
+    uint64_t nonfinite = 0;
   } done_;
+  // Tiled bakes with checkpoints: the finished tiles' state (slots
+  // [0, done_.slots)), for the checkpoints of later tiles.
+  bool keep_finished_ = false;
+  BakeCheckpoint finished_;
   // With a reference: the RMSE^2 and relMSE sums of each tile while black.
   std::vector<std::pair<double, double>> black_ref_;
 };
@@ -174,6 +185,82 @@ BakeProgress Baker::globalize(const BakeProgress& tile) const {
   return p;
 }
 
+void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
+  to.mean.insert(to.mean.end(), from.mean.begin(), from.mean.end());
+  to.m2.insert(to.m2.end(), from.m2.begin(), from.m2.end());
+  to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
+  to.spp.insert(to.spp.end(), from.spp.begin(), from.spp.end());
+  to.basis.insert(to.basis.end(), from.basis.begin(), from.basis.end());
+}
+
+BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) const {
+  BakeCheckpoint c = finished_;
+  c.width = current.width;
+  c.height = current.height;
+  c.paths_done = current.paths_done;
+  c.nonfinite = current.nonfinite;
+  append_state(c, current);
+  const size_t n = s_.info.covered_texels.size();
+  const size_t stride = s_.params.encoding_count == 0 ? 0 : s_.params.basis_stride;
+  c.mean.resize(n, cl::float4{});
+  c.m2.resize(n, cl::float4{});
+  c.weight.resize(n, cl::float2{});
+  c.spp.resize(n, 0);
+  c.basis.resize(n * stride, cl::float4{});
+  const Tile& t = plan_.tiles[ti];
+  c.tile.assign(kTileFields, 0.0);
+  c.tile[kTileIndex] = static_cast<double>(ti);
+  c.tile[kTileBegin] = static_cast<double>(t.begin);
+  c.tile[kTileEnd] = static_cast<double>(t.end);
+  c.tile[kTileCount] = static_cast<double>(plan_.tiles.size());
+  c.tile[kTileDonePaths] = static_cast<double>(done_.paths);
+  c.tile[kTileDoneNonfinite] = static_cast<double>(done_.nonfinite);
+  c.tile[kTileDoneError] = done_.error_sum;
+  c.tile[kTileDoneSq] = done_.sq_sum;
+  c.tile[kTileDoneRel] = done_.rel_sum;
+  c.tile[kTileDoneMinSpp] = static_cast<double>(done_.min_spp);
+  return c;
+}
+
+Result<size_t> Baker::resume_tiles(const BakeCheckpoint& c, BakeResult& result) {
+  const auto other_plan = [&] {
+    return invalid_argument(
+        strprintf("checkpoint was written under another tile plan than this bake's %zu tile(s) "
+                  "(settings.device_memory_budget_mib or the device changed)",
+                  plan_.tiles.size()));
+  };
+  if (c.tile.empty()) {
+    if (tiled()) return other_plan();
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, c, s_.info.covered_texels));
+    return size_t{0};
+  }
+  const auto ti = static_cast<size_t>(c.tile[kTileIndex]);
+  if (c.tile[kTileCount] != static_cast<double>(plan_.tiles.size()) || ti >= plan_.tiles.size() ||
+      c.tile[kTileBegin] != static_cast<double>(plan_.tiles[ti].begin) ||
+      c.tile[kTileEnd] != static_cast<double>(plan_.tiles[ti].end) ||
+      c.mean.size() != s_.info.covered_texels.size())
+    return other_plan();
+  const Tile& t = plan_.tiles[ti];
+  if (t.begin > 0) {
+    BakeCheckpoint done = slice_checkpoint(c, 0, t.begin);
+    done.nonfinite = static_cast<uint64_t>(c.tile[kTileDoneNonfinite]);
+    write_state(s_, done, 0, result);
+    if (keep_finished_) finished_ = std::move(done);
+  }
+  done_.slots = t.begin;
+  done_.paths = static_cast<uint64_t>(c.tile[kTileDonePaths]);
+  done_.nonfinite = static_cast<uint64_t>(c.tile[kTileDoneNonfinite]);
+  done_.error_sum = c.tile[kTileDoneError];
+  done_.sq_sum = c.tile[kTileDoneSq];
+  done_.rel_sum = c.tile[kTileDoneRel];
+  done_.min_spp = static_cast<uint32_t>(c.tile[kTileDoneMinSpp]);
+  LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, t.begin, t.end));
+  LUXEL_RETURN_IF_ERROR(
+      b_.restore_state(ctx_, slice_checkpoint(c, t.begin, t.end), s_.info.covered_texels));
+  return ti;
+}
+
 // Any-hit queries for the active list's shadow rays, then their results: into
 // the paths' radiance, or (texel point with directional encodings) into the
 // basis samples, which keep the light sample apart from the first segment.
@@ -267,24 +354,24 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   const auto t_setup = Clock::now();
   ctx_.timer().reset();
   LUXEL_RETURN_IF_ERROR(setup());
-  if (hooks.resume && tiled())
-    return resource_exhausted(strprintf(
-        "cannot resume: this bake is baked in %zu tiles under settings.device_memory_budget_mib "
-        "(%zu MiB), and only bakes in one tile write checkpoints",
-        plan_.tiles.size(), budget_ >> 20));
+  keep_finished_ = tiled() && static_cast<bool>(hooks.on_checkpoint);
   BakeResult result;
   begin_result(s_, result);
   BakeProgress progress;  // the whole bake's
   double resumed_elapsed = 0;
-  LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+  size_t first_tile = 0;
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
-    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, *hooks.resume, s_.info.covered_texels));
+    auto tile = resume_tiles(*hooks.resume, result);
+    if (!tile) return tile.status();
+    first_tile = tile.value();
     paths_done_ = hooks.resume->paths_done;
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
     result.series = series_from_checkpoint(*hooks.resume);
+  } else {
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   result.setup_s = seconds_since(t_setup);
@@ -315,7 +402,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto cancelled = [&] { return hooks.cancel && hooks.cancel->load(); };
 
   Termination why = Termination::kSamples;
-  for (size_t ti = 0; ti < plan_.tiles.size(); ++ti) {
+  for (size_t ti = first_tile; ti < plan_.tiles.size(); ++ti) {
     const Tile& tile = plan_.tiles[ti];
     // The tile's stopping rules (tile_plan.h): its texels' samples, its
     // share of the time budget, the target error on its texels.
@@ -324,7 +411,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       tile_settings.time_budget_s = settings_.time_budget_s * static_cast<double>(tile.end) /
                                     static_cast<double>(s_.info.covered_texels.size());
     const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin);
-    if (ti > 0) {
+    if (ti > first_tile) {
       LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));
       paths_done_ = 0;
     }
@@ -371,11 +458,10 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
         last_snapshot = Clock::now();
       }
       const bool requested = hooks.checkpoint_now && hooks.checkpoint_now->load();
-      // Checkpoints hold the device state of the whole atlas: bakes in
-      // tiles write none.
-      if (!tiled() && policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
+      if (policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
         auto state = read_state();
         if (!state) return state.status();
+        if (tiled()) state.value() = tiled_checkpoint(state.value(), ti);
         BakeCheckpoint& c = state.value();
         c.fingerprint = hooks.fingerprint;
         c.iteration = progress.iteration;
@@ -403,9 +489,11 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto state = read_state();
     if (!state) return state.status();
     write_state(s_, state.value(), tile.begin, result);
+    if (keep_finished_) append_state(finished_, state.value());
     const double n = static_cast<double>(tile.end - tile.begin);
     done_.slots = tile.end;
     done_.paths += paths_done_;
+    done_.nonfinite += state.value().nonfinite;
     done_.error_sum += tile_progress.error * n;
     if (settings_.reference) {
       done_.sq_sum += tile_progress.rmse * tile_progress.rmse * n;

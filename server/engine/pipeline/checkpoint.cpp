@@ -84,6 +84,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   w.vec(c.weight);
   w.vec(c.spp);
   w.vec(c.basis);
+  w.vec(c.tile);
   const std::string sum = Hasher().add(w.bytes()).hex();
   w.raw(sum.data(), sum.size());
   return write_file_atomic(path, w.bytes().data(), w.bytes().size());
@@ -115,7 +116,7 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
       !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
-      (!v1 && !r.vec(c.basis, texels_max * 64)))
+      (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   c.series_stride = v1 ? 5 : 7;
@@ -124,7 +125,7 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   const size_t n = c.mean.size();
   if ((c.per_texel ? n != texels : n > texels) || n == 0 || c.m2.size() != n ||
       c.weight.size() != n || c.spp.size() != n || c.series.size() % c.series_stride != 0 ||
-      c.basis.size() % n != 0)
+      c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields))
     return corrupt("array sizes do not match the lightmap");
   return c;
 }
@@ -148,6 +149,24 @@ BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uin
     k.spp[i] = c.spp[t];
     for (size_t j = 0; j < stride; ++j) k.basis[i * stride + j] = c.basis[t * stride + j];
   }
+  return k;
+}
+
+BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t end) {
+  BakeCheckpoint k;
+  k.fingerprint = c.fingerprint;
+  k.width = c.width;
+  k.height = c.height;
+  k.paths_done = c.paths_done;
+  k.iteration = c.iteration;
+  k.elapsed_s = c.elapsed_s;
+  k.nonfinite = c.nonfinite;
+  k.mean.assign(c.mean.begin() + begin, c.mean.begin() + end);
+  k.m2.assign(c.m2.begin() + begin, c.m2.begin() + end);
+  k.weight.assign(c.weight.begin() + begin, c.weight.begin() + end);
+  k.spp.assign(c.spp.begin() + begin, c.spp.begin() + end);
+  const size_t stride = c.mean.empty() ? 0 : c.basis.size() / c.mean.size();
+  k.basis.assign(c.basis.begin() + begin * stride, c.basis.begin() + end * stride);
   return k;
 }
 

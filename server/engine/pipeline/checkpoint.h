@@ -34,6 +34,28 @@ struct BakeCheckpoint {
   std::vector<uint32_t> spp;
   // Directional encodings: entries * stride float4 (empty without encodings).
   std::vector<cl::float4> basis;
+  // Bakes in tiles (pipeline/tile_plan.h): the state above covers every
+  // covered texel (finished tiles, the current one, zeros after it) and
+  // paths_done / nonfinite are the current tile's. Empty for a bake in one
+  // tile. Fields: kTileFields below.
+  std::vector<double> tile;
+};
+
+// BakeCheckpoint::tile: the current tile's index, first and end slot, the
+// tile count, then the finished tiles' paths, non-finite drops, relative
+// error sum, RMSE^2 and relMSE sums and minimum spp.
+enum TileField {
+  kTileIndex,
+  kTileBegin,
+  kTileEnd,
+  kTileCount,
+  kTileDonePaths,
+  kTileDoneNonfinite,
+  kTileDoneError,
+  kTileDoneSq,
+  kTileDoneRel,
+  kTileDoneMinSpp,
+  kTileFields
 };
 
 // Binary, little-endian, "LUXCKPT3" magic (versions 1, without the basis
@@ -45,5 +67,9 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path);
 // A whole-image (per_texel) checkpoint's state at the given texels (the
 // per-slot form); other fields are copied.
 BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uint32_t>& texels);
+
+// The per-slot state of slots [begin, end) (mean, M2, weight, spp, basis);
+// other fields are copied, except the series and tile record.
+BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t end);
 
 }  // namespace luxel::pipeline

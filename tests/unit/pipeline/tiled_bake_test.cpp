@@ -9,6 +9,7 @@
 
 #include "device/context.h"
 #include "pipeline/bake.h"
+#include "pipeline/checkpoint.h"
 #include "test_scenes.h"
 
 namespace luxel {
@@ -76,6 +77,58 @@ TEST_F(TiledBakeTest, TilesGiveTheBitsOfTheUntiledBake) {
   EXPECT_EQ(t.min_spp, 12u);
   EXPECT_NEAR(t.error, u.error, 1e-6);
   EXPECT_EQ(t.termination, pipeline::Termination::kSamples);
+}
+
+// Checkpoints of a tiled bake hold the whole atlas (finished tiles, the
+// current one, zeros after it); resuming from one in a later tile gives the
+// bits of the uninterrupted bake.
+TEST_F(TiledBakeTest, ResumeInALaterTileIsBitIdentical) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  auto untiled = pipeline::bake(scene, settings(), *ctx_);
+  ASSERT_TRUE(untiled);
+  pipeline::BakeSettings s = settings();
+  s.device_memory_budget_mib = tight_budget_mib(untiled.value());
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "tiled";
+  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  auto tiled = pipeline::bake(scene, s, *ctx_, hooks);
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  ASSERT_GE(tiled.value().tiles, 3u);
+  expect_same_bits(untiled.value().irradiance, tiled.value().irradiance, "irradiance");
+
+  // A checkpoint inside a later tile, through a file.
+  const pipeline::BakeCheckpoint* pick = nullptr;
+  for (const auto& c : checkpoints)
+    if (!pick && !c.tile.empty() && c.tile[pipeline::kTileIndex] >= 1 && c.paths_done > 0)
+      pick = &c;
+  ASSERT_NE(pick, nullptr);
+  const std::string path = ::testing::TempDir() + "/luxel_tiled.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, *pick).is_ok());
+  auto loaded = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(loaded) << loaded.status().to_string();
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "tiled";
+  resume.resume = &loaded.value();
+  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  const pipeline::BakeResult& u = untiled.value();
+  const pipeline::BakeResult& r = resumed.value();
+  expect_same_bits(u.irradiance, r.irradiance, "irradiance");
+  expect_same_bits(u.samples, r.samples, "samples");
+  for (size_t k = 0; k < u.encodings.size(); ++k)
+    expect_same_bits(u.encodings[k].coefficients, r.encodings[k].coefficients,
+                     u.encodings[k].name.c_str());
+  EXPECT_EQ(u.paths, r.paths);
+  EXPECT_EQ(u.nonfinite_dropped, r.nonfinite_dropped);
+
+  // Under another tile plan the checkpoint is refused, naming the budget.
+  pipeline::BakeSettings other = settings();
+  auto refused = pipeline::bake(scene, other, *ctx_, resume);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("device_memory_budget_mib"), std::string::npos)
+      << refused.status().message();
 }
 
 // Progress over a tiled bake covers the whole atlas: paths only grow, and
