@@ -112,7 +112,9 @@ int run_bake(const std::vector<std::string>& args) {
   if (r.nonfinite_dropped > 0)
     std::printf("warning    %llu non-finite samples dropped\n",
                 static_cast<unsigned long long>(r.nonfinite_dropped));
-  std::printf("memory     %.1f MiB on the device\n", r.peak_device_bytes / 1048576.0);
+  std::printf("memory     %.1f MiB on the device (budget %.0f MiB, %zu tile%s)\n",
+              r.peak_device_bytes / 1048576.0, r.device_memory_budget / 1048576.0, r.tiles,
+              r.tiles == 1 ? "" : "s");
   for (const auto& e : r.encodings)
     std::printf("encoding   %-15s %2d coefficients x RGB, %s\n", e.name.c_str(), e.count,
                 e.residual_rms >= 0 ? strprintf("running residual %.4g", e.residual_rms).c_str()

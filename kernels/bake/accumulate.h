@@ -69,28 +69,45 @@ inline int lux_path_sample(__global const LuxPath* paths,
 }
 
 #if LUX_BASIS
-#define LUX_BASIS_ADD(p, w)                                                            \
-  do {                                                                                 \
-    const LuxBasisSample bs_ = basis_samples[p];                                       \
-    lux_basis_accumulate(basis_state + (size_t)texel * params.basis_stride, encodings, \
-                         params.encoding_count, basis_dirs, &bs_, l, nee, (w),         \
-                         params.acceleration);                                         \
+#define LUX_BASIS_ADD(p, w)                                                        \
+  do {                                                                             \
+    const LuxBasisSample bs_ = basis_samples[p];                                   \
+    lux_basis_accumulate(basis_state + (size_t)c * params.basis_stride, encodings, \
+                         params.encoding_count, basis_dirs, &bs_, l, nee, (w),     \
+                         params.acceleration);                                     \
   } while (0)
 #else
 #define LUX_BASIS_ADD(p, w)
 #endif
 
+#if LUX_FILTER_GAUSSIAN
+/* The covered slot of a texel (covered[] ascends), or 0xFFFFFFFF: paths and
+ * state are indexed by slot, the filter's neighbours are found by texel. */
+inline uint lux_covered_slot(__global const uint* covered, uint n, uint texel) {
+  uint lo = 0, hi = n;
+  while (lo < hi) {
+    const uint mid = lo + (hi - lo) / 2u;
+    if (covered[mid] < texel)
+      lo = mid + 1u;
+    else
+      hi = mid;
+  }
+  return lo < n && covered[lo] == texel ? lo : 0xFFFFFFFFu;
+}
+#endif
+
+/* c = the covered slot: the index of the texel's state and paths. */
 inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
   if (c >= params.covered_count) return;
   const uint texel = covered[c];
   uint first = 0, end = 0;
-  const int own = lux_offset_range(offsets, texel, params.texel_count, &first, &end);
+  const int own = lux_offset_range(offsets, c, params.covered_count, &first, &end);
 #if !LUX_FILTER_GAUSSIAN
   if (!own) return;
 #endif
   /* This texel's running state (the buffers are mean, m2, weight). */
-  float4 t_mean = mean[texel], t_m2 = m2[texel];
-  float2 t_weight = weight[texel];
+  float4 t_mean = mean[c], t_m2 = m2[c];
+  float2 t_weight = weight[c];
   uint dropped = 0;
   const int tx = (int)(texel % params.width), ty = (int)(texel / params.width);
 #if LUX_FILTER_GAUSSIAN
@@ -111,9 +128,9 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
       const int nx = tx + dx, ny = ty + dy;
       if (nx < 0 || ny < 0 || nx >= (int)params.width || ny >= (int)params.height) continue;
       uint nf, ne;
-      if (!lux_offset_range(offsets, (uint)(ny * (int)params.width + nx), params.texel_count, &nf,
-                            &ne))
-        continue;
+      const uint ns =
+          lux_covered_slot(covered, params.covered_count, (uint)(ny * (int)params.width + nx));
+      if (!lux_offset_range(offsets, ns, params.covered_count, &nf, &ne)) continue;
       for (uint p = nf; p < ne; ++p) {
         const LuxPath path = paths[p];
         if (dx != 0 || dy != 0) {
@@ -148,10 +165,10 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
     LUX_BASIS_ADD(p, 1.0f);
   }
 #endif
-  mean[texel] = t_mean;
-  m2[texel] = t_m2;
-  weight[texel] = t_weight;
-  spp[texel] += own ? end - first : 0u;
+  mean[c] = t_mean;
+  m2[c] = t_m2;
+  weight[c] = t_weight;
+  spp[c] += own ? end - first : 0u;
   if (dropped) atomic_add(nonfinite, dropped);
 }
 

@@ -17,17 +17,18 @@
 
 inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   if (gid >= (uint)*count) return;
-  const uint texel = keys[gid];
+  const uint slot = keys[gid]; /* covered slot: index of the per-texel state */
+  const uint texel = covered[slot];
   /* Rank of this path among the texel's paths of this iteration: the
    * texel's sample index continues its progressive sequence (§6.2) without
    * atomics, so results do not depend on scheduling. */
   uint first = 0, end = 0;
-  lux_offset_range(offsets, texel, params.texel_count, &first, &end);
-  const uint index = spp[texel] + (gid - first);
+  lux_offset_range(offsets, slot, params.covered_count, &first, &end);
+  const uint index = spp[slot] + (gid - first);
   const uint seed = lux_texel_seed(texel, params.bake_seed);
 
   /* Listing 4.2: choose one of the texel's valid Hammersley positions. */
-  const uint word_offset = sample_offsets[texel];
+  const uint word_offset = sample_offsets[slot];
   const uint valid = popcount(sample_words[word_offset]) + popcount(sample_words[word_offset + 1]);
   const float u_sample = lux_sample_1d(index, LUX_DIM_TEXEL_SAMPLE, seed);
   const uint rank = min((uint)(u_sample * (float)valid), valid - 1u);

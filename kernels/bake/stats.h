@@ -23,7 +23,7 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
   if (gid < params.covered_count) {
     const uint texel = covered[gid];
     if (params.has_reference) {
-      const float3 d = mean[texel].xyz - reference[texel].xyz;
+      const float3 d = mean[gid].xyz - reference[texel].xyz;
       const float3 r = reference[texel].xyz;
       const float3 d2 = d * d;
       ref_err = (float2)((d2.x + d2.y + d2.z) / 3.0f,
@@ -31,14 +31,15 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
                           d2.z / (r.z * r.z + 1e-2f)) /
                              3.0f);
     }
-    t_spp = spp[texel];
-    const float2 w = weight[texel];
+    /* State is per covered slot; the reference is a full image. */
+    t_spp = spp[gid];
+    const float2 w = weight[gid];
     if (t_spp < 2u || !(w.x > 0.0f)) {
       err = 1.0f;
     } else {
-      const float var = fmax(0.0f, m2[texel].w / w.x);
+      const float var = fmax(0.0f, m2[gid].w / w.x);
       const float n_eff = w.x * w.x / fmax(w.y, 1e-30f);
-      const float y = mean[texel].w;
+      const float y = mean[gid].w;
       const float se = sqrt(var / n_eff);
       err = se <= 0.0f ? 0.0f : (y > 0.0f ? fmin(se / y, 1.0f) : 1.0f);
     }

@@ -40,11 +40,13 @@ inline uint lux_permute(uint i, uint n, uint p) {
 }
 
 /* Path g of the bake (counted over the whole bake, first_path + gid) takes
- * texel covered[perm_pass(g mod N)] with pass = g / N: every texel with a
+ * covered slot perm_pass(g mod N) with pass = g / N: every texel with a
  * valid sample has the same probability, the lightmap fills in random order
  * (a preview of the whole map early), and after k passes every texel has
  * exactly k samples. Slots past the iteration's path count get the invalid
- * key, which the radix sort moves to the end. */
+ * key, which the radix sort moves to the end. The key is the covered slot
+ * (index into `covered`), not the texel: per-texel state is stored per slot,
+ * and slots ascend with texels, so the sorted order is the same either way. */
 inline void lux_texel_domain(uint gid, LUX_STAGE_PARAMS(texel_domain)) {
   if (gid >= params.capacity) return;
   if (gid >= params.paths) {
@@ -56,7 +58,7 @@ inline void lux_texel_domain(uint gid, LUX_STAGE_PARAMS(texel_domain)) {
   const uint pass = (uint)(g / n);
   const uint j = (uint)(g % n);
   const uint pattern = lux_hash_combine(params.bake_seed ^ 0x9e3779b9u, lux_hash_u32(pass));
-  keys[gid] = covered[lux_permute(j, n, pattern)];
+  keys[gid] = lux_permute(j, n, pattern);
 }
 
 #endif /* LUXEL_BAKE_TEXEL_DOMAIN_H */

@@ -1,6 +1,12 @@
 // bench_bake: throughput of the bake engine.
 //
 //   bench_bake [--spp N] [--resolution N] [--quick] [SCENE...]
+//   bench_bake --memory ENCODINGS [--budget MIB] [--spp N] [--resolution N] [SCENE...]
+//
+// --memory: one bake per scene with the directional encodings given
+// (comma-separated, e.g. sg12) under the device-memory budget (default: the
+// engine's), 1 bounce; prints time, peak device memory, tiles and the
+// host's peak resident memory. No files are written.
 //
 // For each scene, in one run on one device:
 //  1. paths/s and the per-kernel breakdown at 1 and 4 bounces through each
@@ -10,6 +16,8 @@
 //     (time for the same number of paths, as a ratio to the default).
 // Scenes get a constant sky and a sun so outdoor scenes have light.
 #include "pipeline/bake.h"
+
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -60,6 +68,8 @@ int main(int argc, char** argv) {
   uint32_t spp = 16;
   int resolution = 256;
   bool quick = false;
+  std::string memory_encodings;
+  double budget_mib = 0;
   std::vector<std::string> scenes;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -69,6 +79,10 @@ int main(int argc, char** argv) {
       resolution = std::atoi(argv[++i]);
     else if (a == "--quick")
       quick = true;
+    else if (a == "--memory" && i + 1 < argc)
+      memory_encodings = argv[++i];
+    else if (a == "--budget" && i + 1 < argc)
+      budget_mib = std::atof(argv[++i]);
     else
       scenes.push_back(a);
   }
@@ -99,6 +113,30 @@ int main(int argc, char** argv) {
     base.lights.sun.illuminance = 5.0f;
     base.progress_interval_s = 1e9;
     std::printf("scene %s\n", path.c_str());
+    if (!memory_encodings.empty()) {
+      auto st = base;
+      st.max_bounces = 1;
+      st.device_memory_budget_mib = budget_mib;
+      for (size_t b = 0, e; b <= memory_encodings.size(); b = e + 1) {
+        e = std::min(memory_encodings.find(',', b), memory_encodings.size());
+        const std::string name = memory_encodings.substr(b, e - b);
+        if (!name.empty() && name != "irradiance") st.encodings.names.push_back(name);
+      }
+      auto r = pipeline::bake(s.value(), st, *ctx.value());
+      if (!r) {
+        std::fprintf(stderr, "bench_bake: %s\n", r.status().to_string().c_str());
+        return 1;
+      }
+      rusage ru{};
+      getrusage(RUSAGE_SELF, &ru);
+      std::printf(
+          "  %d^2 %s: setup %.1f s, tracing %.1f s, %zu covered texels, peak device %.1f MiB "
+          "(budget %.0f MiB, %zu tiles), host peak RSS %.1f MiB\n",
+          resolution, memory_encodings.c_str(), r.value().setup_s, r.value().seconds,
+          r.value().covered_texels, r.value().peak_device_bytes / 1048576.0,
+          r.value().device_memory_budget / 1048576.0, r.value().tiles, ru.ru_maxrss / 1024.0);
+      continue;
+    }
 
     std::printf("  %-28s %9s %9s %10s %8s  %s\n", "configuration", "seconds", "Mpaths/s",
                 "kernel ms", "dev MiB", "largest kernels");

@@ -51,6 +51,11 @@ Json stats_to_json(const Manifest::Stats& s) {
     j["rmse"] = s.rmse;
     j["rel_mse"] = s.rel_mse;
   }
+  if (s.peak_device_bytes > 0) {
+    j["peak_device_bytes"] = s.peak_device_bytes;
+    j["device_memory_budget"] = s.device_memory_budget;
+    j["tiles"] = s.tiles;
+  }
   return j;
 }
 
@@ -245,6 +250,11 @@ Status read_stats(const Json& j, const std::string& what, Manifest::Stats& s) {
   if (j.contains("rmse")) {
     LUXEL_RETURN_IF_ERROR(f.real("rmse", s.rmse));
     LUXEL_RETURN_IF_ERROR(f.real("rel_mse", s.rel_mse));
+  }
+  if (j.contains("peak_device_bytes")) {
+    LUXEL_RETURN_IF_ERROR(f.unsigned64("peak_device_bytes", s.peak_device_bytes));
+    LUXEL_RETURN_IF_ERROR(f.unsigned64("device_memory_budget", s.device_memory_budget));
+    LUXEL_RETURN_IF_ERROR(f.unsigned64("tiles", s.tiles));
   }
   return Status::ok();
 }

@@ -83,6 +83,10 @@ struct Manifest {
     uint64_t nonfinite_dropped = 0;
     std::string termination;  // why the bake stopped: "samples", "time", "error", ...
     size_t covered_texels = 0;
+    // Device memory: the bake's buffers at their peak, the budget it was
+    // planned within, and the tiles of covered texels it took turns in
+    // (0 / absent in JSON: not recorded).
+    uint64_t peak_device_bytes = 0, device_memory_budget = 0, tiles = 0;
   } stats;
 
   int dilation_texels = 0;  // dilation radius applied to the images (>= 0)

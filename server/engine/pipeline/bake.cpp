@@ -2,7 +2,9 @@
 // the device buffers (bake_buffers) and kernels (bake_kernels), runs the
 // wavefront stages of one iteration in order, and asks the policy
 // (bake_policy) when to report, snapshot, checkpoint and stop; the result is
-// put together by bake_assembly.
+// put together by bake_assembly. When the per-texel state does not fit the
+// device-memory budget, the covered texels are baked in tiles, one after
+// another (pipeline/tile_plan.h has the turn policy).
 #include "pipeline/bake.h"
 
 #include <chrono>
@@ -16,6 +18,7 @@
 #include "pipeline/primitives/offset_buffer.h"
 #include "pipeline/primitives/radix_sort.h"
 #include "pipeline/primitives/stream_compaction.h"
+#include "pipeline/tile_plan.h"
 
 namespace luxel::pipeline {
 
@@ -40,9 +43,19 @@ class Baker {
     LUXEL_RETURN_IF_ERROR(kernels_.bind(k, b_.args()));
     return ctx_.launch(kernels_[k], global, local);
   }
+  Status plan_memory();
   Status run_iteration(uint32_t batch);
   Status trace_shadows(bool texel_point);
   Status compute_stats(BakeProgress& p);
+  // The whole bake's progress from the current tile's (identity untiled).
+  BakeProgress globalize(const BakeProgress& tile) const;
+  bool tiled() const { return plan_.tiles.size() > 1; }
+  // Restores a checkpoint: finished tiles into the result, the current
+  // tile onto the device (loaded); returns the current tile's index.
+  Result<size_t> resume_tiles(const BakeCheckpoint& c, BakeResult& result);
+  // A checkpoint of the whole atlas from the current tile's state.
+  BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile) const;
+  static void append_state(BakeCheckpoint& to, const BakeCheckpoint& from);
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -60,16 +73,31 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
-  uint64_t paths_done_ = 0;
+  TilePlan plan_;
+  size_t budget_ = 0;
+  uint64_t paths_done_ = 0;  // of the current tile (of the bake, untiled)
+
+  // Tiled bakes: the finished tiles' share of the progress statistics.
+  struct Done {
+    size_t slots = 0;                // covered slots of the finished tiles
+    uint64_t paths = 0;              // their paths
+    double error_sum = 0;            // sum of their texels' relative errors
+    double sq_sum = 0, rel_sum = 0;  // with a reference: RMSE^2 and relMSE sums
+    uint32_t min_spp = 0xFFFFFFFFu;
+    uint64_t nonfinite = 0;
+  } done_;
+  // Tiled bakes with checkpoints: the finished tiles' state (slots
+  // [0, done_.slots)), for the checkpoints of later tiles.
+  bool keep_finished_ = false;
+  BakeCheckpoint finished_;
+  // With a reference: the RMSE^2 and relMSE sums of each tile while black.
+  std::vector<std::pair<double, double>> black_ref_;
 };
 
 Status Baker::setup() {
   auto setup = prepare_bake(scene_, settings_, ctx_);
   if (!setup) return setup.status();
   s_ = std::move(setup.value());
-  auto buffers = BakeBuffers::create(ctx_, scene_, s_, settings_);
-  if (!buffers) return buffers.status();
-  b_ = std::move(buffers.value());
   auto sort = RadixSort::create(ctx_, s_.capacity);
   if (!sort) return sort.status();
   sort_ = std::move(sort.value());
@@ -78,13 +106,159 @@ Status Baker::setup() {
     if (!compaction) return compaction.status();
     compaction_ = std::move(compaction.value());
   }
-  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, s_.params.texel_count);
+  LUXEL_RETURN_IF_ERROR(plan_memory());
+  auto buffers =
+      BakeBuffers::create(ctx_, scene_, s_, settings_, {plan_.max_slots, plan_.max_words});
+  if (!buffers) return buffers.status();
+  b_ = std::move(buffers.value());
+  auto offsets = OffsetBuffer::create(ctx_, s_.capacity, static_cast<uint32_t>(plan_.max_slots));
   if (!offsets) return offsets.status();
   offset_buffer_ = std::move(offsets.value());
   auto kernels = BakeKernels::create(ctx_, s_.features);
   if (!kernels) return kernels.status();
   kernels_ = std::move(kernels.value());
   return Status::ok();
+}
+
+// The tiles of the covered texels under the device-memory budget.
+Status Baker::plan_memory() {
+  const device::DeviceInfo& info = ctx_.info();
+  budget_ = settings_.device_memory_budget_mib > 0
+                ? static_cast<size_t>(settings_.device_memory_budget_mib * 1048576.0)
+                : default_memory_budget(info.global_mem_bytes);
+  auto fixed = BakeBuffers::fixed_bytes(ctx_, scene_, s_, settings_);
+  if (!fixed) return fixed.status();
+  MemoryModel m;
+  m.budget = budget_;
+  m.max_alloc = info.max_alloc_bytes;
+  m.fixed = fixed.value() + s_.tracer->device_bytes() + sort_->device_bytes() +
+            (compaction_ ? compaction_->device_bytes() : 0);
+  m.per_slot = BakeBuffers::per_slot_bytes(s_);
+  m.largest_per_slot = BakeBuffers::largest_per_slot_bytes(s_);
+  // The Gaussian filter gathers neighbours' paths of the same iteration,
+  // across tile edges too.
+  m.tileable = settings_.filter != Filter::kGaussian;
+  m.why_not =
+      "settings.filter 'gaussian' gathers the paths of neighbouring texels, which may lie "
+      "in another tile (use the box filter, or a larger budget)";
+  auto plan = plan_tiles(s_.info, m);
+  if (!plan) return plan.status();
+  plan_ = std::move(plan.value());
+  if (!tiled() || !settings_.reference) return Status::ok();
+  const std::vector<float>& ref = *settings_.reference;
+  for (const Tile& t : plan_.tiles) {
+    double sq = 0, rel = 0;
+    for (size_t k = t.begin; k < t.end; ++k) {
+      const float* r = &ref[size_t{s_.info.covered_texels[k]} * 4];
+      for (int c = 0; c < 3; ++c) {
+        const double r2 = double{r[c]} * r[c];
+        sq += r2 / 3.0;
+        rel += r2 / (r2 + 1e-2) / 3.0;
+      }
+    }
+    black_ref_.push_back({sq, rel});
+  }
+  return Status::ok();
+}
+
+BakeProgress Baker::globalize(const BakeProgress& tile) const {
+  if (!tiled()) return tile;
+  BakeProgress p = tile;
+  const double n = b_.args().params.covered_count;
+  const double all = static_cast<double>(s_.info.covered_texels.size());
+  const size_t black = s_.info.covered_texels.size() - done_.slots - b_.args().params.covered_count;
+  double sq_black = 0, rel_black = 0;
+  for (size_t i = plan_.tiles.size(); i-- > 0 && plan_.tiles[i].begin >= done_.slots + n;) {
+    if (i < black_ref_.size()) {
+      sq_black += black_ref_[i].first;
+      rel_black += black_ref_[i].second;
+    }
+  }
+  p.paths = done_.paths + tile.paths;
+  p.mean_spp = static_cast<double>(p.paths) / all;
+  p.min_spp = black > 0 ? 0 : std::min(done_.min_spp, tile.min_spp);
+  p.error = (done_.error_sum + tile.error * n + static_cast<double>(black)) / all;
+  if (settings_.reference) {
+    p.rmse = std::sqrt((done_.sq_sum + tile.rmse * tile.rmse * n + sq_black) / all);
+    p.rel_mse = (done_.rel_sum + tile.rel_mse * n + rel_black) / all;
+  }
+  return p;
+}
+
+void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
+  to.mean.insert(to.mean.end(), from.mean.begin(), from.mean.end());
+  to.m2.insert(to.m2.end(), from.m2.begin(), from.m2.end());
+  to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
+  to.spp.insert(to.spp.end(), from.spp.begin(), from.spp.end());
+  to.basis.insert(to.basis.end(), from.basis.begin(), from.basis.end());
+}
+
+BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) const {
+  BakeCheckpoint c = finished_;
+  c.width = current.width;
+  c.height = current.height;
+  c.paths_done = current.paths_done;
+  c.nonfinite = current.nonfinite;
+  append_state(c, current);
+  const size_t n = s_.info.covered_texels.size();
+  const size_t stride = s_.params.encoding_count == 0 ? 0 : s_.params.basis_stride;
+  c.mean.resize(n, cl::float4{});
+  c.m2.resize(n, cl::float4{});
+  c.weight.resize(n, cl::float2{});
+  c.spp.resize(n, 0);
+  c.basis.resize(n * stride, cl::float4{});
+  const Tile& t = plan_.tiles[ti];
+  c.tile.assign(kTileFields, 0.0);
+  c.tile[kTileIndex] = static_cast<double>(ti);
+  c.tile[kTileBegin] = static_cast<double>(t.begin);
+  c.tile[kTileEnd] = static_cast<double>(t.end);
+  c.tile[kTileCount] = static_cast<double>(plan_.tiles.size());
+  c.tile[kTileDonePaths] = static_cast<double>(done_.paths);
+  c.tile[kTileDoneNonfinite] = static_cast<double>(done_.nonfinite);
+  c.tile[kTileDoneError] = done_.error_sum;
+  c.tile[kTileDoneSq] = done_.sq_sum;
+  c.tile[kTileDoneRel] = done_.rel_sum;
+  c.tile[kTileDoneMinSpp] = static_cast<double>(done_.min_spp);
+  return c;
+}
+
+Result<size_t> Baker::resume_tiles(const BakeCheckpoint& c, BakeResult& result) {
+  const auto other_plan = [&] {
+    return invalid_argument(
+        strprintf("checkpoint was written under another tile plan than this bake's %zu tile(s) "
+                  "(settings.device_memory_budget_mib or the device changed)",
+                  plan_.tiles.size()));
+  };
+  if (c.tile.empty()) {
+    if (tiled()) return other_plan();
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, c, s_.info.covered_texels));
+    return size_t{0};
+  }
+  const auto ti = static_cast<size_t>(c.tile[kTileIndex]);
+  if (c.tile[kTileCount] != static_cast<double>(plan_.tiles.size()) || ti >= plan_.tiles.size() ||
+      c.tile[kTileBegin] != static_cast<double>(plan_.tiles[ti].begin) ||
+      c.tile[kTileEnd] != static_cast<double>(plan_.tiles[ti].end) ||
+      c.mean.size() != s_.info.covered_texels.size())
+    return other_plan();
+  const Tile& t = plan_.tiles[ti];
+  if (t.begin > 0) {
+    BakeCheckpoint done = slice_checkpoint(c, 0, t.begin);
+    done.nonfinite = static_cast<uint64_t>(c.tile[kTileDoneNonfinite]);
+    write_state(s_, done, 0, result);
+    if (keep_finished_) finished_ = std::move(done);
+  }
+  done_.slots = t.begin;
+  done_.paths = static_cast<uint64_t>(c.tile[kTileDonePaths]);
+  done_.nonfinite = static_cast<uint64_t>(c.tile[kTileDoneNonfinite]);
+  done_.error_sum = c.tile[kTileDoneError];
+  done_.sq_sum = c.tile[kTileDoneSq];
+  done_.rel_sum = c.tile[kTileDoneRel];
+  done_.min_spp = static_cast<uint32_t>(c.tile[kTileDoneMinSpp]);
+  LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, t.begin, t.end));
+  LUXEL_RETURN_IF_ERROR(
+      b_.restore_state(ctx_, slice_checkpoint(c, t.begin, t.end), s_.info.covered_texels));
+  return ti;
 }
 
 // Any-hit queries for the active list's shadow rays, then their results: into
@@ -108,13 +282,14 @@ Status Baker::run_iteration(uint32_t batch) {
   a.params.paths = batch;
   a.params.first_path = paths_done_;
 
-  // 1. Texel domain, 2. radix sort by texel (only the bits the texel range
-  // needs), 3. offset buffer (Listing 3.1).
+  // 1. Texel domain, 2. radix sort by texel (keys are covered slots, which
+  // ascend with texels; only the bits the slot range needs), 3. offset
+  // buffer over slots (Listing 3.1).
   LUXEL_RETURN_IF_ERROR(launch(BakeKernel::texel_domain, cap));
   const int32_t count = static_cast<int32_t>(batch);
   LUXEL_RETURN_IF_ERROR(ctx_.write(b_.batch_count, &count, sizeof count));
   LUXEL_RETURN_IF_ERROR(sort_->enqueue(a.paths.keys, device::Buffer(), b_.batch_count, cap, 0,
-                                       RadixSort::bits_for(a.params.texel_count - 1)));
+                                       RadixSort::bits_for(a.params.covered_count - 1)));
   LUXEL_RETURN_IF_ERROR(
       offset_buffer_->enqueue(a.paths.keys, b_.batch_count, a.paths.offsets, b_.path_count));
 
@@ -179,17 +354,24 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   const auto t_setup = Clock::now();
   ctx_.timer().reset();
   LUXEL_RETURN_IF_ERROR(setup());
+  keep_finished_ = tiled() && static_cast<bool>(hooks.on_checkpoint);
   BakeResult result;
-  BakeProgress progress;
+  begin_result(s_, result);
+  BakeProgress progress;  // the whole bake's
   double resumed_elapsed = 0;
+  size_t first_tile = 0;
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
-    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, *hooks.resume));
+    auto tile = resume_tiles(*hooks.resume, result);
+    if (!tile) return tile.status();
+    first_tile = tile.value();
     paths_done_ = hooks.resume->paths_done;
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
     result.series = series_from_checkpoint(*hooks.resume);
+  } else {
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   result.setup_s = seconds_since(t_setup);
@@ -200,8 +382,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto elapsed = [&] { return resumed_elapsed + seconds_since(t_start); };
   auto last_report = Clock::now(), last_snapshot = last_report, last_checkpoint = last_report;
   // Statistics, then the progress callback; false: the host cancels.
+  // `tile_progress` gets the current tile's own figures (the error rule's).
+  BakeProgress tile_progress;
   auto report = [&](bool final_report) -> Result<bool> {
-    LUXEL_RETURN_IF_ERROR(compute_stats(progress));
+    LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
+    const uint32_t iteration = progress.iteration;
+    progress = globalize(tile_progress);
+    progress.iteration = iteration;
     progress.elapsed_s = elapsed();
     policy.estimate(progress, final_report);
     // The final report after a stopping rule repeats the last point: replace it.
@@ -215,74 +402,111 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   auto cancelled = [&] { return hooks.cancel && hooks.cancel->load(); };
 
   Termination why = Termination::kSamples;
-  for (;;) {
-    const uint64_t batch = policy.next_batch(s_.capacity, paths_done_);
-    {
-      std::unique_lock<std::mutex> turn;
-      if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
-      LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
-      LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  for (size_t ti = first_tile; ti < plan_.tiles.size(); ++ti) {
+    const Tile& tile = plan_.tiles[ti];
+    // The tile's stopping rules (tile_plan.h): its texels' samples, its
+    // share of the time budget, the target error on its texels.
+    BakeSettings tile_settings = settings_;
+    if (tiled() && settings_.time_budget_s > 0)
+      tile_settings.time_budget_s = settings_.time_budget_s * static_cast<double>(tile.end) /
+                                    static_cast<double>(s_.info.covered_texels.size());
+    const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin);
+    if (ti > first_tile) {
+      LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));
+      paths_done_ = 0;
     }
-    ++progress.iteration;
-    if (auto stop = policy.stop_after_iteration(paths_done_, elapsed(), cancelled())) {
-      why = *stop;
-      break;
-    }
-    if (policy.report_due(seconds_since(last_report))) {
-      auto keep_going = report(false);
-      if (!keep_going) return keep_going.status();
-      if (policy.error_reached(progress)) {
-        why = Termination::kError;
+    for (;;) {
+      const uint64_t batch = tile_policy.next_batch(s_.capacity, paths_done_);
+      {
+        std::unique_lock<std::mutex> turn;
+        if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+        LUXEL_RETURN_IF_ERROR(run_iteration(static_cast<uint32_t>(batch)));
+        LUXEL_RETURN_IF_ERROR(ctx_.finish());
+      }
+      ++progress.iteration;
+      if (auto stop = tile_policy.stop_after_iteration(paths_done_, elapsed(), cancelled())) {
+        why = *stop;
         break;
       }
-      if (!keep_going.value()) {
-        why = Termination::kCancelled;
-        break;
+      if (policy.report_due(seconds_since(last_report))) {
+        auto keep_going = report(false);
+        if (!keep_going) return keep_going.status();
+        if (tile_policy.error_reached(tile_progress)) {
+          why = Termination::kError;
+          break;
+        }
+        if (!keep_going.value()) {
+          why = Termination::kCancelled;
+          break;
+        }
+      }
+      if (policy.snapshot_due(seconds_since(last_snapshot))) {
+        auto state = read_state();
+        if (!state) return state.status();
+        BakeSnapshot snap;
+        snap.width = s_.atlas.width;
+        snap.height = s_.atlas.height;
+        snap.irradiance = result.irradiance;  // the finished tiles (zero untiled)
+        fill_irradiance(s_, state.value().mean, tile.begin, snap.irradiance);
+        // The image's own statistics (error, min spp), not those of the last
+        // progress report.
+        LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
+        snap.progress = globalize(tile_progress);
+        snap.progress.iteration = progress.iteration;
+        snap.progress.elapsed_s = elapsed();
+        hooks.on_snapshot(snap);
+        last_snapshot = Clock::now();
+      }
+      const bool requested = hooks.checkpoint_now && hooks.checkpoint_now->load();
+      if (policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
+        auto state = read_state();
+        if (!state) return state.status();
+        if (tiled()) state.value() = tiled_checkpoint(state.value(), ti);
+        BakeCheckpoint& c = state.value();
+        c.fingerprint = hooks.fingerprint;
+        c.iteration = progress.iteration;
+        c.elapsed_s = elapsed();
+        series_to_checkpoint(result.series, c);
+        hooks.on_checkpoint(c);
+        last_checkpoint = Clock::now();
+        // A host that checkpoints to stop (daemon shutdown) cancels in the
+        // hook: stop here rather than trace an iteration the checkpoint lacks.
+        if (cancelled()) {
+          why = Termination::kCancelled;
+          break;
+        }
       }
     }
-    if (policy.snapshot_due(seconds_since(last_snapshot))) {
-      auto state = read_state();
-      if (!state) return state.status();
-      BakeSnapshot snap;
-      snap.width = s_.atlas.width;
-      snap.height = s_.atlas.height;
-      fill_irradiance(s_, state.value().mean, snap.irradiance);
-      // The image's own statistics (error, min spp), not those of the last
-      // progress report.
-      LUXEL_RETURN_IF_ERROR(compute_stats(progress));
-      snap.progress = progress;
-      snap.progress.elapsed_s = elapsed();
-      hooks.on_snapshot(snap);
-      last_snapshot = Clock::now();
+    // The tile's state into the result; its statistics into done_.
+    const bool last = ti + 1 == plan_.tiles.size() || why == Termination::kCancelled;
+    if (last) {
+      result.seconds = elapsed();
+      auto final_report = report(true);
+      if (!final_report) return final_report.status();
+    } else {
+      LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
     }
-    const bool requested = hooks.checkpoint_now && hooks.checkpoint_now->load();
-    if (policy.checkpoint_due(seconds_since(last_checkpoint), requested)) {
-      auto state = read_state();
-      if (!state) return state.status();
-      BakeCheckpoint& c = state.value();
-      c.fingerprint = hooks.fingerprint;
-      c.iteration = progress.iteration;
-      c.elapsed_s = elapsed();
-      series_to_checkpoint(result.series, c);
-      hooks.on_checkpoint(c);
-      last_checkpoint = Clock::now();
-      // A host that checkpoints to stop (daemon shutdown) cancels in the
-      // hook: stop here rather than trace an iteration the checkpoint lacks.
-      if (cancelled()) {
-        why = Termination::kCancelled;
-        break;
-      }
+    auto state = read_state();
+    if (!state) return state.status();
+    write_state(s_, state.value(), tile.begin, result);
+    if (keep_finished_) append_state(finished_, state.value());
+    const double n = static_cast<double>(tile.end - tile.begin);
+    done_.slots = tile.end;
+    done_.paths += paths_done_;
+    done_.nonfinite += state.value().nonfinite;
+    done_.error_sum += tile_progress.error * n;
+    if (settings_.reference) {
+      done_.sq_sum += tile_progress.rmse * tile_progress.rmse * n;
+      done_.rel_sum += tile_progress.rel_mse * n;
     }
+    done_.min_spp = std::min(done_.min_spp, tile_progress.min_spp);
+    if (last) break;
   }
-  result.seconds = elapsed();
-  auto final_report = report(true);
-  if (!final_report) return final_report.status();
-
-  auto state = read_state();
-  if (!state) return state.status();
-  assemble_result(s_, settings_, state.value(), result);
+  finish_result(s_, settings_, result);
   record_final_progress(progress, ctx_, result);
   result.termination = why;
+  result.tiles = plan_.tiles.size();
+  result.device_memory_budget = budget_;
   result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() + sort_->device_bytes() +
                              (compaction_ ? compaction_->device_bytes() : 0);
   return result;

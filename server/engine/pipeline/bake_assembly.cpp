@@ -6,74 +6,93 @@
 
 namespace luxel::pipeline {
 
-void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean,
+void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean, size_t begin,
                      std::vector<float>& rgba) {
   const atlas::SampleInfo& info = setup.info;
-  rgba.assign(size_t{setup.params.texel_count} * 4, 0.0f);
-  for (uint32_t texel : info.covered_texels) {
+  rgba.resize(size_t{setup.params.texel_count} * 4, 0.0f);
+  for (size_t slot = 0; slot < mean.size(); ++slot) {
+    const uint32_t texel = info.covered_texels[begin + slot];
     const uint32_t off = info.offsets[texel];
     const int valid = std::popcount(info.words[off]) + std::popcount(info.words[off + 1]);
     float* px = &rgba[size_t{texel} * 4];
-    px[0] = mean[texel].x;
-    px[1] = mean[texel].y;
-    px[2] = mean[texel].z;
+    px[0] = mean[slot].x;
+    px[1] = mean[slot].y;
+    px[2] = mean[slot].z;
     px[3] = static_cast<float>(valid) / 64.0f;
   }
 }
 
-namespace {
-
-void assemble_encodings(const BakeSetup& setup, const BakeSettings& settings,
-                        const BakeCheckpoint& state, BakeResult& r) {
+void begin_result(const BakeSetup& setup, BakeResult& r) {
+  const size_t t = setup.params.texel_count;
+  r.width = setup.atlas.width;
+  r.height = setup.atlas.height;
+  r.irradiance.assign(t * 4, 0.0f);
+  r.samples.assign(t, 0.0f);
+  r.rel_error.assign(t, 0.0f);
+  r.nonfinite_dropped = 0;
+  r.encodings.clear();
   const EncodingPlan& plan = setup.plan;
-  const auto& covered = setup.info.covered_texels;
-  r.basis_bytes_per_texel = plan.bytes_per_texel();
   for (size_t k = 0; k < plan.encodings.size(); ++k) {
     EncodedLightmap e;
     e.name = plan.encodings[k].name();
     e.count = plan.table[k].count;
-    e.coefficients = extract_coefficients(plan, k, state.basis, setup.params.texel_count);
-    double residual = 0;
-    for (uint32_t texel : covered) {
-      const size_t header = size_t{texel} * plan.stride + plan.table[k].state_offset;
-      residual += std::sqrt(std::max(0.0f, state.basis[header].y));
-    }
-    const bool progressive = plan.table[k].solver != LUX_SOLVER_PROJECTION;
-    e.residual_rms = progressive ? residual / std::max<size_t>(1, covered.size()) : -1.0;
-    e.manifest_json = plan.encodings[k].describe_json(
-        e.name + ".exr", settings.encodings.acceleration, progressive ? e.residual_rms : -1.0);
+    e.coefficients.assign(t * static_cast<size_t>(e.count) * 3, 0.0f);
+    e.residual_rms = 0;  // the sum over covered texels until finish_result
     r.encodings.push_back(std::move(e));
   }
 }
 
-}  // namespace
-
-void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
-                     const BakeCheckpoint& state, BakeResult& r) {
-  const size_t t = setup.params.texel_count;
-  r.width = setup.atlas.width;
-  r.height = setup.atlas.height;
-  fill_irradiance(setup, state.mean, r.irradiance);
-  r.samples.assign(t, 0.0f);
-  r.rel_error.assign(t, 0.0f);
-  for (uint32_t texel : setup.info.covered_texels) {
-    r.samples[texel] = static_cast<float>(state.spp[texel]);
-    const double w = state.weight[texel].x, w2 = state.weight[texel].y;
-    if (state.spp[texel] >= 2 && w > 0 && state.mean[texel].w > 0) {
-      const double var = std::max(0.0, double{state.m2[texel].w} / w);
+void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin, BakeResult& r) {
+  const auto& covered = setup.info.covered_texels;
+  fill_irradiance(setup, state.mean, begin, r.irradiance);
+  for (size_t slot = 0; slot < state.spp.size(); ++slot) {
+    const uint32_t texel = covered[begin + slot];
+    r.samples[texel] = static_cast<float>(state.spp[slot]);
+    const double w = state.weight[slot].x, w2 = state.weight[slot].y;
+    if (state.spp[slot] >= 2 && w > 0 && state.mean[slot].w > 0) {
+      const double var = std::max(0.0, double{state.m2[slot].w} / w);
       const double n_eff = w * w / std::max(w2, 1e-30);
-      r.rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[texel].w);
+      r.rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[slot].w);
     }
   }
-  r.nonfinite_dropped = state.nonfinite;
-  assemble_encodings(setup, settings, state, r);
+  r.nonfinite_dropped += state.nonfinite;
+  const EncodingPlan& plan = setup.plan;
+  for (size_t k = 0; k < plan.encodings.size(); ++k) {
+    EncodedLightmap& e = r.encodings[k];
+    extract_coefficients(plan, k, state.basis, covered.data() + begin, state.spp.size(),
+                         e.coefficients);
+    for (size_t slot = 0; slot < state.spp.size(); ++slot) {
+      const size_t header = slot * plan.stride + plan.table[k].state_offset;
+      e.residual_rms += std::sqrt(std::max(0.0f, state.basis[header].y));
+    }
+  }
+}
+
+void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeResult& r) {
+  const EncodingPlan& plan = setup.plan;
+  const size_t covered = setup.info.covered_texels.size();
+  r.basis_bytes_per_texel = plan.bytes_per_texel();
+  for (size_t k = 0; k < plan.encodings.size(); ++k) {
+    EncodedLightmap& e = r.encodings[k];
+    const bool progressive = plan.table[k].solver != LUX_SOLVER_PROJECTION;
+    e.residual_rms = progressive ? e.residual_rms / std::max<size_t>(1, covered) : -1.0;
+    e.manifest_json = plan.encodings[k].describe_json(
+        e.name + ".exr", settings.encodings.acceleration, progressive ? e.residual_rms : -1.0);
+  }
   r.atlas = setup.atlas;
-  r.covered_texels = setup.info.covered_texels.size();
+  r.covered_texels = covered;
   device::FeatureSet reported = setup.features;
   for (const auto& [name, value] : setup.tracer->features().values()) reported.set(name, value);
   r.features = reported.describe();
   r.intersector = accel::intersector_name(setup.tracer->kind());
   r.sample_info_bytes = setup.info.bytes();
+}
+
+void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
+                     const BakeCheckpoint& state, BakeResult& r) {
+  begin_result(setup, r);
+  write_state(setup, state, 0, r);
+  finish_result(setup, settings, r);
 }
 
 void sum_stats(const std::vector<cl::LuxAccumStats>& partials, uint32_t covered, bool has_reference,

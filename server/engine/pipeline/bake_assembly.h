@@ -11,14 +11,23 @@
 
 namespace luxel::pipeline {
 
-// Irradiance RGBA from the running means; alpha = fraction of the texel's
-// 64 sample positions that lie on geometry.
-void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean,
+// Irradiance RGBA of covered slots [begin, begin + mean.size()) from their
+// running means, written into the whole image `rgba` (sized here when
+// empty); alpha = fraction of the texel's 64 sample positions that lie on
+// geometry.
+void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean, size_t begin,
                      std::vector<float>& rgba);
 
-// Fills r's images (irradiance, samples, rel_error), nonfinite count and
-// encodings from the state, and what the setup decided (atlas, coverage,
-// compiled features of the bake and the tracer, sample-info size).
+// The result in three steps, so a bake in tiles can write each tile's state
+// as it finishes: begin_result sizes r's images (zero) and encodings;
+// write_state writes the state of covered slots [begin, begin + n) (n =
+// state.spp.size()) into them (irradiance, samples, rel_error,
+// coefficients) and adds its nonfinite count; finish_result adds what the
+// setup decided (atlas, coverage, features, manifest entries).
+void begin_result(const BakeSetup& setup, BakeResult& r);
+void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin, BakeResult& r);
+void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeResult& r);
+// All three for one state of every covered slot.
 void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
                      const BakeCheckpoint& state, BakeResult& r);
 

@@ -16,12 +16,33 @@
 
 namespace luxel::pipeline {
 
+// What the per-slot buffers hold: the covered texels of the largest tile
+// and their sample-info words (pipeline/tile_plan.h).
+struct TileCapacity {
+  size_t slots = 0, words = 0;
+};
+
 class BakeBuffers {
  public:
-  // Uploads the scene groups, allocates the rest and clears the
-  // accumulation. INVALID_ARGUMENT for a reference of the wrong size.
+  // Uploads the scene groups and allocates the rest, the per-slot buffers
+  // for `cap`; load_tile then fills them. INVALID_ARGUMENT for a reference
+  // of the wrong size.
   static Result<BakeBuffers> create(device::Context& ctx, const scene::Scene& scene,
+                                    const BakeSetup& setup, const BakeSettings& settings,
+                                    const TileCapacity& cap);
+  // Bytes create() allocates beside the per-slot buffers (a dry run, no
+  // device memory), and bytes per covered slot: all per-slot buffers, and
+  // the largest one alone (the tile plan's memory model).
+  static Result<size_t> fixed_bytes(device::Context& ctx, const scene::Scene& scene,
                                     const BakeSetup& setup, const BakeSettings& settings);
+  static size_t per_slot_bytes(const BakeSetup& setup);
+  static size_t largest_per_slot_bytes(const BakeSetup& setup);
+
+  // Makes covered slots [begin, end) of the setup the current tile: uploads
+  // their texels and sample-info records, sets args().params.covered_count
+  // and clears the accumulation (state of slot k of the tile = covered slot
+  // begin + k).
+  Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end);
 
   // The kernels' arguments (args().params is the bake's LuxBakeParams).
   BakeArgs& args() { return args_; }
@@ -36,11 +57,16 @@ class BakeBuffers {
   size_t device_bytes() const { return device_bytes_; }
 
   // The accumulation state (mean, M2, weights, samples, encodings, dropped
-  // count) to and from a checkpoint; width/height are checked on restore.
+  // count) to and from a checkpoint, per covered slot; width/height and the
+  // covered count are checked on restore. covered: the setup's covered
+  // texels, to compact a whole-image (version 1-2) checkpoint.
   Status read_state(device::Context& ctx, BakeCheckpoint& c) const;
-  Status restore_state(device::Context& ctx, const BakeCheckpoint& c);
+  Status restore_state(device::Context& ctx, const BakeCheckpoint& c,
+                       const std::vector<uint32_t>& covered);
 
  private:
+  Status allocate(device::Context& ctx, const scene::Scene& scene, const BakeSetup& setup,
+                  const BakeSettings& settings, const TileCapacity& cap, bool dry);
   BakeArgs args_;
   size_t device_bytes_ = 0;
 };

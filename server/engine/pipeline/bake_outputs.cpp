@@ -76,6 +76,9 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.stats.nonfinite_dropped = result.nonfinite_dropped;
   m.stats.termination = termination_name(result.termination);
   m.stats.covered_texels = result.covered_texels;
+  m.stats.peak_device_bytes = result.peak_device_bytes;
+  m.stats.device_memory_budget = result.device_memory_budget;
+  m.stats.tiles = result.tiles;
   m.dilation_texels = settings.dilation_texels;
   for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
   if (!result.encodings.empty()) {

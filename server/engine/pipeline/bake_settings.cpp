@@ -42,6 +42,8 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["max_bounces"] = std::to_string(max_bounces);
   m["rr_depth"] = std::to_string(rr_depth);
   m["paths_per_iteration"] = std::to_string(paths_per_iteration);
+  if (device_memory_budget_mib > 0)
+    m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
   m["intersector"] = accel::intersector_name(intersector);

@@ -58,6 +58,10 @@ struct BakeSettings {
   int max_bounces = 4;  // indirect bounces after the texel point (0 = direct light only)
   int rr_depth = 3;     // Russian roulette from this vertex depth on
   uint32_t paths_per_iteration = 1u << 18;  // batch size: bounds device memory
+  // Device memory the bake may hold, MiB; past it (or past the device's
+  // largest allocation) the atlas is baked in tiles (pipeline/tile_plan.h).
+  // 0: min(80 % of the device's memory, 4 GiB).
+  double device_memory_budget_mib = 0;
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal

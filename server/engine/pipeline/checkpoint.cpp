@@ -10,7 +10,8 @@
 namespace luxel::pipeline {
 namespace {
 
-constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
+constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '3'};
+constexpr char kMagicV2[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
 
 class Writer {
@@ -67,6 +68,7 @@ class Reader {
 }  // namespace
 
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
+  if (c.per_texel) return internal_error("checkpoint: whole-image state is read, never written");
   Writer w;
   w.raw(kMagic, sizeof kMagic);
   w.vec(std::vector<char>(c.fingerprint.begin(), c.fingerprint.end()));
@@ -82,6 +84,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   w.vec(c.weight);
   w.vec(c.spp);
   w.vec(c.basis);
+  w.vec(c.tile);
   const std::string sum = Hasher().add(w.bytes()).hex();
   w.raw(sum.data(), sum.size());
   return write_file_atomic(path, w.bytes().data(), w.bytes().size());
@@ -105,22 +108,66 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   const uint64_t texels_max = uint64_t{1} << 28;
   if (!r.raw(magic, sizeof magic)) return corrupt("not a Luxel checkpoint");
   const bool v1 = std::memcmp(magic, kMagicV1, sizeof kMagicV1) == 0;
-  if (!v1 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+  const bool v2 = std::memcmp(magic, kMagicV2, sizeof kMagicV2) == 0;
+  if (!v1 && !v2 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
     return corrupt("not a Luxel checkpoint");
+  c.per_texel = v1 || v2;
   if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
       !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
-      (!v1 && !r.vec(c.basis, texels_max * 64)))
+      (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   c.series_stride = v1 ? 5 : 7;
+  // Whole images (versions 1-2) or at most one entry per texel (version 3).
   const size_t texels = size_t{c.width} * c.height;
-  if (c.mean.size() != texels || c.m2.size() != texels || c.weight.size() != texels ||
-      c.spp.size() != texels || c.series.size() % c.series_stride != 0 ||
-      c.basis.size() % texels != 0)
+  const size_t n = c.mean.size();
+  if ((c.per_texel ? n != texels : n > texels) || n == 0 || c.m2.size() != n ||
+      c.weight.size() != n || c.spp.size() != n || c.series.size() % c.series_stride != 0 ||
+      c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields))
     return corrupt("array sizes do not match the lightmap");
   return c;
+}
+
+BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uint32_t>& texels) {
+  BakeCheckpoint k = c;
+  k.per_texel = false;
+  const size_t n = texels.size();
+  k.mean.resize(n);
+  k.m2.resize(n);
+  k.weight.resize(n);
+  k.spp.resize(n);
+  const size_t stride = c.mean.empty() ? 0 : c.basis.size() / c.mean.size();
+  k.basis.resize(n * stride);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t t = texels[i];
+    if (t >= c.mean.size()) return {};  // not a whole image of this lightmap
+    k.mean[i] = c.mean[t];
+    k.m2[i] = c.m2[t];
+    k.weight[i] = c.weight[t];
+    k.spp[i] = c.spp[t];
+    for (size_t j = 0; j < stride; ++j) k.basis[i * stride + j] = c.basis[t * stride + j];
+  }
+  return k;
+}
+
+BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t end) {
+  BakeCheckpoint k;
+  k.fingerprint = c.fingerprint;
+  k.width = c.width;
+  k.height = c.height;
+  k.paths_done = c.paths_done;
+  k.iteration = c.iteration;
+  k.elapsed_s = c.elapsed_s;
+  k.nonfinite = c.nonfinite;
+  k.mean.assign(c.mean.begin() + begin, c.mean.begin() + end);
+  k.m2.assign(c.m2.begin() + begin, c.m2.begin() + end);
+  k.weight.assign(c.weight.begin() + begin, c.weight.begin() + end);
+  k.spp.assign(c.spp.begin() + begin, c.spp.begin() + end);
+  const size_t stride = c.mean.empty() ? 0 : c.basis.size() / c.mean.size();
+  k.basis.assign(c.basis.begin() + begin * stride, c.basis.begin() + end * stride);
+  return k;
 }
 
 }  // namespace luxel::pipeline

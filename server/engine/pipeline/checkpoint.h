@@ -25,17 +25,51 @@ struct BakeCheckpoint {
   uint64_t nonfinite = 0;
   std::vector<double> series;  // ErrorSample fields flattened, series_stride per point
   size_t series_stride = 7;    // 7 (with rmse, rel_mse); 5 in version-1 files
+  // Per covered texel, in the order of SampleInfo::covered_texels (version
+  // 3). Versions 1-2 stored whole images (per_texel): the bake keeps the
+  // covered texels on restore (compact_checkpoint).
+  bool per_texel = false;
   std::vector<cl::float4> mean, m2;
   std::vector<cl::float2> weight;
   std::vector<uint32_t> spp;
-  // Directional encodings: texels * stride float4 (empty without encodings).
+  // Directional encodings: entries * stride float4 (empty without encodings).
   std::vector<cl::float4> basis;
+  // Bakes in tiles (pipeline/tile_plan.h): the state above covers every
+  // covered texel (finished tiles, the current one, zeros after it) and
+  // paths_done / nonfinite are the current tile's. Empty for a bake in one
+  // tile. Fields: kTileFields below.
+  std::vector<double> tile;
 };
 
-// Binary, little-endian, "LUXCKPT2" magic (version 1, without the basis
-// state, is still read), 128-bit checksum at the end.
+// BakeCheckpoint::tile: the current tile's index, first and end slot, the
+// tile count, then the finished tiles' paths, non-finite drops, relative
+// error sum, RMSE^2 and relMSE sums and minimum spp.
+enum TileField {
+  kTileIndex,
+  kTileBegin,
+  kTileEnd,
+  kTileCount,
+  kTileDonePaths,
+  kTileDoneNonfinite,
+  kTileDoneError,
+  kTileDoneSq,
+  kTileDoneRel,
+  kTileDoneMinSpp,
+  kTileFields
+};
+
+// Binary, little-endian, "LUXCKPT3" magic (versions 1, without the basis
+// state, and 2, whole images, are still read), 128-bit checksum at the end.
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
 // NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
 Result<BakeCheckpoint> read_checkpoint(const std::string& path);
+
+// A whole-image (per_texel) checkpoint's state at the given texels (the
+// per-slot form); other fields are copied.
+BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uint32_t>& texels);
+
+// The per-slot state of slots [begin, end) (mean, M2, weight, spp, basis);
+// other fields are copied, except the series and tile record.
+BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t end);
 
 }  // namespace luxel::pipeline

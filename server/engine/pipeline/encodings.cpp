@@ -128,21 +128,20 @@ Result<EncodingPlan> plan_encodings(const EncodingSettings& settings) {
   return plan;
 }
 
-std::vector<float> extract_coefficients(const EncodingPlan& plan, size_t k,
-                                        const std::vector<cl::float4>& state, size_t texels) {
+void extract_coefficients(const EncodingPlan& plan, size_t k, const std::vector<cl::float4>& state,
+                          const uint32_t* texels, size_t n, std::vector<float>& out) {
   const cl::LuxEncoding& e = plan.table[k];
-  const size_t n = static_cast<size_t>(e.count);
-  std::vector<float> out(texels * n * 3, 0.0f);
-  if (state.size() < texels * plan.stride) return out;
-  for (size_t t = 0; t < texels; ++t) {
-    const cl::float4* lobes = &state[t * plan.stride + static_cast<size_t>(e.state_offset) + 1];
-    for (size_t i = 0; i < n; ++i) {
-      out[(t * n + i) * 3 + 0] = lobes[i].x;
-      out[(t * n + i) * 3 + 1] = lobes[i].y;
-      out[(t * n + i) * 3 + 2] = lobes[i].z;
+  const size_t count = static_cast<size_t>(e.count);
+  if (state.size() < n * plan.stride) return;
+  for (size_t slot = 0; slot < n; ++slot) {
+    const cl::float4* lobes = &state[slot * plan.stride + static_cast<size_t>(e.state_offset) + 1];
+    float* px = &out[size_t{texels[slot]} * count * 3];
+    for (size_t i = 0; i < count; ++i) {
+      px[i * 3 + 0] = lobes[i].x;
+      px[i * 3 + 1] = lobes[i].y;
+      px[i * 3 + 2] = lobes[i].z;
     }
   }
-  return out;
 }
 
 }  // namespace luxel::pipeline

@@ -72,9 +72,11 @@ struct EncodingPlan {
 
 Result<EncodingPlan> plan_encodings(const EncodingSettings& settings);
 
-// Coefficients of encoding k for every texel, from the device state:
-// texel-major, count * 3 floats (lobe-major RGB). Uncovered texels are 0.
-std::vector<float> extract_coefficients(const EncodingPlan& plan, size_t k,
-                                        const std::vector<cl::float4>& state, size_t texels);
+// Coefficients of encoding k from the device state of n covered slots
+// (stride float4 each), written at texels[slot] into `out`: texel-major,
+// count * 3 floats (lobe-major RGB), sized by the caller (uncovered texels
+// keep what they hold, 0).
+void extract_coefficients(const EncodingPlan& plan, size_t k, const std::vector<cl::float4>& state,
+                          const uint32_t* texels, size_t n, std::vector<float>& out);
 
 }  // namespace luxel::pipeline

@@ -184,6 +184,17 @@ std::vector<Setting> make_schema() {
                .min = 1024,
                .max = 1u << 26,
                LUXEL_NUMBER(paths_per_iteration)});
+  t.push_back({.name = "device_memory_budget_mib",
+               .type = Type::kFloat,
+               .units = "MiB",
+               .help = "device memory the bake may hold; past it the atlas is baked in tiles "
+                       "(0: min(80 % of the device's memory, 4 GiB))",
+               .flag = "--device-memory-budget",
+               .metavar = "MIB",
+               .default_value = SettingValue::of(0),
+               .min = 0,
+               .max = 1u << 24,
+               LUXEL_NUMBER(device_memory_budget_mib)});
   t.push_back({.name = "seed",
                .type = Type::kInt,
                .units = "",
