@@ -3,9 +3,11 @@
 // and scenes, in one run. Prints a markdown table for docs/performance.md.
 //
 //   bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W]
-//              [--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] SCENE...
+//              [--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] [--collapse] SCENE...
 //   (no SCENE: every bundled scene and every shared benchmark scene;
-//   --bvh: the OpenCL node layout, default both: one row per width)
+//   --bvh: the OpenCL node layout, default both: one row per width;
+//   --collapse: BVH4 by collapsing Embree's binary tree instead of its
+//   4-wide build)
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -71,15 +73,18 @@ int main(int argc, char** argv) {
       bvh_options.max_leaf_size = static_cast<unsigned>(std::atoi(argv[++i]));
     else if (a == "--intersection-cost" && i + 1 < argc)
       bvh_options.intersection_cost = std::strtof(argv[++i], nullptr);
+    else if (a == "--collapse")
+      bvh_options.collapse = true;
     else if (a == "--bvh" && i + 1 < argc) {
       const std::string w = argv[++i];
       widths = w == "2"   ? std::vector<unsigned>{2}
                : w == "4" ? std::vector<unsigned>{4}
                           : std::vector<unsigned>{2, 4};
     } else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr,
-                   "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] "
-                   "[--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] [SCENE...]\n");
+      std::fprintf(
+          stderr,
+          "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] "
+          "[--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] [--collapse] [SCENE...]\n");
       return 2;
     } else
       scenes.push_back(a);

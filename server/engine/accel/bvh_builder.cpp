@@ -168,10 +168,16 @@ class Flattener4 : public LeafWriter {
   Flattener4(const TriangleSoup& soup, const BvhBuildOptions& opt, DeviceBvh& out)
       : LeafWriter(soup, opt, out) {}
 
-  int inner(const BuildInner* node, unsigned depth) {
+  int inner(const BuildInner* binary_or_wide, unsigned depth) {
     out_.stats.max_depth = std::max(out_.stats.max_depth, depth);
     const int index = static_cast<int>(out_.nodes4.size());
     out_.nodes4.push_back(empty_node4());
+    BuildInner collapsed;
+    const BuildInner* node = binary_or_wide;
+    if (opt_.collapse) {
+      collapsed = collapse(*binary_or_wide);
+      node = &collapsed;
+    }
     out_.stats.sah_cost += opt_.traversal_cost * area_of_node(node);
     int ref[kMaxWidth], count[kMaxWidth];
     for (unsigned c = 0; c < kMaxWidth; ++c) {
@@ -200,6 +206,40 @@ class Flattener4 : public LeafWriter {
       lane(n.count, i) = count[c];
     }
     return index;
+  }
+
+ private:
+  // Pulls grandchildren up into `node` until it has four children: always
+  // the inner child of largest surface area is replaced by its children (the
+  // greedy SAH collapse of a binary tree, Wald, Benthin and Boulos 2008
+  // "Getting Rid of Packets" §3; Embree's wide builder does the same while
+  // building).
+  static BuildInner collapse(const BuildInner& node) {
+    BuildInner wide = node;
+    for (;;) {
+      int best = -1;
+      double best_area = -1.0;
+      for (unsigned c = 0; c < wide.count; ++c) {
+        const BuildNode* child = wide.child[c];
+        if (!child || child->leaf) continue;
+        const auto* in = static_cast<const BuildInner*>(child);
+        if (wide.count - 1 + in->count > kMaxWidth) continue;
+        const double a = area(wide.bounds[c]);
+        if (a > best_area) {
+          best_area = a;
+          best = static_cast<int>(c);
+        }
+      }
+      if (best < 0) return wide;
+      const BuildInner open = *static_cast<const BuildInner*>(wide.child[best]);
+      wide.child[best] = open.child[0];
+      wide.bounds[best] = open.bounds[0];
+      for (unsigned c = 1; c < open.count; ++c) {
+        wide.child[wide.count] = open.child[c];
+        wide.bounds[wide.count] = open.bounds[c];
+        ++wide.count;
+      }
+    }
   }
 };
 
@@ -262,7 +302,7 @@ Result<DeviceBvh> build_bvh(const TriangleSoup& soup, const BvhBuildOptions& opt
   // the child of largest surface area with a binned SAH split, i.e. the
   // top-down collapse of the binary SAH tree into a 4-ary one (Wald, Benthin
   // and Boulos 2008, "Getting Rid of Packets", §3).
-  args.maxBranchingFactor = options.width;
+  args.maxBranchingFactor = options.collapse ? 2 : options.width;
   args.maxDepth = options.max_depth;
   args.sahBlockSize = 1;
   args.minLeafSize = 1;

@@ -15,10 +15,11 @@
 namespace luxel::accel {
 
 struct BvhBuildOptions {
-  unsigned width = 2;              // 2: LuxBvhNode, 4: LuxBvh4Node (see preferred_bvh_width)
-  unsigned max_leaf_size = 4;      // triangles per leaf (the builder may exceed it at max depth)
-  unsigned max_depth = 48;         // the traversal stack (LUX_STACK_SIZE) must be deeper
-  float traversal_cost = 1.0f;     // SAH cost of one node visit relative to...
+  unsigned width = 2;           // 2: LuxBvhNode, 4: LuxBvh4Node (see preferred_bvh_width)
+  bool collapse = false;        // width 4: build binary, then collapse (else Embree builds 4-wide)
+  unsigned max_leaf_size = 4;   // triangles per leaf (the builder may exceed it at max depth)
+  unsigned max_depth = 48;      // the traversal stack (LUX_STACK_SIZE) must be deeper
+  float traversal_cost = 1.0f;  // SAH cost of one node visit relative to...
   float intersection_cost = 1.0f;  // ...one triangle test
 };
 
