@@ -119,13 +119,15 @@ int run_inspect(const std::vector<std::string>& argv) {
 
   auto soup = accel::build_triangle_soup(scene.value());
   if (!soup) return fail(soup.status());
-  auto bvh = accel::build_bvh(soup.value());
+  accel::BvhBuildOptions bvh_options;
+  bvh_options.width = accel::preferred_bvh_width(ctx.value()->info());
+  auto bvh = accel::build_bvh(soup.value(), bvh_options);
   if (!bvh) return fail(bvh.status());
   const auto& bs = bvh->stats;
   std::printf(
-      "bvh        %zu nodes, %zu leaves, depth %u, SAH cost %.1f, built in %.1f ms (Embree "
+      "bvh        BVH%u, %zu nodes, %zu leaves, depth %u, SAH cost %.1f, built in %.1f ms (Embree "
       "rtcBuildBVH), %.1f MiB on device\n",
-      bs.nodes, bs.leaves, bs.max_depth, bs.sah_cost, bs.build_ms,
+      bvh->width, bs.nodes, bs.leaves, bs.max_depth, bs.sah_cost, bs.build_ms,
       static_cast<double>(bs.device_bytes) / (1024.0 * 1024.0));
 
   const auto tc = std::chrono::steady_clock::now();

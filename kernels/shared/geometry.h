@@ -15,6 +15,24 @@
  * reordered by the builder). An absent child (a scene with one leaf, or an
  * empty scene) has ref -1, count 0 and inverted bounds; traversal skips it
  * by its ref.
+ *
+ * BVH4 layout (LUX_BVH4; Ernst & Greiner 2008, "Multi Bounding Volume
+ * Hierarchies"; Dammertz et al. 2008, "Shallow Bounding Volume Hierarchies
+ * for Fast SIMD Ray Tracing of Incoherent Rays"): up to four children per
+ * node, their bounds stored structure-of-arrays so one float4 holds the same
+ * plane of all four boxes and traversal tests all four with float4 ops.
+ * 128 bytes per node = two cache lines.
+ *
+ *   lo_x[i] .. hi_z[i]   bounds of child slot i
+ *   child[i]             node index (count[i] == 0), first triangle of a
+ *                        leaf (count[i] > 0), or -1 for an absent slot
+ *   count[i]             0 = inner node, n > 0 = leaf of n triangles
+ *
+ * Node 0 is the root; children of a node are in no particular order (the
+ * traversal sorts them by entry distance). Leaves are contiguous ranges of
+ * LuxTriangle as in the BVH2 layout. An absent slot has bounds lo = hi =
+ * +INFINITY on every axis: its entry distance is +INFINITY or the slab test
+ * rejects it, so the traversal never enters it without testing the ref.
  */
 #ifndef LUXEL_SHARED_GEOMETRY_H
 #define LUXEL_SHARED_GEOMETRY_H
@@ -31,6 +49,17 @@ typedef struct LuxBvhNode {
   float4 rmin;
   float4 rmax;
 } LuxBvhNode;
+
+typedef struct LuxBvh4Node {
+  float4 lo_x;
+  float4 hi_x;
+  float4 lo_y;
+  float4 hi_y;
+  float4 lo_z;
+  float4 hi_z;
+  int4 child;
+  int4 count;
+} LuxBvh4Node;
 
 /* World-space triangle, 48 bytes.
  *   v0.w (int) original triangle id (index into the host's triangle soup,

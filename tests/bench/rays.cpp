@@ -3,8 +3,11 @@
 // and scenes, in one run. Prints a markdown table for docs/performance.md.
 //
 //   bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W]
-//              [--leaf-size L] [--intersection-cost C] SCENE...
-//   (no SCENE: every bundled scene and every shared benchmark scene)
+//              [--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] [--collapse] SCENE...
+//   (no SCENE: every bundled scene and every shared benchmark scene;
+//   --bvh: the OpenCL node layout, default both: one row per width;
+//   --collapse: BVH4 by collapsing Embree's binary tree instead of its
+//   4-wide build)
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -55,6 +58,7 @@ int main(int argc, char** argv) {
   accel::BvhBuildOptions bvh_options;
   std::string device_spec;
   std::vector<std::string> scenes;
+  std::vector<unsigned> widths = {2, 4};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--rays" && i + 1 < argc)
@@ -69,10 +73,18 @@ int main(int argc, char** argv) {
       bvh_options.max_leaf_size = static_cast<unsigned>(std::atoi(argv[++i]));
     else if (a == "--intersection-cost" && i + 1 < argc)
       bvh_options.intersection_cost = std::strtof(argv[++i], nullptr);
-    else if (!a.empty() && a[0] == '-') {
-      std::fprintf(stderr,
-                   "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] "
-                   "[--leaf-size L] [--intersection-cost C] [SCENE...]\n");
+    else if (a == "--collapse")
+      bvh_options.collapse = true;
+    else if (a == "--bvh" && i + 1 < argc) {
+      const std::string w = argv[++i];
+      widths = w == "2"   ? std::vector<unsigned>{2}
+               : w == "4" ? std::vector<unsigned>{4}
+                          : std::vector<unsigned>{2, 4};
+    } else if (!a.empty() && a[0] == '-') {
+      std::fprintf(
+          stderr,
+          "usage: bench_rays [--rays N] [--repeats R] [--device SPEC] [--work-group W] "
+          "[--leaf-size L] [--intersection-cost C] [--bvh 2|4|both] [--collapse] [SCENE...]\n");
       return 2;
     } else
       scenes.push_back(a);
@@ -88,35 +100,38 @@ int main(int argc, char** argv) {
       "Embree = wall time of rtcIntersect1M/rtcOccluded1M on all hardware threads\n\n",
       rays, repeats);
   std::printf(
-      "| scene | triangles | BVH nodes | rays | query | OpenCL Mrays/s | Embree Mrays/s | OpenCL / "
-      "Embree |\n");
-  std::printf("|---|---:|---:|---|---|---:|---:|---:|\n");
+      "| scene | triangles | BVH | nodes | SAH | rays | query | OpenCL Mrays/s | Embree Mrays/s | "
+      "OpenCL / Embree |\n");
+  std::printf("|---|---:|---:|---:|---:|---|---|---:|---:|---:|\n");
   for (const auto& path : scenes) {
     auto scene = scene::import_gltf_file(path);
     if (!scene) return fail(scene.status());
     auto soup = accel::build_triangle_soup(scene.value());
     if (!soup) return fail(soup.status());
-    auto bvh = accel::build_bvh(soup.value(), bvh_options);
-    if (!bvh) return fail(bvh.status());
-    auto cl = accel::ClTracer::create(*ctx.value(), bvh.value());
-    if (!cl) return fail(cl.status());
-    if (work_group) cl.value()->set_work_group_size(work_group);
-    auto embree = accel::EmbreeTracer::create(bvh.value());
-    if (!embree) return fail(embree.status());
     const std::string name = fs::path(path).stem().string();
-    for (auto kind :
-         {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow}) {
-      const auto set = accel::make_rays(soup.value(), kind, rays, 99);
-      const auto query =
-          kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
-      auto tp = accel::measure_throughput(*ctx.value(), *cl.value(), *embree.value(), set, query,
-                                          kind == accel::RayKind::kCoherent, repeats);
-      if (!tp) return fail(tp.status());
-      std::printf("| %s | %zu | %zu | %s | %s | %.2f | %.2f | %.2f |\n", name.c_str(), soup->size(),
-                  bvh->stats.nodes, accel::ray_kind_name(kind),
-                  query == accel::Query::kAny ? "any" : "closest", tp->cl_mrays(),
-                  tp->embree_mrays(), tp->ratio());
-      std::fflush(stdout);
+    for (unsigned width : widths) {
+      bvh_options.width = width;
+      auto bvh = accel::build_bvh(soup.value(), bvh_options);
+      if (!bvh) return fail(bvh.status());
+      auto cl = accel::ClTracer::create(*ctx.value(), bvh.value());
+      if (!cl) return fail(cl.status());
+      if (work_group) cl.value()->set_work_group_size(work_group);
+      auto embree = accel::EmbreeTracer::create(bvh.value());
+      if (!embree) return fail(embree.status());
+      for (auto kind :
+           {accel::RayKind::kCoherent, accel::RayKind::kIncoherent, accel::RayKind::kShadow}) {
+        const auto set = accel::make_rays(soup.value(), kind, rays, 99);
+        const auto query =
+            kind == accel::RayKind::kShadow ? accel::Query::kAny : accel::Query::kClosest;
+        auto tp = accel::measure_throughput(*ctx.value(), *cl.value(), *embree.value(), set, query,
+                                            kind == accel::RayKind::kCoherent, repeats);
+        if (!tp) return fail(tp.status());
+        std::printf("| %s | %zu | %u | %zu | %.1f | %s | %s | %.2f | %.2f | %.2f |\n", name.c_str(),
+                    soup->size(), width, bvh->stats.nodes, bvh->stats.sah_cost,
+                    accel::ray_kind_name(kind), query == accel::Query::kAny ? "any" : "closest",
+                    tp->cl_mrays(), tp->embree_mrays(), tp->ratio());
+        std::fflush(stdout);
+      }
     }
   }
   return 0;

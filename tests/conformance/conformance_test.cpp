@@ -81,10 +81,13 @@ TEST(Conformance, OpenClAgreesWithEmbree) {
   ASSERT_TRUE(scene.is_ok()) << scene.status().to_string();
   auto soup = build_triangle_soup(scene.value());
   ASSERT_TRUE(soup.is_ok()) << soup.status().to_string();
-  auto bvh = build_bvh(soup.value());
-  ASSERT_TRUE(bvh.is_ok()) << bvh.status().to_string();
   auto ctx = device::Context::create("");
   ASSERT_TRUE(ctx.is_ok()) << ctx.status().to_string();
+  // The device's node layout (LUXEL_BVH_WIDTH=2|4 picks the other).
+  BvhBuildOptions bvh_options;
+  bvh_options.width = preferred_bvh_width(ctx.value()->info());
+  auto bvh = build_bvh(soup.value(), bvh_options);
+  ASSERT_TRUE(bvh.is_ok()) << bvh.status().to_string();
   auto cl = ClTracer::create(*ctx.value(), bvh.value());
   ASSERT_TRUE(cl.is_ok()) << cl.status().to_string();
   auto embree = EmbreeTracer::create(bvh.value());

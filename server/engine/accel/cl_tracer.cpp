@@ -9,8 +9,10 @@ Result<std::unique_ptr<ClTracer>> ClTracer::create(device::Context& ctx, const D
   const unsigned stack = (required_stack_size(bvh) + 7u) / 8u * 8u;
   t->features_.set("STACK_SIZE", static_cast<int>(std::max(stack, 16u)));
   if (bvh.has_alpha_masks()) t->features_.set("ALPHA_MASK");
+  if (bvh.width == 4) t->features_.set("BVH4");
 
-  auto nodes = ctx.upload(bvh.nodes, "bvh nodes");
+  auto nodes =
+      bvh.width == 4 ? ctx.upload(bvh.nodes4, "bvh4 nodes") : ctx.upload(bvh.nodes, "bvh nodes");
   if (!nodes) return nodes.status();
   t->nodes_ = std::move(nodes.value());
   auto tris = ctx.upload(bvh.triangles, "bvh triangles");

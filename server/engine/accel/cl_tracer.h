@@ -17,7 +17,9 @@ namespace luxel::accel {
 class ClTracer final : public Intersector {
  public:
   // Uploads the BVH (and alpha data only when the scene has masked
-  // triangles) and builds kernels/intersect.cl with the matching features.
+  // triangles) and builds kernels/intersect.cl with the matching features:
+  // BVH4 when `bvh` has width 4 (see preferred_bvh_width), ALPHA_MASK,
+  // STACK_SIZE.
   static Result<std::unique_ptr<ClTracer>> create(device::Context& ctx, const DeviceBvh& bvh);
 
   // Features the intersection program was compiled with.

@@ -27,7 +27,10 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& se
   auto soup = accel::build_triangle_soup(scene);
   if (!soup) return soup.status();
   s.soup = std::move(soup.value());
-  auto bvh = accel::build_bvh(s.soup);
+  // The node width is the device's (BVH4 on CPUs, docs/performance.md).
+  accel::BvhBuildOptions bvh_options;
+  bvh_options.width = accel::preferred_bvh_width(ctx.info());
+  auto bvh = accel::build_bvh(s.soup, bvh_options);
   if (!bvh) return bvh.status();
   s.bvh = std::make_unique<accel::DeviceBvh>(std::move(bvh.value()));
   auto tracer = accel::make_intersector(settings.intersector, ctx, *s.bvh);

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <functional>
 #include <numeric>
 #include <random>
 
@@ -78,7 +80,8 @@ LuxRay ray(Vec3 o, Vec3 d, float tmin = 0, float tmax = INFINITY) {
   return {{o.x, o.y, o.z, tmin}, {d.x, d.y, d.z, tmax}};
 }
 
-class AccelTest : public ::testing::Test {
+// Every test runs for both OpenCL node layouts (BVH2 and BVH4).
+class AccelTest : public ::testing::TestWithParam<unsigned> {
  protected:
   static void SetUpTestSuite() {
     auto ctx = device::Context::create("");
@@ -92,11 +95,14 @@ class AccelTest : public ::testing::Test {
     auto soup = build_triangle_soup(s);
     ASSERT_TRUE(soup.is_ok()) << soup.status().to_string();
     soup_ = std::move(soup.value());
+    opt.width = GetParam();
     auto bvh = build_bvh(soup_, opt);
     ASSERT_TRUE(bvh.is_ok()) << bvh.status().to_string();
     bvh_ = std::move(bvh.value());
+    ASSERT_EQ(bvh_.width, GetParam());
     auto cl = ClTracer::create(*ctx_, bvh_);
     ASSERT_TRUE(cl.is_ok()) << cl.status().to_string();
+    EXPECT_EQ(cl.value()->features().has("BVH4"), GetParam() == 4);
     cl_ = std::move(cl.value());
     auto em = EmbreeTracer::create(bvh_);
     ASSERT_TRUE(em.is_ok()) << em.status().to_string();
@@ -121,7 +127,7 @@ class AccelTest : public ::testing::Test {
 };
 device::Context* AccelTest::ctx_ = nullptr;
 
-TEST_F(AccelTest, SingleTriangleDistanceAndBarycentrics) {
+TEST_P(AccelTest, SingleTriangleDistanceAndBarycentrics) {
   SceneBuilder b;
   b.instance(b.add_mesh({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 1, 2}));
   build(b.s);
@@ -153,7 +159,7 @@ TEST_F(AccelTest, SingleTriangleDistanceAndBarycentrics) {
   EXPECT_EQ(any.value(), (std::vector<int>{1, 1, 0, 0, 0, 0}));
 }
 
-TEST_F(AccelTest, EmptySceneMissesEverything) {
+TEST_P(AccelTest, EmptySceneMissesEverything) {
   SceneBuilder b;
   build(b.s);
   const auto rays = make_rays(soup_, RayKind::kRandom, 1000, 3);
@@ -163,7 +169,7 @@ TEST_F(AccelTest, EmptySceneMissesEverything) {
   for (int o : any.value()) EXPECT_EQ(o, 0);
 }
 
-TEST_F(AccelTest, ClosestOfOverlappingLayersAndOriginalIds) {
+TEST_P(AccelTest, ClosestOfOverlappingLayersAndOriginalIds) {
   // Three parallel grids; rays from above hit the top one, from below the
   // bottom one. Original ids identify which instance was hit.
   SceneBuilder b;
@@ -185,7 +191,7 @@ TEST_F(AccelTest, ClosestOfOverlappingLayersAndOriginalIds) {
   EXPECT_EQ(soup_.size(), 3 * per_grid);
 }
 
-TEST_F(AccelTest, WatertightAtSharedEdgesAndVertices) {
+TEST_P(AccelTest, WatertightAtSharedEdgesAndVertices) {
   // Rays aimed exactly at grid edges and vertices must never slip through.
   SceneBuilder b;
   add_grid(b, 16, 16.0f);
@@ -208,7 +214,7 @@ TEST_F(AccelTest, WatertightAtSharedEdgesAndVertices) {
   for (int o : any.value()) EXPECT_EQ(o, 1);
 }
 
-TEST_F(AccelTest, OffsetRaysDoNotSelfIntersectAtLargeCoordinates) {
+TEST_P(AccelTest, OffsetRaysDoNotSelfIntersectAtLargeCoordinates) {
   // A tilted grid far from the origin; secondary rays leave from hit points
   // offset with the shared ray_offset.h and must not hit their own surface.
   for (double far : {0.0, 1e3, 1e5}) {
@@ -253,7 +259,7 @@ TEST_F(AccelTest, OffsetRaysDoNotSelfIntersectAtLargeCoordinates) {
   }
 }
 
-TEST_F(AccelTest, AlphaMaskCutsOutAndMatchesEmbree) {
+TEST_P(AccelTest, AlphaMaskCutsOutAndMatchesEmbree) {
   // A quad whose texture is transparent on the left half (u < 0.5).
   SceneBuilder b;
   scene::Texture tex;
@@ -299,7 +305,7 @@ TEST_F(AccelTest, AlphaMaskCutsOutAndMatchesEmbree) {
   }
 }
 
-TEST_F(AccelTest, OpaqueScenesCompileWithoutAlphaCode) {
+TEST_P(AccelTest, OpaqueScenesCompileWithoutAlphaCode) {
   SceneBuilder b;
   add_grid(b, 2, 1.0f);
   build(b.s);
@@ -307,7 +313,7 @@ TEST_F(AccelTest, OpaqueScenesCompileWithoutAlphaCode) {
   EXPECT_TRUE(bvh_.uvs.empty());
 }
 
-TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
+TEST_P(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
   // Many randomly placed and rotated small grids: deep BVH, overlapping boxes.
   SceneBuilder b;
   std::mt19937 rng(9);
@@ -322,7 +328,7 @@ TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
     add_grid(b, 3, 2.0f, xf);
   }
   build(b.s, BvhBuildOptions{.max_leaf_size = 2});
-  EXPECT_GT(bvh_.stats.max_depth, 8u);
+  EXPECT_GT(bvh_.stats.max_depth, GetParam() == 2 ? 8u : 4u);
   for (RayKind kind : {RayKind::kRandom, RayKind::kIncoherent, RayKind::kCoherent}) {
     const auto rays = make_rays(soup_, kind, 20000, 17);
     const auto h = cl_closest(rays);
@@ -345,7 +351,7 @@ TEST_F(AccelTest, RandomRaysAgreeWithEmbreeOnAClutteredScene) {
 // mask, a live count below the list's length, empty-interval "no shadow"
 // rays. Results land at the source slots; slots not in the list keep what
 // they held.
-TEST_F(AccelTest, IndexedQueriesAgreeAcrossBackends) {
+TEST_P(AccelTest, IndexedQueriesAgreeAcrossBackends) {
   SceneBuilder b;
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-10, 10);
@@ -419,19 +425,233 @@ TEST_F(AccelTest, IndexedQueriesAgreeAcrossBackends) {
   EXPECT_GT(blocked, rays.size() / 20);
 }
 
-TEST_F(AccelTest, BvhStatsAreConsistent) {
+TEST_P(AccelTest, BvhStatsAreConsistent) {
   SceneBuilder b;
   add_grid(b, 20, 10.0f);
   build(b.s, BvhBuildOptions{.max_leaf_size = 4});
   EXPECT_EQ(bvh_.stats.triangles, 800u);
   EXPECT_EQ(bvh_.triangles.size(), 800u);
-  // A binary tree: leaves = inner nodes + 1 (no absent children here).
-  EXPECT_EQ(bvh_.stats.leaves, bvh_.stats.nodes + 1);
+  if (GetParam() == 2) {
+    // A binary tree: leaves = inner nodes + 1 (no absent children here).
+    EXPECT_EQ(bvh_.stats.leaves, bvh_.stats.nodes + 1);
+    EXPECT_EQ(bvh_.nodes.size(), bvh_.stats.nodes);
+    EXPECT_TRUE(bvh_.nodes4.empty());
+  } else {
+    // Every node has 2 to 4 children: leaves + inner nodes - 1 child slots.
+    EXPECT_GE(bvh_.stats.leaves + bvh_.stats.nodes - 1, 2 * bvh_.stats.nodes);
+    EXPECT_LE(bvh_.stats.leaves + bvh_.stats.nodes - 1, 4 * bvh_.stats.nodes);
+    EXPECT_EQ(bvh_.nodes4.size(), bvh_.stats.nodes);
+    EXPECT_TRUE(bvh_.nodes.empty());
+  }
   EXPECT_GT(bvh_.stats.sah_cost, 0.0);
   // Every soup triangle appears exactly once in leaf order.
   std::vector<int> seen(800, 0);
   for (const auto& t : bvh_.triangles) seen[static_cast<size_t>(cl::as_int(t.v0.w))]++;
   for (int s : seen) EXPECT_EQ(s, 1);
+}
+
+// Isolated triangles along x, one leaf each: nodes with two, three and four
+// children and absent slots. Each ray aims at one triangle's centroid from
+// above or below, so a slot whose bounds, child index or leaf range is
+// mixed up with another's returns the wrong triangle or a miss.
+TEST_P(AccelTest, EveryTriangleOfSparseClustersIsFound) {
+  for (int n : {1, 2, 3, 5, 6, 7, 9, 17, 33}) {
+    SceneBuilder b;
+    std::vector<Vec3> p;
+    std::vector<uint32_t> idx;
+    for (int i = 0; i < n; ++i) {
+      // Uneven gaps so the SAH splits are not all balanced.
+      const float x = 3.0f * i + 0.7f * static_cast<float>((i * 7) % 5);
+      const auto base = static_cast<uint32_t>(p.size());
+      p.insert(p.end(), {{x, 0, 0.1f * i}, {x + 1, 0, 0.1f * i}, {x, 1, 0.1f * i}});
+      idx.insert(idx.end(), {base, base + 1, base + 2});
+    }
+    b.instance(b.add_mesh(p, idx));
+    build(b.s, BvhBuildOptions{.max_leaf_size = 1});
+    std::vector<LuxRay> rays;
+    for (int i = 0; i < n; ++i) {
+      const Vec3 c = (p[3 * i] + p[3 * i + 1] + p[3 * i + 2]) * (1.0f / 3.0f);
+      rays.push_back(ray({c.x, c.y, c.z + 5}, {0, 0, -1}));
+      rays.push_back(ray({c.x, c.y, c.z - 5}, {0, 0, 1}));
+      rays.push_back(ray({c.x + 0.5f, c.y + 2, c.z}, {0, 0, -1}));  // beside it: a miss
+    }
+    const auto h = cl_closest(rays);
+    auto any = cl_->any(rays);
+    ASSERT_TRUE(any.is_ok());
+    for (int i = 0; i < n; ++i) {
+      const size_t r = 3 * static_cast<size_t>(i);
+      EXPECT_EQ(h[r].prim, i) << "n=" << n;
+      EXPECT_EQ(h[r + 1].prim, i) << "n=" << n;
+      EXPECT_EQ(h[r + 2].prim, -1) << "n=" << n;
+      EXPECT_NEAR(h[r].t, 5.0f, 1e-5f);
+      EXPECT_EQ(any.value()[r], 1);
+      EXPECT_EQ(any.value()[r + 2], 0);
+    }
+  }
+}
+
+// Structural check of the device layout: every node is reached once from the
+// root, every slot's box contains what it references, leaves cover every
+// triangle exactly once, absent slots are the documented empty encoding.
+TEST_P(AccelTest, NodeLayoutIsATreeWithContainingBounds) {
+  SceneBuilder b;
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-20, 20);
+  for (int i = 0; i < 120; ++i) add_grid(b, 2, 1.5f, translate(u(rng), u(rng), u(rng)));
+  build(b.s, BvhBuildOptions{.max_leaf_size = 3});
+  struct Box {
+    float lo[3], hi[3];
+  };
+  std::vector<int> node_seen(bvh_.stats.nodes, 0), tri_seen(bvh_.triangles.size(), 0);
+  auto contains = [](const Box& b, float x, float y, float z) {
+    return x >= b.lo[0] && x <= b.hi[0] && y >= b.lo[1] && y <= b.hi[1] && z >= b.lo[2] &&
+           z <= b.hi[2];
+  };
+  auto check_leaf = [&](const Box& box, int first, int count) {
+    ASSERT_GT(count, 0);
+    ASSERT_LE(static_cast<size_t>(first + count), bvh_.triangles.size());
+    for (int t = first; t < first + count; ++t) {
+      tri_seen[static_cast<size_t>(t)]++;
+      for (const auto& v : {bvh_.triangles[t].v0, bvh_.triangles[t].v1, bvh_.triangles[t].v2})
+        EXPECT_TRUE(contains(box, v.x, v.y, v.z)) << "triangle " << t;
+    }
+  };
+  // Walks node `index`; `parent` is the box the parent holds for it.
+  std::function<void(int, const Box&)> walk = [&](int index, const Box& parent) {
+    ASSERT_GE(index, 0);
+    ASSERT_LT(static_cast<size_t>(index), node_seen.size());
+    node_seen[static_cast<size_t>(index)]++;
+    if (GetParam() == 4) {
+      const auto& n = bvh_.nodes4[static_cast<size_t>(index)];
+      const float* lo[3] = {&n.lo_x.x, &n.lo_y.x, &n.lo_z.x};
+      const float* hi[3] = {&n.hi_x.x, &n.hi_y.x, &n.hi_z.x};
+      const int* child = &n.child.x;
+      const int* count = &n.count.x;
+      int present = 0;
+      for (int s = 0; s < 4; ++s) {
+        Box box;
+        for (int k = 0; k < 3; ++k) {
+          box.lo[k] = lo[k][s];
+          box.hi[k] = hi[k][s];
+        }
+        if (child[s] < 0) {
+          EXPECT_EQ(count[s], 0);
+          for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::isinf(box.lo[k]) && box.lo[k] > 0);
+          continue;
+        }
+        ++present;
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_GE(box.lo[k], parent.lo[k]);
+          EXPECT_LE(box.hi[k], parent.hi[k]);
+        }
+        if (count[s] > 0)
+          check_leaf(box, child[s], count[s]);
+        else
+          walk(child[s], box);
+      }
+      EXPECT_GE(present, index == 0 ? 1 : 2);
+    } else {
+      const auto& n = bvh_.nodes[static_cast<size_t>(index)];
+      for (const auto* c : {&n.lmin, &n.rmin}) {
+        const auto& mn = *c;
+        const auto& mx = c == &n.lmin ? n.lmax : n.rmax;
+        const int ref = cl::as_int(mn.w), count = cl::as_int(mx.w);
+        if (ref < 0) continue;
+        const Box box{{mn.x, mn.y, mn.z}, {mx.x, mx.y, mx.z}};
+        for (int k = 0; k < 3; ++k) {
+          EXPECT_GE(box.lo[k], parent.lo[k]);
+          EXPECT_LE(box.hi[k], parent.hi[k]);
+        }
+        if (count > 0)
+          check_leaf(box, ref, count);
+        else
+          walk(ref, box);
+      }
+    }
+  };
+  const Box everything{{-INFINITY, -INFINITY, -INFINITY}, {INFINITY, INFINITY, INFINITY}};
+  walk(0, everything);
+  for (int s : node_seen) EXPECT_EQ(s, 1);
+  for (int s : tri_seen) EXPECT_EQ(s, 1);
+  EXPECT_LE(required_stack_size(bvh_), static_cast<unsigned>(cl_->features().value("STACK_SIZE")));
+}
+
+INSTANTIATE_TEST_SUITE_P(Widths, AccelTest, ::testing::Values(2u, 4u),
+                         [](const auto& info) { return "Bvh" + std::to_string(info.param); });
+
+// The BVH4 traversal against the BVH2 one on the same scene and rays: the
+// same triangle at the same distance (both run the same triangle test, so
+// the distance is bit-identical), and the same any-hit answers.
+TEST(AccelWidths, Bvh4AgreesWithBvh2) {
+  auto ctx = device::Context::create("");
+  ASSERT_TRUE(ctx.is_ok()) << ctx.status().to_string();
+  SceneBuilder b;
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-15, 15), a(0, 6.28);
+  for (int i = 0; i < 250; ++i) {
+    Mat4 xf = translate(u(rng), u(rng), u(rng));
+    const double c = std::cos(a(rng)), s = std::sin(a(rng));
+    xf.at(0, 0) = c;
+    xf.at(0, 1) = -s;
+    xf.at(1, 0) = s;
+    xf.at(1, 1) = c;
+    add_grid(b, 4, 3.0f, xf);
+  }
+  auto soup = build_triangle_soup(b.s);
+  ASSERT_TRUE(soup.is_ok());
+  auto bvh2 = build_bvh(soup.value(), BvhBuildOptions{.width = 2});
+  ASSERT_TRUE(bvh2.is_ok());
+  auto cl2 = ClTracer::create(*ctx.value(), bvh2.value());
+  ASSERT_TRUE(cl2.is_ok());
+  // Embree's 4-wide build and the collapsed binary tree.
+  for (bool collapse : {false, true}) {
+    SCOPED_TRACE(collapse ? "collapsed BVH2" : "Embree 4-wide build");
+    auto bvh4 = build_bvh(soup.value(), BvhBuildOptions{.width = 4, .collapse = collapse});
+    ASSERT_TRUE(bvh4.is_ok());
+    EXPECT_LT(bvh4->stats.nodes, bvh2->stats.nodes);
+    EXPECT_LE(bvh4->stats.max_depth, bvh2->stats.max_depth);
+    if (collapse) EXPECT_EQ(bvh4->stats.leaves, bvh2->stats.leaves);  // the same leaves
+    auto cl4 = ClTracer::create(*ctx.value(), bvh4.value());
+    ASSERT_TRUE(cl4.is_ok());
+    for (RayKind kind : {RayKind::kRandom, RayKind::kIncoherent, RayKind::kShadow}) {
+      const auto rays = make_rays(soup.value(), kind, 20000, 5);
+      auto h2 = cl2.value()->closest(rays);
+      auto h4 = cl4.value()->closest(rays);
+      auto o2 = cl2.value()->any(rays);
+      auto o4 = cl4.value()->any(rays);
+      ASSERT_TRUE(h2.is_ok() && h4.is_ok() && o2.is_ok() && o4.is_ok());
+      size_t disagree = 0, hits = 0;
+      for (size_t i = 0; i < rays.size(); ++i) {
+        const auto& x = h2.value()[i];
+        const auto& y = h4.value()[i];
+        hits += x.prim >= 0;
+        // Only an exact tie (coincident or edge-sharing triangles) may
+        // differ in the triangle, never in the distance.
+        disagree += x.prim != y.prim;
+        EXPECT_EQ(x.t, y.t) << ray_kind_name(kind) << " ray " << i;
+        EXPECT_EQ(o2.value()[i], o4.value()[i]) << ray_kind_name(kind) << " ray " << i;
+      }
+      EXPECT_LE(disagree, rays.size() / 2000) << ray_kind_name(kind);
+      EXPECT_GT(hits, rays.size() / 20) << ray_kind_name(kind);
+    }
+  }
+}
+
+TEST(AccelWidths, PreferredWidthFollowsDeviceAndEnvironment) {
+  device::DeviceInfo cpu, gpu;
+  gpu.is_gpu = true;
+  unsetenv("LUXEL_BVH_WIDTH");
+  EXPECT_EQ(preferred_bvh_width(cpu), 4u);
+  EXPECT_EQ(preferred_bvh_width(gpu), 2u);
+  setenv("LUXEL_BVH_WIDTH", "2", 1);
+  EXPECT_EQ(preferred_bvh_width(cpu), 2u);
+  setenv("LUXEL_BVH_WIDTH", "4", 1);
+  EXPECT_EQ(preferred_bvh_width(gpu), 4u);
+  unsetenv("LUXEL_BVH_WIDTH");
+  SceneBuilder b;
+  auto soup = build_triangle_soup(b.s);
+  ASSERT_TRUE(soup.is_ok());
+  EXPECT_FALSE(build_bvh(soup.value(), BvhBuildOptions{.width = 3}).is_ok());
 }
 
 }  // namespace
