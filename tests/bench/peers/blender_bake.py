@@ -356,7 +356,7 @@ def add_sun(scene, spec):
     ob.rotation_mode = "QUATERNION"
     ob.rotation_quaternion = d.to_track_quat("-Z", "Y")
     scene.collection.objects.link(ob)
-    return {"name": "luxel_sun", "direction_blender": list(d), "energy": e, "angle_rad": lt.angle}
+    return {"name": "luxel_sun", "type": "SUN", "direction_blender": list(d), "energy": e, "angle_rad": lt.angle}
 
 
 def write_exr(path, img, res):

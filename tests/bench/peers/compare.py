@@ -293,7 +293,7 @@ def analyse(sdir):
                                   "setup_s": bj["setup_s"], "warmup_s": bj.get("warmup_s")},
             "luxel_ref_seconds": ref.manifest["stats"]["seconds"], "speed": speed,
             "triangles": bj.get("triangles"),
-            "lights": ", ".join(f"{x['type'].lower()}" for x in bj.get("lights", [])) or None,
+            "lights": ", ".join(x.get('type', 'SUN').lower() for x in bj.get("lights", [])) or None,
             "luxel_features": ref.manifest.get("features")}
 
 
