@@ -427,8 +427,11 @@ def report(res):
                              "Cycles / Luxel ± 1σ", "MSD / noise var.", "RMS diff. beyond noise"],
                             rows))
         charts = a["interior"]["charts"]
+        if len(charts) > 24:   # big atlases: the 24 charts with most texels
+            charts = sorted(sorted(charts, key=lambda c: -c["texels"])[:24], key=lambda c: c["chart"])
         if len(charts) > 1:
-            out.append("\nPer chart (interior texels, luminance):\n")
+            out.append(f"\nPer chart (interior texels, luminance; {len(charts)} of "
+                       f"{len(a['interior']['charts'])} charts):\n")
             out.append(md_table(["chart", "texels", "rows", "cols", "E Luxel", "E Cycles",
                                  "Cycles / Luxel ± 1σ"],
                                 [[c["chart"], c["texels"], c["rows"], c["cols"], c["luxel_E"],

@@ -52,7 +52,7 @@ else
     "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|16384|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
   )
   # 512^2, 99k triangles, 1102 meshes, 95 GGX materials: PEER_HEAVY=1 (about 6 more minutes)
-  HEAVY=("gas_station|$GAS|512|$SKY_GAS|$SUN_GAS||256|4,8,16,32,64|1,2,4,8,16,32|128|0")
+  HEAVY=("gas_station|$GAS|512|$SKY_GAS|$SUN_GAS||512|4,8,16,32|1,2,4,8,16,32|128|0")
 fi
 if [ "${PEER_HEAVY:-0}" = 1 ]; then
   [ -f "$GAS" ] || { echo "run_peer_bench: PEER_HEAVY=1 needs $GAS (set PEER_GAS)" >&2; exit 2; }
