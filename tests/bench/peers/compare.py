@@ -32,10 +32,14 @@ Conventions (README.md next to this file):
     converging Monte Carlo estimator relMSE ~ V / spp, so time to an error e is
     spp / (samples/s) = V / (e x samples per texel per second) and
         t_Cycles / t_Luxel = (Luxel samples/s / Cycles samples/s)
-                           x (V_Cycles / V_Luxel),   V = relMSE x spp,
+                           x (V_Cycles / V_Luxel) x (N_Cycles / N_Luxel),
+    V = relMSE x spp, N = texels traced,
     V being "error per sample" (geometric mean over the ladder rungs inside
     the error range both ladders cover). A sample is one path from one texel
-    (Luxel: stats.paths; Cycles: baked texels x spp).
+    (Luxel: stats.paths; Cycles: baked texels x spp). A third factor is the
+    number of texels each traces per spp (Luxel: every covered texel, chart
+    borders included; Cycles: texels whose centre lies on a triangle):
+    ratio ~ throughput x error per sample x (Cycles texels / Luxel texels).
 """
 import csv
 import json
@@ -307,18 +311,22 @@ def split(lux, bl, table):
         v = [x for x in v if x > 0]
         return math.exp(np.mean(np.log(v))) if v else None
 
-    def pick(rows, rate):
+    def pick(rows, rate, texels):
         inside = [r for r in rows if lo / 2 <= r["matched"]["relmse"] <= hi * 2] or rows
         return {"samples_per_s": gm([rate(r) for r in inside]),
                 "relmse_x_spp": gm([r["matched"]["relmse"] * r["spp"] for r in inside]),
+                "texels": gm([texels(r) for r in inside]),
                 "rungs": [r["spp"] for r in inside]}
 
-    out = {"luxel": pick(lux, lambda r: r["paths"] / r["trace_s"]),
-           "cycles": pick(bl, lambda r: r["texels"] * r["spp"] / r["bake_s"])}
+    out = {"luxel": pick(lux, lambda r: r["paths"] / r["trace_s"], lambda r: r["paths"] / r["spp"]),
+           "cycles": pick(bl, lambda r: r["texels"] * r["spp"] / r["bake_s"], lambda r: r["texels"])}
     L, C = out["luxel"], out["cycles"]
     if L["samples_per_s"] and C["samples_per_s"] and L["relmse_x_spp"] and C["relmse_x_spp"]:
         out["throughput_ratio"] = L["samples_per_s"] / C["samples_per_s"]
         out["error_per_sample_ratio"] = C["relmse_x_spp"] / L["relmse_x_spp"]
+        # texels traced per sample per texel: Luxel traces every covered texel
+        # (chart borders included), Cycles the texels whose centre is on a triangle
+        out["texel_ratio"] = C["texels"] / L["texels"]
     return out
 
 
@@ -386,7 +394,8 @@ def summary(res):
                      f"{e2e['geomean_ratio']:.2f}" if e2e["levels"] else "-",
                      spl["cycles"]["samples_per_s"] / 1e6, spl["luxel"]["samples_per_s"] / 1e6,
                      spl["cycles"]["relmse_x_spp"], spl["luxel"]["relmse_x_spp"],
-                     f"{spl.get('throughput_ratio', 0):.2f} x {spl.get('error_per_sample_ratio', 0):.2f}"])
+                     f"{spl.get('throughput_ratio', 0):.2f} x {spl.get('error_per_sample_ratio', 0):.2f}"
+                     f" x {spl.get('texel_ratio', 0):.2f}"])
     if not rows:
         return ""
     return ("### Summary: time to equal relMSE (matched texels), Cycles vs Luxel\n\n"
@@ -395,12 +404,12 @@ def summary(res):
             "common error levels; the ratio columns are the geometric mean over all five "
             "(Cycles time / Luxel time, > 1: Luxel faster; the goal is >= 2). Samples/s: paths "
             "from texels per second in the engine; error per sample: relMSE x spp (lower is "
-            "better). Split: ratio = (Luxel / Cycles samples/s) x (Cycles / Luxel error per "
-            "sample).\n\n"
+            "better). Split: ratio ≈ (Luxel / Cycles samples/s) x (Cycles / Luxel error per "
+            "sample) x (texels Cycles bakes / texels Luxel bakes).\n\n"
             + md_table(["scene", "size", "triangles", "relMSE", "Cycles s", "Luxel s",
                         "engine ratio", "Cycles e2e s", "Luxel e2e s", "e2e ratio",
                         "Cycles Msamples/s", "Luxel Msamples/s", "Cycles relMSE·spp",
-                        "Luxel relMSE·spp", "split: throughput x error/sample"], rows) + "\n")
+                        "Luxel relMSE·spp", "split: throughput x error/sample x texels"], rows) + "\n")
 
 
 def report(res):
@@ -496,8 +505,10 @@ def report(res):
                        f"Cycles {fmt(spl['cycles']['samples_per_s'] / 1e6)} M (ratio "
                        f"{spl['throughput_ratio']:.2f}); relMSE x spp Luxel "
                        f"{fmt(spl['luxel']['relmse_x_spp'])}, Cycles {fmt(spl['cycles']['relmse_x_spp'])} "
-                       f"(Cycles / Luxel {spl['error_per_sample_ratio']:.2f}); product "
-                       f"{spl['throughput_ratio'] * spl['error_per_sample_ratio']:.2f}.\n")
+                       f"(Cycles / Luxel {spl['error_per_sample_ratio']:.2f}); texels baked Luxel "
+                       f"{fmt(spl['luxel']['texels'])}, Cycles {fmt(spl['cycles']['texels'])} (Cycles / "
+                       f"Luxel {spl['texel_ratio']:.2f}); product "
+                       f"{spl['throughput_ratio'] * spl['error_per_sample_ratio'] * spl['texel_ratio']:.2f}.\n")
         s = sp["engine_matched_relmse"]
         if s["levels"]:
             out.append("")

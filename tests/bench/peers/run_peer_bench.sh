@@ -5,10 +5,10 @@
 #   tests/bench/peers/install-blender.sh     # once (apt: blender, python3-openimageio)
 #   tests/bench/peers/run_peer_bench.sh [OUT]   # default OUT = out/peers
 #
-# Needs a built luxel (build/client/luxel, or set LUXEL=...). About 6 minutes
-# on a 2-core machine for the five 64^2 scenes. PEER_HEAVY=1 adds the gas
+# Needs a built luxel (build/client/luxel, or set LUXEL=...). About 4.5
+# minutes on a 2-core machine for the five 64^2 scenes. PEER_HEAVY=1 adds the gas
 # station (/work/shared/scenes/gas_station.glb or PEER_GAS=...; 512^2, 99k
-# triangles; about 6 minutes more). PEER_ONLY=a,b: only those scenes.
+# triangles; about 2.5 minutes more). PEER_ONLY=a,b: only those scenes.
 # PEER_QUICK=1: tiny sample counts (a smoke run, ~1 min; its numbers mean
 # nothing). On a shared machine prefix with `flock /tmp/luxel-cpu.lock`.
 set -euo pipefail
@@ -51,7 +51,7 @@ else
     "sky_courtyard|@/sky_courtyard.gltf|$RES|$SKY|||32768|4,8,16,32,64,128,256,512,1024,2048|1,2,4,8,16,32,64,128,256,512,1024,2048|8192|256"
     "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|16384|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
   )
-  # 512^2, 99k triangles, 1102 meshes, 95 GGX materials: PEER_HEAVY=1 (about 6 more minutes)
+  # 512^2, 99k triangles, 1102 meshes, 95 GGX materials: PEER_HEAVY=1 (about 2.5 more minutes)
   HEAVY=("gas_station|$GAS|512|$SKY_GAS|$SUN_GAS||512|4,8,16,32|1,2,4,8,16,32|128|0")
 fi
 if [ "${PEER_HEAVY:-0}" = 1 ]; then
