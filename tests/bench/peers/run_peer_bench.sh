@@ -80,7 +80,7 @@ wait_quiet() {
   for i in $(seq "${PEER_QUIET_TRIES:-60}"); do
     busy=$(cpu_busy)
     "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) < 0.15 else 1)" "$busy" && break
-    [ "$i" = 1 ] && echo "   (machine busy: $busy of the CPU in use by others; waiting up to 2 min)"
+    [ "$i" = 1 ] && echo "   (machine busy: $busy of the CPU in use by others; waiting up to ${PEER_QUIET_TRIES:-60} s)"
     sleep 1
   done
   echo "$busy"
