@@ -4,31 +4,40 @@ Run inside Blender (Debian 12: blender 3.4.1):
 
   blender -b --factory-startup --python tests/bench/peers/blender_bake.py -- \
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
-      --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--t0 EPOCH_SECONDS] \
-      [--materials lambert|principled]
+      --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
+      [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
 
 What it does (README.md next to this file explains the conversions):
 
-  1. imports the glTF with Blender's own importer (io_scene_gltf2);
-  2. makes the materials match Luxel's transport model (default
-     `--materials lambert`): every material becomes a Diffuse BSDF (roughness
-     0 = Lambert) with the importer's base colour, plus an Emission shader with
-     the importer's emission colour x strength (= glTF emissiveFactor x
-     KHR_materials_emissive_strength) that is zeroed on back faces unless the
-     glTF material is doubleSided (Blender emits from both sides, Luxel from
-     the front only). Only valid for metallic = 0, roughness = 1 materials,
-     which Luxel also shades as pure Lambert; anything else is refused.
-     `--materials principled` keeps the importer's Principled BSDF (to measure
-     what the material model alone changes);
-  3. sets the world to a constant background of colour --sky, strength 1
-     (radiance R,G,B in W/m^2/sr, as Luxel's --sky), or black;
-  4. Cycles CPU, all threads, no clamping, no light threshold, no adaptive
+  1. imports the glTF with Blender's own importer (io_scene_gltf2), lighting
+     mode COMPAT ("Unitless"): point/spot energy = 4 pi x glTF intensity,
+     sun strength = glTF intensity, i.e. radiant intensity (W/sr) and
+     irradiance (W/m^2) 1:1 as Luxel reads them; checked against the file;
+  2. makes the lights match Luxel's: point and spot radius 0 (the importer
+     leaves Blender's 0.25 m soft radius), sun angle = 2 x --directional-radius;
+     spots get a hard cone (blend 0, size = 2 x outerConeAngle) and a light
+     node tree whose strength is glTF's falloff over Cycles' own (below);
+  3. makes the materials match Luxel's BSDF (default `--materials matched`):
+     Lambert when no material of the scene needs the GGX layer (Luxel then
+     compiles it out), else Lambert x (1 - F) + GGX with Schlick F, from the
+     importer's base colour, metallic and roughness sockets (textures kept),
+     plus an Emission shader (emission colour x strength, zeroed on back faces
+     unless the glTF material is doubleSided: Cycles emits from both sides,
+     Luxel from the front only). `--materials principled` keeps the
+     importer's Principled BSDF (what the material model alone changes).
+     In both, the baked point itself sees a white Lambert surface (Light Path
+     "Is Camera Ray", set on bake paths' first vertex): the pass is then E/pi
+     whatever the receiver's material, as Luxel's irradiance lightmap;
+  4. sets the world to a constant background of colour --sky, strength 1
+     (radiance R,G,B in W/m^2/sr, as Luxel's --sky), or black; --sun adds a
+     sun lamp like Luxel's --sun/--sun-illuminance/--sun-radius;
+  5. Cycles CPU, all threads, no clamping, no light threshold, no adaptive
      sampling, no denoising; max/diffuse/glossy/transmission bounces = --bounces;
-  5. bakes type DIFFUSE, pass filter {DIRECT, INDIRECT} (no COLOR) into one
+  6. bakes type DIFFUSE, pass filter {DIRECT, INDIRECT} (no COLOR) into one
      float image of --resolution^2 through the lightmap UV map (glTF
      TEXCOORD_1 = the importer's second UV map, "UVMap.001"), margin 0, once
      per entry of --runs (SAMPLES@SEED), timing each bpy.ops.object.bake call;
-  6. writes DIR/blender_s<SAMPLES>_seed<SEED>.exr (RGBA float32, row 0 = top,
+  7. writes DIR/blender_s<SAMPLES>_seed<SEED>.exr (RGBA float32, row 0 = top,
      RGB multiplied by pi so it is irradiance E in W/m^2 like Luxel's:
      Blender's diffuse pass without colour is E / pi) and DIR/blender.json
      with the timings.
@@ -65,7 +74,10 @@ def parse_args():
     ap.add_argument("--runs", default="64",
                     help="comma-separated bakes in order, SAMPLES or SAMPLES@SEED (seed default 1)")
     ap.add_argument("--sky", default=None, help="constant sky radiance R,G,B")
-    ap.add_argument("--materials", choices=["lambert", "principled"], default="lambert")
+    ap.add_argument("--sun", default=None, help="X,Y,Z,E,DEG: a sun as Luxel's --sun (glTF axes)")
+    ap.add_argument("--directional-radius", type=float, default=0.0,
+                    help="angular radius of the glTF's directional lights, degrees (Luxel's option)")
+    ap.add_argument("--materials", choices=["matched", "principled"], default="matched")
     ap.add_argument("--uv-map", default=None, help="UV map name (default: the second one)")
     ap.add_argument("--warmup", action="store_true",
                     help="one 1-spp bake before the runs, timed apart (first-bake costs)")
@@ -74,36 +86,131 @@ def parse_args():
     return ap.parse_args(argv)
 
 
-def to_lambert(mat):
-    """Replace the importer's Principled BSDF by Lambert (+ one-sided emission)."""
+def socket_or_value(sock):
+    """(output socket feeding `sock`, or None) and its default value"""
+    if sock.is_linked:
+        return sock.links[0].from_socket, None
+    return None, sock.default_value
+
+
+def feed(nt, src, dst):
+    """connect src = (socket, value) into input socket dst"""
+    sock, val = src
+    if sock is not None:
+        nt.links.new(sock, dst)
+    else:
+        dst.default_value = val
+
+
+def is_rough_dielectric(bsdf):
+    """Luxel's test (server/engine/pipeline/scene_data.cpp): metallic 0,
+    roughness 1, no metallic-roughness texture; the importer links Metallic and
+    Roughness to that texture when there is one"""
+    m, r = bsdf.inputs["Metallic"], bsdf.inputs["Roughness"]
+    return not (m.is_linked or r.is_linked) and m.default_value <= 0.0 and r.default_value >= 1.0
+
+
+def luxel_bsdf(nt, bsdf, specular):
+    """Cycles nodes for Luxel's BSDF (kernels/shading/bsdf.h) of the glTF
+    material behind the importer's Principled node; returns the shader socket.
+
+    specular False (no material of the scene needs the GGX layer, so Luxel
+    compiles it out): Lambert of the base colour.
+    specular True: Lambert of base (1 - metallic) (1 - F(n.wo)) + GGX glossy of
+    roughness r (Cycles: alpha = r^2, as Luxel) and colour F(n.wo), Schlick F
+    with f0 = mix(0.04, base, metallic). Differences that remain (README):
+    Luxel takes F at the microfacet normal (wo.h), this graph at the shading
+    normal; Cycles 3.4's GGX uses separable Smith masking, Luxel the
+    height-correlated form."""
+    base = socket_or_value(bsdf.inputs["Base Color"])
+    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Roughness"].default_value = 0.0  # Oren-Nayar sigma 0 = Lambert
+    if not specular:
+        feed(nt, base, diffuse.inputs["Color"])
+        return diffuse.outputs["BSDF"]
+    metal = socket_or_value(bsdf.inputs["Metallic"])
+    rough = socket_or_value(bsdf.inputs["Roughness"])
+    # f0 = mix(0.04, base, metallic)
+    f0 = nt.nodes.new("ShaderNodeMixRGB")
+    f0.blend_type = "MIX"
+    feed(nt, metal, f0.inputs["Fac"])
+    f0.inputs["Color1"].default_value = (0.04, 0.04, 0.04, 1.0)
+    feed(nt, base, f0.inputs["Color2"])
+    # c5 = (1 - clamp(n.wo))^5; Incoming points from the surface towards the
+    # viewer, Normal is flipped to the viewer's side on back faces (as Luxel's frame)
+    geo = nt.nodes.new("ShaderNodeNewGeometry")
+    dot = nt.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    nt.links.new(geo.outputs["Normal"], dot.inputs[0])
+    nt.links.new(geo.outputs["Incoming"], dot.inputs[1])
+    one_minus = nt.nodes.new("ShaderNodeMath")
+    one_minus.operation = "SUBTRACT"
+    one_minus.use_clamp = True
+    one_minus.inputs[0].default_value = 1.0
+    nt.links.new(dot.outputs["Value"], one_minus.inputs[1])
+    c5 = nt.nodes.new("ShaderNodeMath")
+    c5.operation = "POWER"
+    nt.links.new(one_minus.outputs["Value"], c5.inputs[0])
+    c5.inputs[1].default_value = 5.0
+    # F = f0 + (1 - f0) c5 = mix(f0, 1, c5)
+    fres = nt.nodes.new("ShaderNodeMixRGB")
+    fres.blend_type = "MIX"
+    nt.links.new(c5.outputs["Value"], fres.inputs["Fac"])
+    nt.links.new(f0.outputs["Color"], fres.inputs["Color1"])
+    fres.inputs["Color2"].default_value = (1.0, 1.0, 1.0, 1.0)
+    # diffuse colour = base (1 - metallic) (1 - F)
+    inv = nt.nodes.new("ShaderNodeInvert")
+    inv.inputs["Fac"].default_value = 1.0
+    nt.links.new(fres.outputs["Color"], inv.inputs["Color"])
+    dmetal = nt.nodes.new("ShaderNodeMixRGB")   # mix(base, black, metallic)
+    dmetal.blend_type = "MIX"
+    feed(nt, metal, dmetal.inputs["Fac"])
+    feed(nt, base, dmetal.inputs["Color1"])
+    dmetal.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    dcol = nt.nodes.new("ShaderNodeMixRGB")
+    dcol.blend_type = "MULTIPLY"
+    dcol.inputs["Fac"].default_value = 1.0
+    nt.links.new(dmetal.outputs["Color"], dcol.inputs["Color1"])
+    nt.links.new(inv.outputs["Color"], dcol.inputs["Color2"])
+    nt.links.new(dcol.outputs["Color"], diffuse.inputs["Color"])
+    glossy = nt.nodes.new("ShaderNodeBsdfGlossy")
+    glossy.distribution = "GGX"          # single scattering, as Luxel's
+    nt.links.new(fres.outputs["Color"], glossy.inputs["Color"])
+    feed(nt, rough, glossy.inputs["Roughness"])
+    add = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(diffuse.outputs["BSDF"], add.inputs[0])
+    nt.links.new(glossy.outputs["BSDF"], add.inputs[1])
+    return add.outputs["Shader"]
+
+
+def convert_material(mat, mode, specular):
+    """Material as Luxel shades it (mode 'matched') or the importer's
+    Principled BSDF ('principled'), with one-sided emission, and a white
+    Lambert receiver at the baked point."""
     nt = mat.node_tree
     bsdf = next((n for n in nt.nodes if n.type == "BSDF_PRINCIPLED"), None)
     out = next((n for n in nt.nodes if n.type == "OUTPUT_MATERIAL"), None)
     if bsdf is None or out is None:
         raise SystemExit(f"material {mat.name}: no Principled BSDF from the glTF importer")
-    metallic = bsdf.inputs["Metallic"]
-    rough = bsdf.inputs["Roughness"]
-    if metallic.is_linked or rough.is_linked or metallic.default_value > 0.0 or rough.default_value < 1.0:
-        raise SystemExit(f"material {mat.name}: metallic {metallic.default_value} roughness "
-                         f"{rough.default_value}: only metallic=0, roughness=1 (Lambert in Luxel) "
-                         "is supported by --materials lambert")
     base = bsdf.inputs["Base Color"]
     emis = bsdf.inputs["Emission"]
     strength = float(bsdf.inputs["Emission Strength"].default_value)
-    info = {"base_color": [round(x, 6) for x in list(base.default_value)[:3]],
+    info = {"base_color": "texture" if base.is_linked else [round(x, 6) for x in list(base.default_value)[:3]],
+            "metallic": "texture" if bsdf.inputs["Metallic"].is_linked
+            else round(bsdf.inputs["Metallic"].default_value, 6),
+            "roughness": "texture" if bsdf.inputs["Roughness"].is_linked
+            else round(bsdf.inputs["Roughness"].default_value, 6),
             "emission_color": [round(x, 6) for x in list(emis.default_value)[:3]],
             "emission_strength": strength,
             "double_sided": not mat.use_backface_culling}
-
-    diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
-    diffuse.inputs["Roughness"].default_value = 0.0  # Oren-Nayar sigma 0 = Lambert
-    if base.is_linked:   # base colour texture: keep it
-        nt.links.new(base.links[0].from_socket, diffuse.inputs["Color"])
-    else:
-        diffuse.inputs["Color"].default_value = base.default_value
-    shader = diffuse.outputs["BSDF"]
     if emis.is_linked:
         raise SystemExit(f"material {mat.name}: emissive textures are not supported here")
+    if mode == "matched":
+        shader = luxel_bsdf(nt, bsdf, specular)
+    else:
+        # the importer's Principled BSDF without its emission (added below)
+        bsdf.inputs["Emission Strength"].default_value = 0.0
+        shader = bsdf.outputs["BSDF"]
     if max(list(emis.default_value)[:3]) * strength > 0.0:
         em = nt.nodes.new("ShaderNodeEmission")
         em.inputs["Color"].default_value = emis.default_value
@@ -124,9 +231,132 @@ def to_lambert(mat):
         nt.links.new(shader, add.inputs[0])
         nt.links.new(em.outputs["Emission"], add.inputs[1])
         shader = add.outputs["Shader"]
-    nt.nodes.remove(bsdf)
-    nt.links.new(shader, out.inputs["Surface"])
+    # The baked point: Cycles starts bake paths with the camera-ray flag
+    # (integrator/init_from_bake.h -> path_state_init_integrator), so "Is
+    # Camera Ray" is 1 there only. A white Lambert there makes the DIFFUSE
+    # pass without COLOR E/pi for every receiver (metals included); every
+    # later vertex sees the material.
+    lp = nt.nodes.new("ShaderNodeLightPath")
+    white = nt.nodes.new("ShaderNodeBsdfDiffuse")
+    white.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    white.inputs["Roughness"].default_value = 0.0
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    nt.links.new(lp.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    nt.links.new(shader, mix.inputs[1])
+    nt.links.new(white.outputs["BSDF"], mix.inputs[2])
+    if mode == "matched":
+        nt.nodes.remove(bsdf)
+    nt.links.new(mix.outputs["Shader"], out.inputs["Surface"])
     return info
+
+
+def gltf_json(path):
+    """the glTF JSON of a .gltf or .glb file"""
+    with open(path, "rb") as f:
+        data = f.read()
+    if data[:4] == b"glTF":
+        n = int.from_bytes(data[12:16], "little")
+        return json.loads(data[20:20 + n])
+    return json.loads(data)
+
+
+def world_axis(obj):
+    """unit world direction of the object's local -Z (where a light points)"""
+    import mathutils
+    v = obj.matrix_world.to_3x3() @ mathutils.Vector((0.0, 0.0, -1.0))
+    return v.normalized()
+
+
+def spot_falloff_nodes(light, axis, inner, outer):
+    """Cycles 3.4's spot (kernel/light/spot.h, spot_light_attenuation) is
+    cos(theta) x smoothstep over its blend zone; with blend 0 it is
+    cos(theta) inside the cone. glTF's (and Luxel's, kernels/shading/lights.h)
+    is the square of a linear ramp in cos theta from the outer to the inner
+    cone. The light's Emission strength becomes ramp^2 / cos(theta), with
+    cos(theta) = |Incoming . axis| (Incoming: from the light towards the lit
+    point in a light shader)."""
+    light.use_nodes = True
+    nt = light.node_tree
+    em = next(n for n in nt.nodes if n.type == "EMISSION")
+    geo = nt.nodes.new("ShaderNodeNewGeometry")
+    dot = nt.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    nt.links.new(geo.outputs["Incoming"], dot.inputs[0])
+    dot.inputs[1].default_value = tuple(axis)
+    cd = nt.nodes.new("ShaderNodeMath")
+    cd.operation = "ABSOLUTE"
+    nt.links.new(dot.outputs["Value"], cd.inputs[0])
+    ci, co = math.cos(inner), math.cos(outer)
+    ramp = nt.nodes.new("ShaderNodeMath")      # clamp((cd - co) / (ci - co))
+    ramp.operation = "MULTIPLY_ADD"
+    ramp.use_clamp = True
+    nt.links.new(cd.outputs["Value"], ramp.inputs[0])
+    ramp.inputs[1].default_value = 1.0 / max(ci - co, 1e-4)
+    ramp.inputs[2].default_value = -co / max(ci - co, 1e-4)
+    sq = nt.nodes.new("ShaderNodeMath")
+    sq.operation = "MULTIPLY"
+    nt.links.new(ramp.outputs["Value"], sq.inputs[0])
+    nt.links.new(ramp.outputs["Value"], sq.inputs[1])
+    div = nt.nodes.new("ShaderNodeMath")
+    div.operation = "DIVIDE"
+    nt.links.new(sq.outputs["Value"], div.inputs[0])
+    nt.links.new(cd.outputs["Value"], div.inputs[1])
+    nt.links.new(div.outputs["Value"], em.inputs["Strength"])
+
+
+def match_lights(scene, gltf, directional_radius_deg):
+    """Check the importer's COMPAT conversion against the file and make each
+    lamp what Luxel makes of the glTF light; returns a description."""
+    defs = gltf.get("extensions", {}).get("KHR_lights_punctual", {}).get("lights", [])
+    by_name = {}
+    for i, d in enumerate(defs):
+        by_name.setdefault(d.get("name", {"point": "Point", "spot": "Spot"}.get(d["type"], "Sun")), d)
+    out = []
+    for o in scene.objects:
+        if o.type != "LIGHT":
+            continue
+        lt = o.data
+        d = by_name.get(lt.name.split(".")[0]) or by_name.get(lt.name)
+        if d is None:
+            raise SystemExit(f"light {lt.name}: not found in the glTF's KHR_lights_punctual")
+        inten = float(d.get("intensity", 1.0))
+        want = inten if lt.type == "SUN" else 4.0 * math.pi * inten
+        if abs(lt.energy - want) > 1e-5 * max(want, 1.0):
+            raise SystemExit(f"light {lt.name}: importer gave energy {lt.energy}, expected {want}")
+        axis = world_axis(o)
+        rec = {"name": lt.name, "type": lt.type, "energy": lt.energy, "gltf_intensity": inten,
+               "color": list(lt.color), "axis": [round(x, 6) for x in axis]}
+        if lt.type == "SUN":
+            lt.angle = 2.0 * math.radians(directional_radius_deg)   # angular diameter
+            rec["angle_rad"] = lt.angle
+        else:
+            lt.shadow_soft_size = 0.0       # a point, like Luxel's (importer leaves 0.25 m)
+            rec["position"] = list(o.matrix_world.translation)
+        if lt.type == "SPOT":
+            sp = d.get("spot", {})
+            inner, outer = float(sp.get("innerConeAngle", 0.0)), float(sp.get("outerConeAngle", math.pi / 4))
+            lt.spot_size = 2.0 * outer
+            lt.spot_blend = 0.0
+            spot_falloff_nodes(lt, axis, inner, outer)
+            rec.update(inner=inner, outer=outer, spot_size=lt.spot_size)
+        out.append(rec)
+    return out
+
+
+def add_sun(scene, spec):
+    """--sun X,Y,Z,E,DEG: Luxel's --sun X,Y,Z --sun-illuminance E --sun-radius DEG"""
+    import mathutils
+    x, y, z, e, deg = (float(v) for v in spec.split(","))
+    # glTF +Y up = Blender +Z up (the importer maps (x, y, z) to (x, -z, y))
+    d = mathutils.Vector((x, -z, y)).normalized()
+    lt = bpy.data.lights.new("luxel_sun", type="SUN")
+    lt.energy = e
+    lt.angle = 2.0 * math.radians(deg)
+    ob = bpy.data.objects.new("luxel_sun", lt)
+    ob.rotation_mode = "QUATERNION"
+    ob.rotation_quaternion = d.to_track_quat("-Z", "Y")
+    scene.collection.objects.link(ob)
+    return {"name": "luxel_sun", "type": "SUN", "direction_blender": list(d), "energy": e, "angle_rad": lt.angle}
 
 
 def write_exr(path, img, res):
@@ -163,7 +393,7 @@ def main():
     os.makedirs(a.out, exist_ok=True)
     t_import0 = time.time()
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=os.path.abspath(a.scene))
+    bpy.ops.import_scene.gltf(filepath=os.path.abspath(a.scene), convert_lighting_mode="COMPAT")
     t_import = time.time() - t_import0
 
     t_setup0 = time.time()
@@ -171,10 +401,21 @@ def main():
     meshes = [o for o in scene.objects if o.type == "MESH"]
     if not meshes:
         raise SystemExit("no meshes imported")
-    lights = [o for o in scene.objects if o.type == "LIGHT"]
-    if lights:
-        raise SystemExit(f"{len(lights)} punctual lights: this harness compares emissive/sky "
-                         "lighting only (light unit conversions are not handled)")
+    n_objects = len(meshes)
+    lights = match_lights(scene, gltf_json(a.scene), a.directional_radius)
+    if a.sun:
+        lights.append(add_sun(scene, a.sun))
+    if len(meshes) > 1:
+        # Blender's bake operator renders each selected object on its own, with
+        # a full Cycles scene sync each time (1102 objects of the gas station:
+        # 400 s for a 1-spp bake): join them into one object first, as users
+        # baking one shared atlas do. UV maps join by name, materials are kept.
+        bpy.ops.object.select_all(action="DESELECT")
+        for o in meshes:
+            o.select_set(True)
+        bpy.context.view_layer.objects.active = meshes[0]
+        bpy.ops.object.join()
+        meshes = [o for o in scene.objects if o.type == "MESH"]
     uv_names = set()
     for o in meshes:
         if len(o.data.uv_layers) < 2 and a.uv_map is None:
@@ -185,15 +426,19 @@ def main():
     if len(uv_names) != 1:
         raise SystemExit(f"lightmap UV maps differ between objects: {sorted(uv_names)}")
     uv_name = uv_names.pop()
+    triangles = 0
+    for o in meshes:
+        o.data.calc_loop_triangles()
+        triangles += len(o.data.loop_triangles)
 
     img = bpy.data.images.new("lightmap", a.resolution, a.resolution, alpha=True, float_buffer=True)
     img.colorspace_settings.name = "Linear"
     materials = {}
-    for m in bpy.data.materials:
-        if not m.use_nodes or m.users == 0:
-            continue
-        if a.materials == "lambert":
-            materials[m.name] = to_lambert(m)
+    used = [m for m in bpy.data.materials if m.use_nodes and m.users > 0]
+    specular = not all(is_rough_dielectric(next(n for n in m.node_tree.nodes
+                                                  if n.type == "BSDF_PRINCIPLED")) for m in used)
+    for m in used:
+        materials[m.name] = convert_material(m, a.materials, specular)
         tex = m.node_tree.nodes.new("ShaderNodeTexImage")
         tex.image = img
         for n in m.node_tree.nodes:
@@ -274,11 +519,11 @@ def main():
         "blender_version": bpy.app.version_string,
         "scene": a.scene, "resolution": a.resolution, "bounces": a.bounces,
         "sky": sky, "materials": a.materials, "uv_map": uv_name,
-        "objects": len(meshes), "threads": scene.render.threads,
+        "objects": len(meshes), "objects_joined": n_objects, "threads": scene.render.threads, "triangles": triangles,
         "sampling_pattern": c.sampling_pattern,
         "startup_s": (T_SCRIPT - a.t0) if a.t0 else None,
         "import_s": t_import, "setup_s": t_setup, "warmup_s": warmup_s,
-        "material_conversion": materials,
+        "material_conversion": materials, "specular_layer": specular, "lights": lights,
         "bakes": bakes,
     }
     with open(os.path.join(a.out, "blender.json"), "w") as f:

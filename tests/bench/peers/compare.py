@@ -27,7 +27,19 @@ Conventions (README.md next to this file):
     (independent of the ladders: Luxel ladder seed 2, Cycles seeds 3, 1, 2).
     The reference's own noise (Luxel's rel_error.exr times the reference
     value, per texel) is subtracted from both measures; raw values are in
-    errors.csv.
+    errors.csv;
+  * the speed ratio splits into throughput and error per sample: for a
+    converging Monte Carlo estimator relMSE ~ V / spp, so time to an error e is
+    spp / (samples/s) = V / (e x samples per texel per second) and
+        t_Cycles / t_Luxel = (Luxel samples/s / Cycles samples/s)
+                           x (V_Cycles / V_Luxel) x (N_Cycles / N_Luxel),
+    V = relMSE x spp, N = texels traced,
+    V being "error per sample" (geometric mean over the ladder rungs inside
+    the error range both ladders cover). A sample is one path from one texel
+    (Luxel: stats.paths; Cycles: baked texels x spp). A third factor is the
+    number of texels each traces per spp (Luxel: every covered texel, chart
+    borders included; Cycles: texels whose centre lies on a triangle):
+    ratio ~ throughput x error per sample x (Cycles texels / Luxel texels).
 """
 import csv
 import json
@@ -274,6 +286,7 @@ def analyse(sdir):
                     [(r["trace_s"], r[sel][meas]) for r in lux], [(r["bake_s"], r[sel][meas]) for r in bl])
             speed[f"end_to_end_{sel}_relmse"] = speed_table(
                 [(r["wall_s"], r[sel]["relmse"]) for r in lux], [(r["cold_s"], r[sel]["relmse"]) for r in bl])
+        speed["split"] = split(lux, bl, speed["engine_matched_relmse"])
         speed["own_relmse"] = speed_table(
             [(r["trace_s"], r["interior"]["relmse"]) for r in lux],
             [(r["bake_s"], r["own"]["relmse"]) for r in bl if "own" in r])
@@ -282,7 +295,39 @@ def analyse(sdir):
     return {"name": name, "settings": st, "agreement": agree, "luxel": lux, "blender": bl,
             "blender_overheads": {"startup_s": bj["startup_s"], "import_s": bj["import_s"],
                                   "setup_s": bj["setup_s"], "warmup_s": bj.get("warmup_s")},
-            "luxel_ref_seconds": ref.manifest["stats"]["seconds"], "speed": speed}
+            "luxel_ref_seconds": ref.manifest["stats"]["seconds"], "speed": speed,
+            "triangles": bj.get("triangles"),
+            "lights": ", ".join(x.get('type', 'SUN').lower() for x in bj.get("lights", [])) or None,
+            "luxel_features": ref.manifest.get("features")}
+
+
+def split(lux, bl, table):
+    """samples/s and error per sample (relMSE x spp, matched texels) of each
+    ladder, over the rungs inside the error range of the speed table"""
+    levels = [lv["error"] for lv in table["levels"]]
+    lo, hi = (min(levels), max(levels)) if levels else (0.0, math.inf)
+
+    def gm(v):
+        v = [x for x in v if x > 0]
+        return math.exp(np.mean(np.log(v))) if v else None
+
+    def pick(rows, rate, texels):
+        inside = [r for r in rows if lo / 2 <= r["matched"]["relmse"] <= hi * 2] or rows
+        return {"samples_per_s": gm([rate(r) for r in inside]),
+                "relmse_x_spp": gm([r["matched"]["relmse"] * r["spp"] for r in inside]),
+                "texels": gm([texels(r) for r in inside]),
+                "rungs": [r["spp"] for r in inside]}
+
+    out = {"luxel": pick(lux, lambda r: r["paths"] / r["trace_s"], lambda r: r["paths"] / r["spp"]),
+           "cycles": pick(bl, lambda r: r["texels"] * r["spp"] / r["bake_s"], lambda r: r["texels"])}
+    L, C = out["luxel"], out["cycles"]
+    if L["samples_per_s"] and C["samples_per_s"] and L["relmse_x_spp"] and C["relmse_x_spp"]:
+        out["throughput_ratio"] = L["samples_per_s"] / C["samples_per_s"]
+        out["error_per_sample_ratio"] = C["relmse_x_spp"] / L["relmse_x_spp"]
+        # texels traced per sample per texel: Luxel traces every covered texel
+        # (chart borders included), Cycles the texels whose centre is on a triangle
+        out["texel_ratio"] = C["texels"] / L["texels"]
+    return out
 
 
 def write_csv(sdir, lux, bl):
@@ -329,12 +374,51 @@ def plot(sdir, name, st, lux, bl):
     plt.close(fig)
 
 
+def summary(res):
+    """one row per scene with a ladder: the headline numbers"""
+    rows = []
+    for r in res:
+        sp = r.get("speed") or {}
+        if not sp.get("engine_matched_relmse", {}).get("levels"):
+            continue
+        st = r["settings"]
+        eng = sp["engine_matched_relmse"]
+        mid = eng["levels"][len(eng["levels"]) // 2]
+        e2e = sp["end_to_end_matched_relmse"]
+        e2e_mid = min(e2e["levels"], key=lambda lv: abs(math.log(lv["error"] / mid["error"]))) \
+            if e2e["levels"] else None
+        spl = sp["split"]
+        rows.append([r["name"], f"{st['resolution']}²", r.get("triangles") or "-", mid["error"],
+                     mid["blender_s"], mid["luxel_s"], f"{eng['geomean_ratio']:.2f}",
+                     e2e_mid["blender_s"] if e2e_mid else "-", e2e_mid["luxel_s"] if e2e_mid else "-",
+                     f"{e2e['geomean_ratio']:.2f}" if e2e["levels"] else "-",
+                     spl["cycles"]["samples_per_s"] / 1e6, spl["luxel"]["samples_per_s"] / 1e6,
+                     spl["cycles"]["relmse_x_spp"], spl["luxel"]["relmse_x_spp"],
+                     f"{spl.get('throughput_ratio', 0):.2f} x {spl.get('error_per_sample_ratio', 0):.2f}"
+                     f" x {spl.get('texel_ratio', 0):.2f}"])
+    if not rows:
+        return ""
+    return ("### Summary: time to equal relMSE (matched texels), Cycles vs Luxel\n\n"
+            "Engine: Luxel trace seconds vs one Cycles bake call; end to end: Luxel process wall "
+            "vs Blender start + import + setup + bake call. Both at the middle one of the five "
+            "common error levels; the ratio columns are the geometric mean over all five "
+            "(Cycles time / Luxel time, > 1: Luxel faster; the goal is >= 2). Samples/s: paths "
+            "from texels per second in the engine; error per sample: relMSE x spp (lower is "
+            "better). Split: ratio ≈ (Luxel / Cycles samples/s) x (Cycles / Luxel error per "
+            "sample) x (texels Cycles bakes / texels Luxel bakes).\n\n"
+            + md_table(["scene", "size", "triangles", "relMSE", "Cycles s", "Luxel s",
+                        "engine ratio", "Cycles e2e s", "Luxel e2e s", "e2e ratio",
+                        "Cycles Msamples/s", "Luxel Msamples/s", "Cycles relMSE·spp",
+                        "Luxel relMSE·spp", "split: throughput x error/sample x texels"], rows) + "\n")
+
+
 def report(res):
-    out = []
+    out = [summary(res)]
     for r in res:
         st, a = r["settings"], r["agreement"]
         out.append(f"\n### {r['name']}: {st['resolution']}², {st['bounces']} bounces, "
-                   f"sky {st['sky'] or 'none'}\n")
+                   f"sky {st['sky'] or 'none'}, sun {st.get('sun') or 'none'}, "
+                   f"{r.get('triangles') or '?'} triangles, lights: {r.get('lights') or 'none'}\n")
         out.append(f"Reference: Luxel {a['ref_spp']} spp, seed 1 ({fmt(r['luxel_ref_seconds'])} s "
                    f"trace). Cycles converged: {a['blender_spp']} spp (seeds 1 and 2, averaged). "
                    f"Texels: {a['texels_covered']} covered, {a['interior']['texels']} interior, "
@@ -352,8 +436,11 @@ def report(res):
                              "Cycles / Luxel ± 1σ", "MSD / noise var.", "RMS diff. beyond noise"],
                             rows))
         charts = a["interior"]["charts"]
+        if len(charts) > 24:   # big atlases: the 24 charts with most texels
+            charts = sorted(sorted(charts, key=lambda c: -c["texels"])[:24], key=lambda c: c["chart"])
         if len(charts) > 1:
-            out.append("\nPer chart (interior texels, luminance):\n")
+            out.append(f"\nPer chart (interior texels, luminance; {len(charts)} of "
+                       f"{len(a['interior']['charts'])} charts):\n")
             out.append(md_table(["chart", "texels", "rows", "cols", "E Luxel", "E Cycles",
                                  "Cycles / Luxel ± 1σ"],
                                 [[c["chart"], c["texels"], c["rows"], c["cols"], c["luxel_E"],
@@ -411,6 +498,17 @@ def report(res):
                          f"{min(rs):.2f} .. {max(rs):.2f}", f"{s['geomean_ratio']:.2f}"])
         out.append(md_table(["time to equal error: Cycles time / Luxel time (> 1: Luxel faster)",
                              "error levels", "ratio range", "geo. mean"], rows))
+        spl = sp.get("split")
+        if spl and "throughput_ratio" in spl:
+            out.append(f"\nSplit (matched texels, rungs Luxel {spl['luxel']['rungs']}, Cycles "
+                       f"{spl['cycles']['rungs']}): samples/s Luxel {fmt(spl['luxel']['samples_per_s'] / 1e6)} M, "
+                       f"Cycles {fmt(spl['cycles']['samples_per_s'] / 1e6)} M (ratio "
+                       f"{spl['throughput_ratio']:.2f}); relMSE x spp Luxel "
+                       f"{fmt(spl['luxel']['relmse_x_spp'])}, Cycles {fmt(spl['cycles']['relmse_x_spp'])} "
+                       f"(Cycles / Luxel {spl['error_per_sample_ratio']:.2f}); texels baked Luxel "
+                       f"{fmt(spl['luxel']['texels'])}, Cycles {fmt(spl['cycles']['texels'])} (Cycles / "
+                       f"Luxel {spl['texel_ratio']:.2f}); product "
+                       f"{spl['throughput_ratio'] * spl['error_per_sample_ratio'] * spl['texel_ratio']:.2f}.\n")
         s = sp["engine_matched_relmse"]
         if s["levels"]:
             out.append("")
@@ -425,7 +523,8 @@ def main():
         sys.exit(__doc__)
     root = sys.argv[1]
     scenes = [d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, "settings.json"))]
-    scenes.sort(key=lambda s: (s != "sky_plane", s))
+    order = ["sky_plane", "lights_plane", "cornell_box", "sky_courtyard", "lights_courtyard"]
+    scenes.sort(key=lambda s: (order.index(s) if s in order else len(order), s))
     res = [analyse(os.path.join(root, s)) for s in scenes]
     with open(os.path.join(root, "summary.json"), "w") as f:
         json.dump(res, f, indent=1)

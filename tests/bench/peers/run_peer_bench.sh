@@ -5,9 +5,12 @@
 #   tests/bench/peers/install-blender.sh     # once (apt: blender, python3-openimageio)
 #   tests/bench/peers/run_peer_bench.sh [OUT]   # default OUT = out/peers
 #
-# Needs a built luxel (build/client/luxel, or set LUXEL=...). About 4 minutes
-# on a 2-core machine. PEER_QUICK=1: tiny sample counts (a smoke run, ~20 s;
-# its numbers mean nothing).
+# Needs a built luxel (build/client/luxel, or set LUXEL=...). About 4.5
+# minutes on a 2-core machine for the five 64^2 scenes. PEER_HEAVY=1 adds the gas
+# station (/work/shared/scenes/gas_station.glb or PEER_GAS=...; 512^2, 99k
+# triangles; about 2.5 minutes more). PEER_ONLY=a,b: only those scenes.
+# PEER_QUICK=1: tiny sample counts (a smoke run, ~1 min; its numbers mean
+# nothing). On a shared machine prefix with `flock /tmp/luxel-cpu.lock`.
 set -euo pipefail
 
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -24,25 +27,49 @@ command -v "$BLENDER" >/dev/null || { echo "run_peer_bench: no blender; run $HER
 [ -x "$LUXEL" ] || { echo "run_peer_bench: no luxel at $LUXEL (build first, or set LUXEL)" >&2; exit 2; }
 "$PY" -c "import numpy, OpenImageIO" 2>/dev/null || { echo "run_peer_bench: $PY lacks numpy/OpenImageIO; run $HERE/install-blender.sh" >&2; exit 2; }
 
-# name | scene | sky | Luxel reference spp | Luxel ladder | Cycles ladder |
-#   Cycles converged spp (x2 seeds) | spp of the 4x-resolution filter check (0: none)
+# name | scene | lightmap side | sky R,G,B | sun X,Y,Z,E,DEG (Luxel --sun, --sun-illuminance,
+#   --sun-radius) | angular radius of the glTF's directional lights (deg) | Luxel reference spp |
+#   Luxel ladder | Cycles ladder | Cycles converged spp (x2 seeds) |
+#   spp of the 4x-resolution filter check (0: none)
+SUN_GAS=0.4,-0.8,0.45,3.0,0.27  # gas station: a sun (W/m^2 facing it) ...
+SKY_GAS=0.10,0.15,0.25           # ... and a dim blue sky
+GAS=${PEER_GAS:-/work/shared/scenes/gas_station.glb}
 if [ "${PEER_QUICK:-0}" = 1 ]; then
   SCENES=(
-    "sky_plane|@/sky_plane.gltf|$SKY|64|||64|0"
-    "cornell_box|$ROOT/scenes/cornell_box.gltf||256|4,16|4,16|64|0"
-    "sky_courtyard|@/sky_courtyard.gltf|$SKY|256|4,16|4,16|64|16"
+    "sky_plane|@/sky_plane.gltf|$RES|$SKY|||64|||64|0"
+    "lights_plane|@/lights_plane.gltf|$RES|||0.27|256|||64|0"
+    "cornell_box|$ROOT/scenes/cornell_box.gltf|$RES|||0|256|4,16|4,16|64|0"
+    "sky_courtyard|@/sky_courtyard.gltf|$RES|$SKY|||256|4,16|4,16|64|16"
+    "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|256|4,16|4,16|64|0"
   )
+  HEAVY=("gas_station|$GAS|256|$SKY_GAS|$SUN_GAS||64|4,16|1,4|16|0")
 else
   SCENES=(
-    "sky_plane|@/sky_plane.gltf|$SKY|256|||256|0"
-    "cornell_box|$ROOT/scenes/cornell_box.gltf||8192|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
-    "sky_courtyard|@/sky_courtyard.gltf|$SKY|32768|4,8,16,32,64,128,256,512,1024,2048|1,2,4,8,16,32,64,128,256,512,1024,2048|8192|256"
+    "sky_plane|@/sky_plane.gltf|$RES|$SKY|||256|||256|0"
+    "lights_plane|@/lights_plane.gltf|$RES|||0.27|4096|||1024|0"
+    "cornell_box|$ROOT/scenes/cornell_box.gltf|$RES|||0|8192|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
+    "sky_courtyard|@/sky_courtyard.gltf|$RES|$SKY|||32768|4,8,16,32,64,128,256,512,1024,2048|1,2,4,8,16,32,64,128,256,512,1024,2048|8192|256"
+    "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|16384|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
   )
+  # 512^2, 99k triangles, 1102 meshes, 95 GGX materials: PEER_HEAVY=1 (about 2.5 more minutes)
+  HEAVY=("gas_station|$GAS|512|$SKY_GAS|$SUN_GAS||512|4,8,16,32|1,2,4,8,16,32|128|0")
+fi
+if [ "${PEER_HEAVY:-0}" = 1 ]; then
+  [ -f "$GAS" ] || { echo "run_peer_bench: PEER_HEAVY=1 needs $GAS (set PEER_GAS)" >&2; exit 2; }
+  SCENES+=("${HEAVY[@]}")
+fi
+if [ -n "${PEER_ONLY:-}" ]; then   # PEER_ONLY=name1,name2: a subset
+  keep=()
+  for spec in "${SCENES[@]}"; do
+    [[ ",$PEER_ONLY," == *",${spec%%|*},"* ]] && keep+=("$spec")
+  done
+  SCENES=("${keep[@]}")
 fi
 
 now() { date +%s.%N; }
 # share of CPU time not idle over one second (other users of the machine
-# distort every timing here: the run waits up to 2 minutes for a quiet machine)
+# distort every timing here: the run waits up to 2 minutes for a quiet machine;
+# PEER_QUIET_TRIES=N waits at most N seconds, and the busy share is recorded)
 cpu_busy() {
   local a b
   read -r -a a < /proc/stat; sleep 1; read -r -a b < /proc/stat
@@ -50,10 +77,10 @@ cpu_busy() {
 }
 wait_quiet() {
   local busy i
-  for i in $(seq 60); do
+  for i in $(seq "${PEER_QUIET_TRIES:-60}"); do
     busy=$(cpu_busy)
     "$PY" -c "import sys; sys.exit(0 if float(sys.argv[1]) < 0.15 else 1)" "$busy" && break
-    [ "$i" = 1 ] && echo "   (machine busy: $busy of the CPU in use by others; waiting up to 2 min)"
+    [ "$i" = 1 ] && echo "   (machine busy: $busy of the CPU in use by others; waiting up to ${PEER_QUIET_TRIES:-60} s)"
     sleep 1
   done
   echo "$busy"
@@ -69,32 +96,45 @@ mkdir -p "$OUT/scenes"
   echo "git: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$ROOT" diff --quiet 2>/dev/null || echo -dirty)"
   echo "luxel: $("$LUXEL" --version 2>&1 | head -1)"
   echo "blender: $("$BLENDER" --version 2>/dev/null | head -1)"
-  echo "resolution: $RES, bounces: $BOUNCES"
+  echo "resolution: $RES (unless a scene sets its own), bounces: $BOUNCES"
+  echo "opencl: $(clinfo -l 2>/dev/null | tr '\n' ' ' || true)"
   lscpu | head -20
 } > "$OUT/machine.txt"
 cat "$OUT/machine.txt"
 
 T_ALL=$(now)
 for spec in "${SCENES[@]}"; do
-  IFS='|' read -r name scene sky ref_spp lux_ladder bl_ladder bl_hi hires_spp <<< "$spec"
+  IFS='|' read -r name scene res sky sun dirrad ref_spp lux_ladder bl_ladder bl_hi hires_spp <<< "$spec"
   scene=${scene/#@/$OUT/scenes}
   d="$OUT/$name"
   mkdir -p "$d/luxel"
+  # the same lighting for both: skyarg goes to Luxel, blarg to blender_bake.py
   skyarg=()
-  [ -n "$sky" ] && skyarg=(--sky "$sky")
+  blarg=()
+  [ -n "$sky" ] && { skyarg+=(--sky "$sky"); blarg+=(--sky "$sky"); }
+  if [ -n "$sun" ]; then
+    IFS=',' read -r sx sy sz se sr <<< "$sun"
+    skyarg+=(--sun "$sx,$sy,$sz" --sun-illuminance "$se" --sun-radius "$sr")
+    blarg+=(--sun "$sun")
+  fi
+  if [ -n "$dirrad" ]; then
+    skyarg+=(--directional-radius "$dirrad")
+    blarg+=(--directional-radius "$dirrad")
+  fi
   busy=$(wait_quiet | tail -1)
   echo "== $name: CPU busy before start: $busy"
   cat > "$d/settings.json" <<EOF
-{"name": "$name", "scene": "$scene", "sky": "$sky", "resolution": $RES, "bounces": $BOUNCES,
+{"name": "$name", "scene": "$scene", "sky": "$sky", "sun": "$sun", "directional_radius": "$dirrad",
+ "resolution": $res, "bounces": $BOUNCES,
  "ref_spp": $ref_spp, "luxel_ladder": $(json_list "$lux_ladder"),
  "blender_ladder": $(json_list "$bl_ladder"), "blender_hi": $bl_hi, "cpu_busy_before": $busy}
 EOF
   echo "== $name: Luxel reference ($ref_spp spp, seed 1)"
-  "$LUXEL" bake "$scene" --local --out "$d/luxel_ref" --resolution "$RES" --samples "$ref_spp" \
+  "$LUXEL" bake "$scene" --local --out "$d/luxel_ref" --resolution "$res" --samples "$ref_spp" \
       --bounces "$BOUNCES" --seed 1 "${skyarg[@]}" --quiet | grep -E '^(lightmap|baked)' || true
   for spp in ${lux_ladder//,/ }; do
     t0=$(now)
-    "$LUXEL" bake "$scene" --local --out "$d/luxel/s$spp" --resolution "$RES" --samples "$spp" \
+    "$LUXEL" bake "$scene" --local --out "$d/luxel/s$spp" --resolution "$res" --samples "$spp" \
         --bounces "$BOUNCES" --seed 2 "${skyarg[@]}" --quiet > "$d/luxel/s$spp.log"
     elapsed "$t0" "$(now)" > "$d/luxel/s$spp/wall_s.txt"
     echo "   luxel $spp spp: $(grep '^baked' "$d/luxel/s$spp.log" | cut -c12-60) (process $(cat "$d/luxel/s$spp/wall_s.txt") s)"
@@ -107,14 +147,14 @@ EOF
   runs=${runs#,}
   echo "== $name: Cycles ($runs)"
   "$BLENDER" -b --factory-startup --python "$HERE/blender_bake.py" -- --scene "$scene" \
-      --out "$d/blender" --resolution "$RES" --bounces "$BOUNCES" --runs "$runs" --warmup \
-      ${sky:+--sky "$sky"} --t0 "$(now)" > "$d/blender.log" 2>&1 \
+      --out "$d/blender" --resolution "$res" --bounces "$BOUNCES" --runs "$runs" --warmup \
+      "${blarg[@]}" --t0 "$(now)" > "$d/blender.log" 2>&1 \
     || { tail -30 "$d/blender.log" >&2; exit 1; }
   grep '^blender_bake' "$d/blender.log" | sed 's/^/   /'
   if [ "$hires_spp" != 0 ]; then
     # filter check (not timed): both renderers at 4x the resolution, for the
     # texels where the converged maps disagree (compare.py box-filters down)
-    hr=$((RES * 4))
+    hr=$((res * 4))
     echo "== $name: ${hr}^2 filter check ($hires_spp spp each)"
     mkdir -p "$d/hires"
     echo "{\"resolution\": $hr, \"luxel_spp\": $hires_spp, \"blender_spp\": $hires_spp}" > "$d/hires/settings.json"
@@ -122,7 +162,7 @@ EOF
         --bounces "$BOUNCES" --seed 1 "${skyarg[@]}" --quiet > "$d/hires/luxel.log"
     "$BLENDER" -b --factory-startup --python "$HERE/blender_bake.py" -- --scene "$scene" \
         --out "$d/hires/blender" --resolution "$hr" --bounces "$BOUNCES" --runs "$hires_spp@1" \
-        ${sky:+--sky "$sky"} > "$d/hires/blender.log" 2>&1 || { tail -30 "$d/hires/blender.log" >&2; exit 1; }
+        "${blarg[@]}" > "$d/hires/blender.log" 2>&1 || { tail -30 "$d/hires/blender.log" >&2; exit 1; }
   fi
 done
 echo "== all bakes: $(elapsed "$T_ALL" "$(now)") s"
