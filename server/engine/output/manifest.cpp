@@ -85,6 +85,7 @@ Json to_json(const Manifest& m) {
   j["features"] = m.features;
   j["device"] = m.device;
   if (!m.intersector.empty()) j["intersector"] = m.intersector;
+  if (!m.import_warnings.empty()) j["import_warnings"] = m.import_warnings;
   j["stats"] = stats_to_json(m.stats);
   if (!m.encodings_json.empty()) {
     j["encodings"] = Json::array();
@@ -308,6 +309,17 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.string("features", m.features));
   LUXEL_RETURN_IF_ERROR(f.string("device", m.device));
   if (j.contains("intersector")) LUXEL_RETURN_IF_ERROR(f.string("intersector", m.intersector));
+  if (j.contains("import_warnings")) {
+    const Json* list = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.array("import_warnings", list));
+    m.import_warnings.clear();
+    for (size_t i = 0; i < list->size(); ++i) {
+      if (!(*list)[i].is_string())
+        return invalid_argument(
+            strprintf("%s: field 'import_warnings[%zu]' must be a string", what.c_str(), i));
+      m.import_warnings.push_back((*list)[i].get<std::string>());
+    }
+  }
   if (j.contains("encodings")) {
     const Json& enc = j["encodings"];
     if (!enc.is_array())

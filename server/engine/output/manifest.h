@@ -67,6 +67,9 @@ struct Manifest {
   std::map<std::string, std::string> settings;  // bake settings as given
   std::string features;                         // compiled feature list
   std::string device;                           // device description
+  // What the importer dropped or could not apply (scene::ImportStats), by
+  // name: unsupported extensions, normal maps, samplers. Empty: none.
+  std::vector<std::string> import_warnings;
   std::string intersector;  // backend of the ray queries ("embree", "opencl"; empty: not recorded)
   // Directional encodings: one JSON object each (basis, directions,
   // frame, solver, file), kept as JSON text so the engine's basis description

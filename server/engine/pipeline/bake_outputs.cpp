@@ -66,6 +66,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.features = result.features;
   m.device = result.device;
   m.intersector = result.intersector;
+  m.import_warnings = scene.import_stats.warnings;
   m.stats.seconds = result.seconds;
   m.stats.paths = result.paths;
   m.stats.mean_spp = result.mean_spp;

@@ -200,6 +200,12 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &model));
   Scene scene;
   scene.source_name = name;
+  // Extensions the file uses that the importer does not read, by name
+  // (materials and textures name where each one appears).
+  for (const std::string& name : model.extensionsUsed)
+    if (name != "KHR_lights_punctual" && name != "KHR_materials_emissive_strength")
+      scene.import_stats.warnings.push_back("extension " + name +
+                                            " is used by the file and not supported (ignored)");
   LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
   LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));
   if (scene.materials.empty()) {

@@ -19,10 +19,17 @@ class TextureTable {
         scene_(scene),
         pixel_budget_(options.max_total_texture_pixels) {}
 
+  std::vector<std::string>& warnings() { return scene_->import_stats.warnings; }
+
   // Resolves a textureInfo of material `what` ("material 'x' (material[1])
   // baseColorTexture") to a TextureRef, decoding the image on first use.
-  Result<TextureRef> resolve(int texture_index, int texcoord, ColorSpace space,
+  Result<TextureRef> resolve(const tinygltf::TextureInfo& info, ColorSpace space,
                              const std::string& what) {
+    return resolve(info.index, info.texCoord, info.extensions, space, what);
+  }
+
+  Result<TextureRef> resolve(int texture_index, int texcoord, const tinygltf::ExtensionMap& ext,
+                             ColorSpace space, const std::string& what) {
     TextureRef ref;
     if (texture_index < 0) return ref;
     if (static_cast<size_t>(texture_index) >= model_.textures.size()) {
@@ -41,6 +48,7 @@ class TextureTable {
                     what.c_str(), texture_index, image));
     }
     ref.texcoord = texcoord;
+    warn_ignored(texture_index, texcoord, ext, what);
     const auto key = std::make_pair(image, space);
     auto it = decoded_.find(key);
     if (it == decoded_.end()) {
@@ -54,6 +62,34 @@ class TextureTable {
   }
 
  private:
+  // What the bake does not apply yet is named, never silently dropped:
+  // texture transforms, non-repeat samplers (the kernels wrap by repeat),
+  // textures on TEXCOORD_1 (the device carries material UVs of set 0).
+  void warn_ignored(int texture_index, int texcoord, const tinygltf::ExtensionMap& ext,
+                    const std::string& what) {
+    if (ext.count("KHR_texture_transform"))
+      warnings().push_back(what +
+                           ": KHR_texture_transform is not supported; the texture is "
+                           "sampled untransformed");
+    for (const auto& [name, value] : ext)
+      if (name != "KHR_texture_transform")
+        warnings().push_back(what + ": texture extension " + name + " is not supported (ignored)");
+    if (texcoord == 1)
+      warnings().push_back(what +
+                           ": texCoord 1 is not supported by the bake; the texture is "
+                           "left out (factors only)");
+    const int sampler = model_.textures[static_cast<size_t>(texture_index)].sampler;
+    if (sampler >= 0 && static_cast<size_t>(sampler) < model_.samplers.size()) {
+      const auto& sm = model_.samplers[static_cast<size_t>(sampler)];
+      constexpr int kRepeat = 10497;  // glTF 2.0 §5.26, sampler.wrapS / wrapT
+      if (sm.wrapS != kRepeat || sm.wrapT != kRepeat)
+        warnings().push_back(strprintf(
+            "%s: sampler %d wraps (S %d, T %d); only REPEAT (10497) is supported, the texture "
+            "repeats",
+            what.c_str(), sampler, sm.wrapS, sm.wrapT));
+    }
+  }
+
   const tinygltf::Model& model_;
   const ImportOptions& options_;
   Scene* scene_;
@@ -132,19 +168,27 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   LUXEL_RETURN_IF_ERROR(check_factor(label, "alphaCutoff", gm.alphaCutoff, 0, 3.0e38));
   m.alpha_cutoff = static_cast<float>(gm.alphaCutoff);
 
-  auto base = table->resolve(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
-                             ColorSpace::kSRGB, label + " baseColorTexture");
+  auto base = table->resolve(pbr.baseColorTexture, ColorSpace::kSRGB, label + " baseColorTexture");
   if (!base) return base.status();
   m.base_color_texture = *base;
-  auto mr =
-      table->resolve(pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
-                     ColorSpace::kLinear, label + " metallicRoughnessTexture");
+  auto mr = table->resolve(pbr.metallicRoughnessTexture, ColorSpace::kLinear,
+                           label + " metallicRoughnessTexture");
   if (!mr) return mr.status();
   m.metallic_roughness_texture = *mr;
-  auto em = table->resolve(gm.emissiveTexture.index, gm.emissiveTexture.texCoord, ColorSpace::kSRGB,
-                           label + " emissiveTexture");
+  auto em = table->resolve(gm.emissiveTexture, ColorSpace::kSRGB, label + " emissiveTexture");
   if (!em) return em.status();
   m.emissive_texture = *em;
+
+  // Inputs that change baked light but are not modelled yet, by name.
+  auto& warnings = table->warnings();
+  if (gm.normalTexture.index >= 0)
+    warnings.push_back(label +
+                       ": normalTexture is not supported; the interpolated vertex "
+                       "normal is used");
+  for (const auto& [name, value] : gm.extensions)
+    if (name != "KHR_materials_emissive_strength")
+      warnings.push_back(label + ": material extension " + name +
+                         " is not supported (the metallic-roughness core is used)");
   return m;
 }
 

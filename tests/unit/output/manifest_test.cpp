@@ -37,6 +37,8 @@ Manifest full_manifest() {
   m.settings = {{"samples", "1024"}, {"bounces", "4"}, {"seed", "7"}, {"filter", "box"}};
   m.features = "LUX_POINT_LIGHTS LUX_SORT";
   m.device = "pthread-cpu (PoCL 3.1)";
+  m.import_warnings = {"extension KHR_materials_ior is used by the file and not supported",
+                       "material 'x' (material[0]): normalTexture is not supported"};
   m.stats.seconds = 12.5;
   m.stats.paths = (1ull << 60) + 3;
   m.stats.mean_spp = 1023.75;
@@ -95,6 +97,7 @@ TEST(Manifest, RoundTripKeepsEveryField) {
   EXPECT_EQ(got.settings, m.settings);
   EXPECT_EQ(got.features, m.features);
   EXPECT_EQ(got.device, m.device);
+  EXPECT_EQ(got.import_warnings, m.import_warnings);
   EXPECT_EQ(got.stats.seconds, m.stats.seconds);
   EXPECT_EQ(got.stats.paths, m.stats.paths);
   EXPECT_EQ(got.stats.mean_spp, m.stats.mean_spp);

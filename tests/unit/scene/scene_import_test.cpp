@@ -243,6 +243,58 @@ TEST(SceneImport, MaterialsAllFieldsAndTextures) {
   EXPECT_NE(format_stats(s).find("emissive"), std::string::npos);
 }
 
+// Material inputs the bake does not apply are named in the warnings (which
+// `luxel inspect`, the upload reply and the manifest carry), never dropped
+// silently; a file that uses only supported inputs gets none.
+TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
+  GltfBuilder b;
+  const std::string png = test::encode_png(1, 1, 4, {255, 255, 255, 255});
+  b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(png)}}});
+  b.doc["samplers"] = json::array({{{"wrapS", 33071}, {"wrapT", 10497}}});  // CLAMP_TO_EDGE
+  b.doc["textures"] = json::array({{{"source", 0}}, {{"source", 0}, {"sampler", 0}}});
+  b.doc["extensionsUsed"] = json::array(
+      {"KHR_texture_transform", "KHR_materials_ior", "KHR_materials_emissive_strength"});
+  const int mat = b.add_material(
+      {{"name", "painted"},
+       {"pbrMetallicRoughness",
+        {{"baseColorTexture",
+          {{"index", 0}, {"extensions", {{"KHR_texture_transform", {{"scale", {2, 2}}}}}}}},
+         {"metallicRoughnessTexture", {{"index", 1}}}}},
+       {"emissiveTexture", {{"index", 0}, {"texCoord", 1}}},
+       {"normalTexture", {{"index", 0}}},
+       {"extensions",
+        {{"KHR_materials_ior", {{"ior", 1.7}}},
+         {"KHR_materials_emissive_strength", {{"emissiveStrength", 2}}}}}});
+  json prim = b.triangles(kQuadPositions, kQuadIndices);
+  prim["material"] = mat;
+  b.add_node({{"mesh", b.add_mesh("m", {prim})}});
+  auto r = load(b.gltf_embedded());
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  const auto& w = r->import_stats.warnings;
+  auto has = [&](std::initializer_list<const char*> needles) {
+    for (const std::string& line : w) {
+      bool all = true;
+      for (const char* n : needles) all = all && line.find(n) != std::string::npos;
+      if (all) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(has({"extension KHR_texture_transform", "not supported"}));
+  EXPECT_TRUE(has({"extension KHR_materials_ior", "not supported"}));
+  EXPECT_FALSE(has({"extension KHR_materials_emissive_strength"})) << "it is supported";
+  EXPECT_TRUE(has({"material 'painted'", "baseColorTexture", "KHR_texture_transform"}));
+  EXPECT_TRUE(has({"material 'painted'", "metallicRoughnessTexture", "sampler 0", "33071"}));
+  EXPECT_TRUE(has({"material 'painted'", "emissiveTexture", "texCoord 1"}));
+  EXPECT_TRUE(has({"material 'painted'", "normalTexture"}));
+  EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_ior"}));
+  EXPECT_EQ(w.size(), 7u) << "one line per input";
+
+  // The plain quad of the other tests: nothing to report.
+  auto plain = load(quad_scene().gltf_embedded());
+  ASSERT_TRUE(plain.is_ok());
+  EXPECT_TRUE(plain->import_stats.warnings.empty());
+}
+
 TEST(SceneImport, SixteenBitGreyImageExpandsToRgba) {
   GltfBuilder b;
   const std::string png = test::encode_png16_gray(2, 1, {0x8000, 0xFFFF});
