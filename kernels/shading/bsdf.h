@@ -1,38 +1,72 @@
-/* The surface BSDF: glTF metallic-roughness as an additive pair of layers,
- * Lambertian diffuse + GGX specular (thesis §6.3.1, "Sampling Real-Time
- * Material Models"), sampled one layer at a time (Eq. 6.2).
+/* The surface BSDF: the glTF 2.0 metallic-roughness BRDF as the
+ * specification's Appendix B defines it (glTF 2.0 specification, Appendix B
+ * "BRDF Implementation", B.3 "Metal BRDF and Dielectric BSDF"), plus the
+ * Kulla-Conty multiple-scattering energy compensation of the GGX lobe
+ * (Kulla & Conty 2017, "Revisiting Physically Based Shading at Imageworks",
+ * SIGGRAPH course slides, "Energy compensation" and "Fresnel"), sampled one
+ * layer at a time (thesis §6.3.1, Eq. 6.2).
  *
  * Conventions: everything is in the local shading frame (z = shading
  * normal); wo points towards the viewer / previous path vertex, wi is the
  * sampled or lit direction; both unit length. Every function returns 0 (or
  * -1 for lux_bsdf_sample) when wo or wi is at or below the horizon: callers
- * flip the frame for two-sided materials before calling.
+ * flip the frame for two-sided materials before calling. The BSDF is built
+ * for one wo (lux_make_bsdf takes wo.z): the compensation and the layer
+ * probability depend on it.
  *
- * Layers (index 0 diffuse, 1 specular):
- *   specular  f = F(wo.h) D(h) G2(wo, wi) / (4 wo.z wi.z), GGX D, Smith
- *             height-correlated G2 (Heitz 2014), Schlick F with
- *             f0 = mix(0.04, base_color, metallic).
- *   diffuse   f = diffuse / pi * (1 - F(wo.z)),  diffuse = base_color (1 - metallic).
- *             The (1 - F(wo.z)) factor removes the light a smooth coating
- *             reflects towards wo, so a white dielectric does not reflect
- *             1 + F: for a smooth coating the two layers sum to exactly 1.
- *             A rough coating reflects less than F(wo.z) (single-scattering
- *             GGX loses energy to masking), so the sum falls below 1 towards
- *             grazing (white, roughness 1: albedo 0.97 at wo.z = 1, 0.68 at
- *             0.2, 0.28 at 0.05) and exceeds it nowhere by more than ~1e-3
- *             (Jensen excess of the convex F, roughness 0.1..0.4, wo.z
- *             0.5..0.7). Without LUX_SPECULAR there is no coating and the
- *             diffuse layer is plain Lambert.
+ * Appendix B, with h = normalize(wo + wi), alpha = roughness^2:
+ *   specular_brdf = D(h) G2(wo, wi) / (4 wo.z wi.z), GGX D, Smith
+ *                   height-correlated G2 (Heitz 2014, "Understanding the
+ *                   Masking-Shadowing Function", Eq. 99)
+ *   metal         = conductor_fresnel(f0 = base_color, specular_brdf)
+ *                 = specular_brdf * Schlick(base_color, wo.h)
+ *   dielectric    = fresnel_mix(ior 1.5, base = base_color / pi, layer = specular_brdf)
+ *                 = mix(base_color / pi, specular_brdf, Schlick(0.04, wo.h))
+ *   f             = mix(dielectric, metal, metallic)
+ * which this file evaluates exactly, as two layers:
+ *   specular  Schlick(f0, wo.h) specular_brdf, f0 = mix(0.04, base_color,
+ *             metallic) (the mix is linear in f0, so this is exact);
+ *   diffuse   diffuse / pi * (1 - Schlick(0.04, wo.h)), diffuse =
+ *             base_color (1 - metallic): the dielectric's own (1 - F) with the
+ *             same F(wo.h) as its specular layer (not the mixed f0: Appendix
+ *             B mixes the two whole BRDFs), plus the compensation lobe below.
  *   alpha     = roughness^2, at least LUX_BSDF_MIN_ALPHA so roughness 0 is a
  *             very sharp but finite lobe (D <= 1 / (pi alpha^2) ~ 3.2e5).
- *   p_specular  probability of sampling the specular layer:
- *             lum(f0) / (lum(f0) + lum(diffuse)), clamped to [0.1, 0.9] when
- *             both layers reflect something; 1 when the diffuse layer is
- *             black (metals); exactly 0 without LUX_SPECULAR, where all
- *             specular code compiles out.
+ *
+ * Energy compensation (Kulla-Conty 2017): single-scattering GGX with F = 1
+ * reflects only E(mu_o) (E_avg on average) of the light; the rest would
+ * scatter again between microfacets. The lobe
+ *   f_ms = (1 - E(wo.z)) (1 - E(wi.z)) / (pi (1 - E_avg))
+ * reflects exactly 1 - E(wo.z), so f_ss + f_ms is a white furnace of 1 for
+ * F = 1. With Fresnel, f_ms is scaled by the colour
+ *   F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)),   F_avg = (20 f0 + 1) / 21
+ * (the slides' series of interreflections; F_avg = 2 int F(mu) mu dmu is
+ * exact for Schlick's F), mixed like Appendix B: (1 - metallic) F_ms(0.04) +
+ * metallic F_ms(base_color). E and E_avg come from the generated
+ * ggx_albedo_table.h (bilinear in (wo.z, roughness); E_avg is the exact
+ * average of the interpolated rows, so the lobe conserves energy exactly
+ * against the table). f_ms is cosine-sampled with the diffuse layer.
+ *
+ * Deviations from Appendix B, measured in docs/accuracy.md: the added
+ * compensation lobe (Appendix B is single-scattering); Appendix B's own
+ * dielectric is not energy conserving (its diffuse (1 - F(wo.h)) does not
+ * equal the light the coating's GGX lobe leaves: a smooth white dielectric
+ * reflects up to ~1.9 at grazing wo), kept as specified; scenes whose
+ * materials are all rough dielectrics (metallic 0, roughness 1, no texture)
+ * compile the specular layer out and are exactly Lambertian (their 4 %
+ * coating is left out).
+ *
+ * Layers (index 0 diffuse + compensation, both cosine-sampled; 1 specular):
+ *   p_specular  probability of sampling the specular layer: ls / (ls + lc),
+ *             ls = lum(f0) E(wo.z) (the single-scattering albedo at normal
+ *             Fresnel), lc = lum(diffuse) + lum(F_ms) (1 - E(wo.z)); clamped
+ *             to [0.1, 0.9] when the diffuse layer reflects something; 1 for
+ *             a smooth metal (no compensation to sample); exactly 0 without
+ *             LUX_SPECULAR, where all specular code compiles out and the
+ *             diffuse layer is plain Lambert.
  *
  * Sampling (Eq. 6.2): the layer is chosen with u_layer, then sampled on its
- * own: cosine hemisphere for diffuse, the GGX distribution of visible
+ * own: cosine hemisphere for layer 0, the GGX distribution of visible
  * normals (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT
  * 7(4), 2018) reflected about the sampled microfacet normal for specular.
  * The weight is that layer's f cos / (p_layer pdf_layer), not the sum of
@@ -43,17 +77,24 @@
 #define LUXEL_SHADING_BSDF_H
 
 #include "sampling/warp.h"
+#if LUX_SPECULAR
+#include "shading/ggx_albedo_table.h"
+#endif
 
 #define LUX_BSDF_LAYER_DIFFUSE 0
 #define LUX_BSDF_LAYER_SPECULAR 1
 /* pbrt-v4 treats alpha < 1e-3 as a perfect mirror; this keeps it a lobe. */
 #define LUX_BSDF_MIN_ALPHA 1e-3f
 #define LUX_BSDF_MIN_P_LAYER 0.1f
+/* Appendix B's dielectric: ior 1.5, f0 = ((1.5 - 1) / (1.5 + 1))^2. */
+#define LUX_BSDF_DIELECTRIC_F0 0.04f
 
 typedef struct {
   float3 diffuse;   /* Lambert albedo, base_color (1 - metallic) */
   float3 f0;        /* Fresnel reflectance at normal incidence */
+  float3 ms;        /* F_ms (1 - E(wo.z)) / (pi (1 - E_avg)): f_ms = ms (1 - E(wi.z)) */
   float alpha;      /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
+  float roughness;  /* saturated roughness, the table coordinate */
   float p_specular; /* probability of sampling the specular layer */
 } LuxBsdf;
 
@@ -66,20 +107,73 @@ inline float lux_saturate(float x) {
   return fmin(fmax(x, 0.0f), 1.0f);
 }
 
-inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness) {
+#if LUX_SPECULAR
+
+/* E(mu, roughness) of ggx_albedo_table.h, bilinear in (sqrt(mu), roughness)
+ * between the nodes. */
+inline float lux_ggx_albedo(float mu, float roughness) {
+  const float n = (float)(LUX_GGX_ALBEDO_SIZE - 1);
+  const float x = sqrt(lux_saturate(mu)) * n, y = lux_saturate(roughness) * n;
+  const int i = min((int)x, LUX_GGX_ALBEDO_SIZE - 2), j = min((int)y, LUX_GGX_ALBEDO_SIZE - 2);
+  const float tx = x - (float)i, ty = y - (float)j;
+  const int k = j * LUX_GGX_ALBEDO_SIZE + i;
+  const float e0 = mix(lux_ggx_e[k], lux_ggx_e[k + 1], tx);
+  const float e1 =
+      mix(lux_ggx_e[k + LUX_GGX_ALBEDO_SIZE], lux_ggx_e[k + LUX_GGX_ALBEDO_SIZE + 1], tx);
+  return mix(e0, e1, ty);
+}
+
+/* E_avg(roughness), linear between the nodes (the exact average of the
+ * bilinear E above). */
+inline float lux_ggx_albedo_avg(float roughness) {
+  const float y = lux_saturate(roughness) * (float)(LUX_GGX_ALBEDO_SIZE - 1);
+  const int j = min((int)y, LUX_GGX_ALBEDO_SIZE - 2);
+  return mix(lux_ggx_e_avg[j], lux_ggx_e_avg[j + 1], y - (float)j);
+}
+
+/* Kulla-Conty 2017 ("Fresnel"): the colour of the multiply scattered light,
+ * F_avg^2 E_avg / (1 - F_avg (1 - E_avg)), with Schlick's
+ * F_avg = 2 int F mu dmu = f0 + (1 - f0) / 21. */
+inline float3 lux_kulla_conty_fms(float3 f0, float e_avg) {
+  const float3 f_avg = f0 + (1.0f - f0) * (1.0f / 21.0f);
+  return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
+}
+
+#endif /* LUX_SPECULAR */
+
+/* wo_z: cos theta of the direction the BSDF will be used with (the
+ * compensation and p_specular depend on it); callers clamp it above 0. */
+inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness, float wo_z) {
   LuxBsdf m;
   base_color = fmax(base_color, (float3)(0.0f));
   metallic = lux_saturate(metallic);
   roughness = lux_saturate(roughness);
   m.diffuse = base_color * (1.0f - metallic);
-  m.f0 = mix((float3)(0.04f), base_color, metallic);
+  m.f0 = mix((float3)(LUX_BSDF_DIELECTRIC_F0), base_color, metallic);
   m.alpha = fmax(roughness * roughness, LUX_BSDF_MIN_ALPHA);
+  m.roughness = roughness;
+  m.ms = (float3)(0.0f);
 #if LUX_SPECULAR
-  const float ls = lux_luminance(m.f0), ld = lux_luminance(m.diffuse);
-  m.p_specular = (ls + ld > 0.0f) ? ls / (ls + ld) : 0.5f;
+  const float e_o = lux_ggx_albedo(wo_z, roughness);
+  const float e_avg = lux_ggx_albedo_avg(roughness);
+  /* The albedo of the compensation lobe at wo: F_ms (1 - E(wo.z)). */
+  float3 ms_albedo = (float3)(0.0f);
+  /* Keeps 1 / (1 - E_avg) finite; the smoothest row (roughness 0, alpha
+   * 1e-3) still loses ~1e-5 on average, at grazing angles. */
+  if (1.0f - e_avg > 1e-7f) {
+    const float3 fms =
+        (1.0f - metallic) * lux_kulla_conty_fms((float3)(LUX_BSDF_DIELECTRIC_F0), e_avg) +
+        metallic * lux_kulla_conty_fms(base_color, e_avg);
+    ms_albedo = fms * fmax(1.0f - e_o, 0.0f);
+    m.ms = ms_albedo * (LUX_INV_PI / (1.0f - e_avg));
+  }
+  const float ld = lux_luminance(m.diffuse);
+  const float ls = lux_luminance(m.f0) * e_o, lc = ld + lux_luminance(ms_albedo);
+  m.p_specular = (ls + lc > 0.0f) ? ls / (ls + lc) : 0.5f;
   if (ls > 0.0f && ld > 0.0f)
     m.p_specular = clamp(m.p_specular, LUX_BSDF_MIN_P_LAYER, 1.0f - LUX_BSDF_MIN_P_LAYER);
 #else
+  (void)wo_z;
   m.p_specular = 0.0f;
 #endif
   return m;
@@ -148,7 +242,12 @@ inline float3 lux_bsdf_eval_layer(const LuxBsdf* m, int layer, float3 wo, float3
   if (wo.z <= 0.0f || wi.z <= 0.0f) return (float3)(0.0f);
   if (layer == LUX_BSDF_LAYER_DIFFUSE) {
 #if LUX_SPECULAR
-    return m->diffuse * LUX_INV_PI * (1.0f - lux_fresnel_schlick(m->f0, wo.z));
+    /* Appendix B fresnel_mix: the dielectric's F(wo.h), ior 1.5. */
+    const float3 h = normalize(wo + wi);
+    const float c = 1.0f - lux_saturate(dot(wo, h));
+    const float f = LUX_BSDF_DIELECTRIC_F0 + (1.0f - LUX_BSDF_DIELECTRIC_F0) * (c * c * c * c * c);
+    return m->diffuse * (LUX_INV_PI * (1.0f - f)) +
+           m->ms * fmax(1.0f - lux_ggx_albedo(wi.z, m->roughness), 0.0f);
 #else
     return m->diffuse * LUX_INV_PI;
 #endif
