@@ -104,6 +104,9 @@ double kulla_conty_fms(double f0, double e_avg) {
 
 struct Expected {
   Albedo single, total;  // Appendix B alone; with the compensation lobe
+  // The model before Appendix B: diffuse weighted by 1 - F(f0, N.V), no
+  // compensation. Used as an injected error the test must reject.
+  Albedo old;
 };
 
 Expected quadrature(const Material& m, double cz, double e_avg) {
@@ -122,6 +125,7 @@ Expected quadrature(const Material& m, double cz, double e_avg) {
     const double fms =
         (1 - metallic) * kulla_conty_fms(0.04, e_avg) + metallic * kulla_conty_fms(base[c], e_avg);
     e.total.rgb[c] = e.single.rgb[c] + fms * (1.0 - e_o);
+    e.old.rgb[c] = spec.rgb[c] + base[c] * (1 - metallic) * (1.0 - schlick(f0[c], cz));
   }
   return e;
 }
@@ -137,6 +141,7 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
       {{0.95f, 0.64f, 0.54f, 1.0f}, 0.5f}, {{1.0f, 1.0f, 1.0f, 1.0f}, 1.0f},
       {{0.9f, 0.6f, 0.3f, 0.5f}, 0.6f}};
   double worst_gap = 0.0, worst_uncompensated = 0.0;
+  int rejected_old = 0, cases = 0;
   for (const Material& m : materials) {
     const double e_avg = average_albedo(std::max(double(m.roughness) * m.roughness, 1e-3));
     for (double cz : {0.9, 0.4, 0.1}) {
@@ -147,6 +152,7 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
       ASSIGN_OR_FAIL(s, probe().bsdf_sample(Build::kSobolSpecular, m,
                                             to_float4(spherical_direction(cz, 0.7)), -1.0f, n));
       const Expected e = quadrature(m, cz, e_avg);
+      bool old_rejected = false;
       for (int c = 0; c < 3; ++c) {
         std::vector<double> w(n);
         for (size_t i = 0; i < n; ++i) {
@@ -158,12 +164,22 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
             << "channel " << c << ": sampled " << est.mean << " +- " << est.standard_error
             << ", quadrature " << e.total.rgb[c] << " (Appendix B alone " << e.single.rgb[c] << ")";
         worst_gap = std::max(worst_gap, std::fabs(est.mean - e.total.rgb[c]));
+        // The same bound must reject the previous model's weighting.
+        if (std::fabs(est.mean - e.old.rgb[c]) > kZ * est.standard_error + kTableTolerance)
+          old_rejected = true;
         worst_uncompensated = std::max(worst_uncompensated, e.total.rgb[c] - e.single.rgb[c]);
       }
+      // At wo.z 0.1 both changes show for every material: the (1 - F(N.V))
+      // diffuse weight for dielectrics, the missing compensation for metals.
+      if (cz < 0.2) EXPECT_TRUE(old_rejected) << "the previous model would pass";
+      rejected_old += old_rejected;
+      ++cases;
     }
   }
-  std::printf("[ albedo   ] largest |sampled - quadrature| %.5f; largest compensation share %.4f\n",
-              worst_gap, worst_uncompensated);
+  std::printf(
+      "[ albedo   ] largest |sampled - quadrature| %.5f; largest compensation share %.4f; "
+      "previous model rejected in %d of %d cases\n",
+      worst_gap, worst_uncompensated, rejected_old, cases);
 }
 
 }  // namespace
