@@ -45,7 +45,10 @@
  * metallic F_ms(base_color). E and E_avg come from the generated
  * ggx_albedo_table.h (bilinear in (wo.z, roughness); E_avg is the exact
  * average of the interpolated rows, so the lobe conserves energy exactly
- * against the table). f_ms is cosine-sampled with the diffuse layer.
+ * against the table). f_ms belongs to layer 0 with the diffuse lobe; layer
+ * 0 is sampled as a one-sample mixture (p_cosine) of the cosine hemisphere
+ * and the compensation lobe's own tabulated distribution
+ * (lux_ggx_ms_sample), and its pdf is that mixture.
  *
  * Deviations from Appendix B, measured in docs/accuracy.md: the added
  * compensation lobe (Appendix B is single-scattering); Appendix B's own
@@ -56,7 +59,7 @@
  * compile the specular layer out and are exactly Lambertian (their 4 %
  * coating is left out).
  *
- * Layers (index 0 diffuse + compensation, both cosine-sampled; 1 specular):
+ * Layers (index 0 diffuse + compensation; 1 specular):
  *   p_specular  probability of sampling the specular layer: ls / (ls + lc),
  *             ls = lum(f0) E(wo.z) (the single-scattering albedo at normal
  *             Fresnel), lc = lum(diffuse) + lum(F_ms) (1 - E(wo.z)); clamped
@@ -64,11 +67,16 @@
  *             a smooth metal (no compensation to sample); exactly 0 without
  *             LUX_SPECULAR, where all specular code compiles out and the
  *             diffuse layer is plain Lambert.
+ *   p_cosine  within layer 0, the probability of cosine sampling:
+ *             lum(diffuse) / lc; the rest samples the compensation lobe
+ *             (1 for no compensation, 0 for a metal).
  *
  * Sampling (Eq. 6.2): the layer is chosen with u_layer, then sampled on its
- * own: cosine hemisphere for layer 0, the GGX distribution of visible
- * normals (Heitz, "Sampling the GGX Distribution of Visible Normals", JCGT
- * 7(4), 2018) reflected about the sampled microfacet normal for specular.
+ * own: layer 0 by the cosine hemisphere / compensation mixture (u_layer,
+ * rescaled, picks the component), the specular layer by the GGX
+ * distribution of visible normals (Heitz, "Sampling the GGX Distribution of
+ * Visible Normals", JCGT 7(4), 2018) reflected about the sampled microfacet
+ * normal.
  * The weight is that layer's f cos / (p_layer pdf_layer), not the sum of
  * both layers (the thesis's Figure 6.2: evaluating all layers for a sample
  * of one causes fireflies); the caller combines layers with NEE by MIS
@@ -96,6 +104,7 @@ typedef struct {
   float alpha;      /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
   float roughness;  /* saturated roughness, the table coordinate */
   float p_specular; /* probability of sampling the specular layer */
+  float p_cosine;   /* within layer 0: probability of cosine (vs compensation) sampling */
 } LuxBsdf;
 
 /* Rec. 709 luminance of linear RGB. */
@@ -105,6 +114,10 @@ inline float lux_luminance(float3 c) {
 
 inline float lux_saturate(float x) {
   return fmin(fmax(x, 0.0f), 1.0f);
+}
+
+inline float lux_max3_bsdf(float3 v) {
+  return fmax(v.x, fmax(v.y, v.z));
 }
 
 #if LUX_SPECULAR
@@ -137,6 +150,53 @@ inline float lux_ggx_albedo_avg(float roughness) {
 inline float3 lux_kulla_conty_fms(float3 f0, float e_avg) {
   const float3 f_avg = f0 + (1.0f - f0) * (1.0f / 21.0f);
   return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
+}
+
+/* Sampling the compensation lobe (shape (1 - E(mu)) mu): a roughness row
+ * is picked with the weights of the bilinear E, a cell of sqrt(mu) from the
+ * row's tabulated cumulative distribution lux_ggx_ms_cdf, mu within the cell
+ * proportionally to mu (mu^2 uniform), phi uniformly. The density over
+ * solid angle is, on cell i, ((1 - t) c_j,i + t c_j+1,i) mu / (pi (1 - E_avg))
+ * with c_j,i = dcdf (1 - E_avg_j) / (x_i+1^4 - x_i^4) (the cell's mean of
+ * 1 - E), exactly what lux_ggx_ms_pdf returns. */
+inline float lux_ggx_ms_cell_density(int row, int cell) {
+  const int k = row * (LUX_GGX_ALBEDO_SIZE - 1) + cell;
+  const float lo = cell > 0 ? lux_ggx_ms_cdf[k - 1] : 0.0f;
+  const float h = 1.0f / (float)(LUX_GGX_ALBEDO_SIZE - 1);
+  const float xa = (float)cell * h, xb = (float)(cell + 1) * h;
+  const float xa2 = xa * xa, xb2 = xb * xb;
+  return (lux_ggx_ms_cdf[k] - lo) * (1.0f - lux_ggx_e_avg[row]) / (xb2 * xb2 - xa2 * xa2);
+}
+
+inline float lux_ggx_ms_pdf(float roughness, float mu) {
+  if (mu <= 0.0f) return 0.0f;
+  const float n = (float)(LUX_GGX_ALBEDO_SIZE - 1);
+  const float y = lux_saturate(roughness) * n;
+  const int j = min((int)y, LUX_GGX_ALBEDO_SIZE - 2);
+  const float t = y - (float)j;
+  const int i = min((int)(sqrt(fmin(mu, 1.0f)) * n), LUX_GGX_ALBEDO_SIZE - 2);
+  const float lost = mix(1.0f - lux_ggx_e_avg[j], 1.0f - lux_ggx_e_avg[j + 1], t);
+  const float c = mix(lux_ggx_ms_cell_density(j, i), lux_ggx_ms_cell_density(j + 1, i), t);
+  return lost > 0.0f ? c * mu * LUX_INV_PI / lost : 0.0f;
+}
+
+inline float3 lux_ggx_ms_sample(float roughness, float u_row, float2 u) {
+  const float n = (float)(LUX_GGX_ALBEDO_SIZE - 1);
+  const float y = lux_saturate(roughness) * n;
+  int j = min((int)y, LUX_GGX_ALBEDO_SIZE - 2);
+  const float t = y - (float)j;
+  const float w0 = (1.0f - t) * (1.0f - lux_ggx_e_avg[j]), w1 = t * (1.0f - lux_ggx_e_avg[j + 1]);
+  if (u_row * (w0 + w1) >= w0) ++j;
+  const int base = j * (LUX_GGX_ALBEDO_SIZE - 1);
+  int i = 0;
+  while (i < LUX_GGX_ALBEDO_SIZE - 2 && u.x >= lux_ggx_ms_cdf[base + i]) ++i;
+  const float lo = i > 0 ? lux_ggx_ms_cdf[base + i - 1] : 0.0f, hi = lux_ggx_ms_cdf[base + i];
+  const float s = hi > lo ? lux_saturate((u.x - lo) / (hi - lo)) : 0.5f;
+  const float xa = (float)i / n, xb = (float)(i + 1) / n;
+  const float mu = sqrt(mix(xa * xa * xa * xa, xb * xb * xb * xb, s));
+  const float sin_theta = sqrt(fmax(0.0f, 1.0f - mu * mu));
+  const float phi = 2.0f * LUX_PI * u.y;
+  return (float3)(sin_theta * cos(phi), sin_theta * sin(phi), mu);
 }
 
 #endif /* LUX_SPECULAR */
@@ -172,9 +232,14 @@ inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
   m.p_specular = (ls + lc > 0.0f) ? ls / (ls + lc) : 0.5f;
   if (ls > 0.0f && ld > 0.0f)
     m.p_specular = clamp(m.p_specular, LUX_BSDF_MIN_P_LAYER, 1.0f - LUX_BSDF_MIN_P_LAYER);
+  /* Layer 0 is a one-sample mixture of cosine and compensation sampling in
+   * proportion to the two lobes' albedos (no compensation: cosine only). */
+  m.p_cosine = lc > 0.0f ? ld / lc : 1.0f;
+  if (lux_max3_bsdf(m.ms) <= 0.0f) m.p_cosine = 1.0f;
 #else
   (void)wo_z;
   m.p_specular = 0.0f;
+  m.p_cosine = 1.0f;
 #endif
   return m;
 }
@@ -267,8 +332,15 @@ inline float3 lux_bsdf_eval_layer(const LuxBsdf* m, int layer, float3 wo, float3
  * Jacobian 1 / (4 wo.h) cancels the wo.h of the visible-normal density. */
 inline float lux_bsdf_pdf_layer(const LuxBsdf* m, int layer, float3 wo, float3 wi) {
   if (wo.z <= 0.0f || wi.z <= 0.0f) return 0.0f;
-  if (layer == LUX_BSDF_LAYER_DIFFUSE)
+  if (layer == LUX_BSDF_LAYER_DIFFUSE) {
+#if LUX_SPECULAR
+    float pdf = m->p_cosine * lux_cosine_hemisphere_pdf(wi.z);
+    if (m->p_cosine < 1.0f) pdf += (1.0f - m->p_cosine) * lux_ggx_ms_pdf(m->roughness, wi.z);
+    return (1.0f - m->p_specular) * pdf;
+#else
     return (1.0f - m->p_specular) * lux_cosine_hemisphere_pdf(wi.z);
+#endif
+  }
 #if LUX_SPECULAR
   if (layer == LUX_BSDF_LAYER_SPECULAR) {
     const float3 h = normalize(wo + wi);
@@ -299,6 +371,22 @@ inline int lux_bsdf_sample(const LuxBsdf* m, float3 wo, float u_layer, float2 u,
     *weight = lux_fresnel_schlick(m->f0, dot(wo, hr)) *
               (lux_ggx_g2(wo, *wi, m->alpha) / (lux_ggx_g1(wo, m->alpha) * m->p_specular));
     return LUX_BSDF_LAYER_SPECULAR;
+  }
+  if (m->p_cosine < 1.0f) {
+    /* Layer 0 as a mixture: u_layer, rescaled to [0, 1) past p_specular,
+     * picks cosine or compensation sampling, and again the table row. */
+    const float v = (u_layer - m->p_specular) / (1.0f - m->p_specular);
+    if (v < m->p_cosine) {
+      *wi = lux_cosine_hemisphere(u);
+    } else {
+      const float v_row = lux_saturate((v - m->p_cosine) / (1.0f - m->p_cosine));
+      *wi = lux_ggx_ms_sample(m->roughness, v_row, u);
+    }
+    if ((*wi).z <= 0.0f) return -1;
+    *pdf = lux_bsdf_pdf_layer(m, LUX_BSDF_LAYER_DIFFUSE, wo, *wi);
+    if (!(*pdf > 0.0f)) return -1;
+    *weight = lux_bsdf_eval_layer(m, LUX_BSDF_LAYER_DIFFUSE, wo, *wi) * ((*wi).z / *pdf);
+    return LUX_BSDF_LAYER_DIFFUSE;
   }
 #else
   (void)u_layer;

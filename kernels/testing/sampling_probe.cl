@@ -79,7 +79,7 @@ __kernel void probe_onb(__global const float4* normals, __global const float4* v
 
 /* material = (base_color, metallic), rough[i] = (roughness, wo.z; 0 means 1).
  * out[3i] = (diffuse, alpha), out[3i+1] = (f0, p_specular),
- * out[3i+2] = (ms, roughness): ms = f_ms / (1 - E(wi.z)). */
+ * out[3i+2] = (ms, p_cosine): ms = f_ms / (1 - E(wi.z)). */
 __kernel void probe_make_bsdf(__global const float4* material, __global const float4* rough,
                               const uint count, __global float4* out) {
   const uint i = get_global_id(0);
@@ -88,7 +88,7 @@ __kernel void probe_make_bsdf(__global const float4* material, __global const fl
                                   rough[i].y > 0.0f ? rough[i].y : 1.0f);
   out[3 * i + 0] = (float4)(m.diffuse, m.alpha);
   out[3 * i + 1] = (float4)(m.f0, m.p_specular);
-  out[3 * i + 2] = (float4)(m.ms, m.roughness);
+  out[3 * i + 2] = (float4)(m.ms, m.p_cosine);
 }
 
 /* lux_bsdf_sample for one material and wo; u[i] = (u.x, u.y, u_layer, -).

@@ -124,6 +124,10 @@ struct Table {
   int size = 0;
   std::vector<float> e;      // [j * size + i]: roughness j / (size-1), mu i / (size-1)
   std::vector<float> e_avg;  // [j]
+  // [j * (size - 1) + i]: the distribution bsdf.h samples the compensation
+  // lobe from, cumulative over the cells [i, i + 1] / (size - 1) of sqrt(mu)
+  // (last entry 1).
+  std::vector<float> ms_cdf;
 };
 
 // 2 int_0^1 E(mu) mu dmu of the interpolant through the row's nodes,
@@ -144,6 +148,36 @@ inline double row_average(const float* row, int size) {
   return sum;
 }
 
+// The compensation lobe's cosine-weighted shape (1 - E(mu)) mu per cell of
+// sqrt(mu), int (1 - E) mu dmu = int (1 - E(x)) 2 x^3 dx (quartic, exact by
+// 3-point Gauss-Legendre), normalized and accumulated. bsdf.h samples a cell
+// from it and mu within the cell proportionally to mu, so its density is
+// piecewise c_i mu with c_i the cell's mean of 1 - E: the weight f / pdf
+// stays near (1 - E(mu)) / c_i ~ 1 instead of (1 - E(mu)) / (1 - E_avg)
+// under plain cosine sampling. A floor of 1e-9 of cosine weight per cell
+// keeps every cell sampleable.
+inline std::vector<double> ms_cdf_row(const float* row, int size) {
+  const double h = 1.0 / (size - 1);
+  const double nodes[3] = {-std::sqrt(0.6), 0.0, std::sqrt(0.6)};
+  const double weights[3] = {5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0};
+  std::vector<double> cdf(size_t(size - 1));
+  double sum = 0.0;
+  for (int i = 0; i + 1 < size; ++i) {
+    double w = 0.0;
+    for (int q = 0; q < 3; ++q) {
+      const double t = 0.5 * (1.0 + nodes[q]), x = (i + t) * h;
+      const double e = row[i] + (double(row[i + 1]) - row[i]) * t;
+      w += weights[q] * 0.5 * h * std::max(0.0, 1.0 - e) * 2.0 * x * x * x;
+    }
+    const double xa = i * h, xb = (i + 1) * h;
+    sum += w + 1e-9 * (std::pow(xb, 4.0) - std::pow(xa, 4.0));
+    cdf[size_t(i)] = sum;
+  }
+  for (double& c : cdf) c /= sum;
+  cdf.back() = 1.0;
+  return cdf;
+}
+
 inline Table generate(const Settings& s) {
   Table t;
   t.size = s.size;
@@ -154,6 +188,7 @@ inline Table generate(const Settings& s) {
       t.e[size_t(j) * s.size + i] = float(directional_albedo(
           std::pow(double(i) / (s.size - 1), 2.0), double(j) / (s.size - 1), s.samples));
     t.e_avg[size_t(j)] = float(row_average(&t.e[size_t(j) * s.size], s.size));
+    for (double c : ms_cdf_row(&t.e[size_t(j) * s.size], s.size)) t.ms_cdf.push_back(float(c));
   }
   return t;
 }
@@ -177,7 +212,9 @@ inline std::string header(const Table& t, const Settings& s) {
       " * energy compensation in bsdf.h. lux_ggx_e[j * LUX_GGX_ALBEDO_SIZE + i] is\n"
       " * E at sqrt(mu) = i / (SIZE - 1), roughness = j / (SIZE - 1); interpolate\n"
       " * bilinearly in (sqrt(mu), roughness). lux_ggx_e_avg[j] is the exact\n"
-      " * average 2 int E mu dmu of row j's interpolant.\n */\n"
+      " * average 2 int E mu dmu of row j's interpolant. lux_ggx_ms_cdf[j * (SIZE - 1)\n"
+      " * + i] is the cumulative distribution over the cells of sqrt(mu) that the\n"
+      " * compensation lobe is sampled from (shape (1 - E(mu)) mu, exact per cell).\n */\n"
       "#ifndef LUXEL_SHADING_GGX_ALBEDO_TABLE_H\n#define LUXEL_SHADING_GGX_ALBEDO_TABLE_H\n\n";
   std::snprintf(buf, sizeof buf, "#define LUX_GGX_ALBEDO_SIZE %d\n\n", t.size);
   out += buf;
@@ -206,6 +243,22 @@ inline std::string header(const Table& t, const Settings& s) {
       out += buf;
     }
     out += "\n";
+  }
+  out +=
+      "};\n\nLUX_GGX_TABLE_QUAL float lux_ggx_ms_cdf[LUX_GGX_ALBEDO_SIZE * (LUX_GGX_ALBEDO_SIZE - "
+      "1)] = {\n";
+  const int cells = t.size - 1;
+  for (int j = 0; j < t.size; ++j) {
+    std::snprintf(buf, sizeof buf, "    /* roughness %.5f */\n", double(j) / (t.size - 1));
+    out += buf;
+    for (int i = 0; i < cells; i += 6) {
+      out += "   ";
+      for (int k = i; k < std::min(i + 6, cells); ++k) {
+        std::snprintf(buf, sizeof buf, " %#.9gf,", double(t.ms_cdf[size_t(j) * cells + k]));
+        out += buf;
+      }
+      out += "\n";
+    }
   }
   out += "};\n\n#undef LUX_GGX_TABLE_QUAL\n\n#endif /* LUXEL_SHADING_GGX_ALBEDO_TABLE_H */\n";
   return out;

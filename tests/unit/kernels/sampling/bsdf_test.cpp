@@ -53,6 +53,14 @@ TEST_F(BsdfTest, MakeBsdfFollowsGltfMetallicRoughness) {
       EXPECT_GE(std::min({ms.x, ms.y, ms.z}), 0.0f);
       if (!specular || r == 0.0f) EXPECT_EQ(ms.x + ms.y + ms.z, 0.0f);
       if (specular && r >= 0.5f && base.x > 0.0f) EXPECT_GT(ms.x, 0.0f);
+      // Layer 0 samples the compensation lobe in proportion to its albedo:
+      // only it for a metal, never without it.
+      if (ms.x + ms.y + ms.z == 0.0f) EXPECT_EQ(ms.w, 1.0f);
+      if (specular && metallic == 1.0f && r > 0.0f) EXPECT_EQ(ms.w, 0.0f);
+      if (specular && metallic < 1.0f && r > 0.0f && base.x > 0.0f) {
+        EXPECT_GT(ms.w, 0.5f);
+        EXPECT_LT(ms.w, 1.0f);
+      }
       const float p = f0.w;
       if (!specular) {
         EXPECT_EQ(p, 0.0f);
