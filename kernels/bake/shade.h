@@ -83,7 +83,6 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     metallic *= mr.z;
   }
 #endif
-  const LuxBsdf bsdf = lux_make_bsdf(base, metallic, roughness);
   LuxSurface sf = s;
   if (dot(wo, sf.ng) < 0.0f) {
     sf.ng = -sf.ng;
@@ -95,6 +94,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   /* Shading normal facing away from the viewer (bent normals): clamp so the
    * BSDF stays defined. */
   if (wo_local.z <= 1e-4f) wo_local = normalize((float3)(wo_local.x, wo_local.y, 1e-4f));
+  const LuxBsdf bsdf = lux_make_bsdf(base, metallic, roughness, wo_local.z);
 
   const uint dim = LUX_DIM_VERTEX(path.depth);
   LuxRay shadow;

@@ -37,7 +37,8 @@ TEST_F(BsdfTest, MakeBsdfFollowsGltfMetallicRoughness) {
     for (size_t i = 0; i < materials.size(); ++i) {
       SCOPED_TRACE(testing::Message()
                    << "material " << i << (specular ? " (specular)" : " (diffuse only)"));
-      const float4 base = materials[i], diffuse = out[2 * i], f0 = out[2 * i + 1];
+      const float4 base = materials[i], diffuse = out[3 * i], f0 = out[3 * i + 1],
+                   ms = out[3 * i + 2];
       const float metallic = base.w, r = roughness[i].x;
       EXPECT_NEAR(diffuse.x, base.x * (1 - metallic), 1e-6);
       EXPECT_NEAR(diffuse.z, base.z * (1 - metallic), 1e-6);
@@ -47,13 +48,29 @@ TEST_F(BsdfTest, MakeBsdfFollowsGltfMetallicRoughness) {
       EXPECT_GT(diffuse.w, 0.0f);
       EXPECT_LE(diffuse.w, std::max(r * r, 2e-3f));
       if (r > 0.1f) EXPECT_NEAR(diffuse.w, r * r, 1e-6);
+      // The Kulla-Conty lobe: non-negative, absent without LUX_SPECULAR and
+      // for smooth surfaces (nothing lost to multiple scattering).
+      EXPECT_GE(std::min({ms.x, ms.y, ms.z}), 0.0f);
+      if (!specular || r == 0.0f) EXPECT_EQ(ms.x + ms.y + ms.z, 0.0f);
+      if (specular && r >= 0.5f && base.x > 0.0f) EXPECT_GT(ms.x, 0.0f);
+      // Layer 0 samples the compensation lobe in proportion to its albedo:
+      // only it for a metal, never without it.
+      if (ms.x + ms.y + ms.z == 0.0f) EXPECT_EQ(ms.w, 1.0f);
+      if (specular && metallic == 1.0f && r > 0.0f) EXPECT_EQ(ms.w, 0.0f);
+      if (specular && metallic < 1.0f && r > 0.0f && base.x > 0.0f) {
+        EXPECT_GT(ms.w, 0.5f);
+        EXPECT_LT(ms.w, 1.0f);
+      }
       const float p = f0.w;
       if (!specular) {
         EXPECT_EQ(p, 0.0f);
+      } else if (metallic == 1.0f && r == 0.0f) {
+        EXPECT_EQ(p, 1.0f) << "a smooth metal only has the specular layer";
       } else if (metallic == 1.0f) {
-        EXPECT_EQ(p, 1.0f) << "a metal has no diffuse layer to sample";
+        EXPECT_GT(p, 0.5f) << "the compensation lobe is the smaller share";
+        EXPECT_LT(p, 1.0f) << "a rough metal samples its compensation lobe too";
       } else if (base.x == 0.0f) {
-        EXPECT_EQ(p, 1.0f) << "a black dielectric only reflects specularly";
+        EXPECT_EQ(p, 1.0f) << "a smooth black dielectric only reflects specularly";
       } else {
         EXPECT_GE(p, 0.1f);
         EXPECT_LE(p, 0.9f);
@@ -77,8 +94,8 @@ TEST_F(BsdfTest, SampleReportsTheLayerPdfAndWeightFCosOverPdf) {
       for (double cz : {1.0, 0.6, 0.05}) {
         SCOPED_TRACE(testing::Message() << "roughness " << m.roughness << " metallic "
                                         << m.base_metallic.w << " wo.z " << cz);
-        ASSIGN_OR_FAIL(params,
-                       probe().make_bsdf(build, {m.base_metallic}, {float4{m.roughness, 0, 0, 0}}));
+        ASSIGN_OR_FAIL(params, probe().make_bsdf(build, {m.base_metallic},
+                                                 {float4{m.roughness, float(cz), 0, 0}}));
         const float p_specular = params[1].w;
         ASSIGN_OR_FAIL(s, probe().bsdf_sample(build, m, wo_at(cz), -1.0f, n));
         size_t valid = 0;
@@ -104,11 +121,14 @@ TEST_F(BsdfTest, SampleReportsTheLayerPdfAndWeightFCosOverPdf) {
 }
 
 // White furnace: the directional albedo E(wo) = integral of f cos, estimated
-// with the sampler (mean weight), for base colour 1. With both layers it
-// must not exceed 1 beyond the confidence bound anywhere: smooth to rough,
-// normal to grazing incidence. It cannot be less than the diffuse layer's
-// share, (1 - metallic)(1 - F(wo.z)), either.
-TEST_F(BsdfTest, WhiteFurnaceAlbedoNeverExceedsOne) {
+// with the sampler (mean weight), for base colour 1. A white metal has F = 1,
+// so with the Kulla-Conty compensation it reflects exactly 1 (up to the
+// table's interpolation, < 3e-3 here) from smooth to rough and normal to
+// grazing incidence. The dielectric follows Appendix B, which is not energy
+// conserving (its diffuse (1 - F(wo.h)) ignores the light the coating
+// reflects): only finiteness and greyness are checked here; its value is
+// checked against an independent quadrature in bsdf_albedo_test.cpp.
+TEST_F(BsdfTest, WhiteFurnaceAlbedoOfAWhiteMetalIsOne) {
   const size_t n = size_t(1) << 16;
   double worst = 0.0, least = 2.0;
   for (float metallic : {0.0f, 0.5f, 1.0f})
@@ -126,21 +146,19 @@ TEST_F(BsdfTest, WhiteFurnaceAlbedoNeverExceedsOne) {
           w[i] = s.weight[i].x;
         }
         const MeanEstimate e = estimate_mean(w);
-        EXPECT_LE(e.mean, 1.0 + kZ * e.standard_error)
-            << "E = " << e.mean << " +- " << e.standard_error;
-        const double f0 = 0.04 * (1.0 - metallic) + metallic;
-        const double diffuse_share =
-            (1.0 - metallic) * (1.0 - (f0 + (1.0 - f0) * std::pow(1.0 - cz, 5.0)));
-        EXPECT_GE(e.mean, diffuse_share - kZ * e.standard_error) << "E = " << e.mean;
-        // A smooth metal reflects (nearly) everything away from grazing:
-        // single-scattering GGX loses < 1% at roughness <= 0.05.
-        if (metallic == 1.0f && roughness <= 0.05f && cz >= 0.2)
-          EXPECT_GE(e.mean, 0.99 - kZ * e.standard_error) << "E = " << e.mean;
-        worst = std::max(worst, e.mean);
-        if (metallic == 0.0f) least = std::min(least, e.mean);
+        if (metallic == 1.0f) {
+          EXPECT_NEAR(e.mean, 1.0, kZ * e.standard_error + 3e-3)
+              << "E = " << e.mean << " +- " << e.standard_error;
+          worst = std::max(worst, std::fabs(e.mean - 1.0));
+        }
+        if (metallic == 0.0f) {
+          least = std::min(least, e.mean);
+          std::printf("[ energy   ] white dielectric, roughness %.2f, wo.z %.3f: albedo %.4f\n",
+                      roughness, cz, e.mean);
+        }
       }
   std::printf(
-      "[ energy   ] white-furnace albedo estimates: largest %.5f, smallest dielectric %.5f\n",
+      "[ energy   ] white metal: largest |E - 1| %.5f; smallest white dielectric albedo %.5f\n",
       worst, least);
 }
 

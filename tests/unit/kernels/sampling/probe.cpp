@@ -134,14 +134,14 @@ Result<std::vector<float4>> Probe::make_bsdf(Build build, const std::vector<floa
   if (!k) return k.status();
   auto m = ctx_->upload(base_metallic, "bsdf materials");
   auto r = ctx_->upload(roughness, "bsdf roughness");
-  auto out = ctx_->alloc(base_metallic.size() * 2 * sizeof(float4), "bsdf parameters");
+  auto out = ctx_->alloc(base_metallic.size() * 3 * sizeof(float4), "bsdf parameters");
   if (!m) return m.status();
   if (!r) return r.status();
   if (!out) return out.status();
   LUXEL_RETURN_IF_ERROR(
       k->set_args(m.value(), r.value(), uint32_t(base_metallic.size()), out.value()));
   LUXEL_RETURN_IF_ERROR(ctx_->launch(k.value(), base_metallic.size(), 64));
-  return read_back<float4>(out.value(), base_metallic.size() * 2);
+  return read_back<float4>(out.value(), base_metallic.size() * 3);
 }
 
 Result<BsdfSamples> Probe::bsdf_sample(Build build, const Material& m, float4 wo,

@@ -68,6 +68,8 @@ class Probe {
   Result<std::vector<float>> cosine_hemisphere_pdf(const std::vector<float4>& dirs);
   Result<std::vector<float4>> onb(const std::vector<float4>& normals,
                                   const std::vector<float4>& vectors);
+  // roughness[i] = (roughness, wo.z or 0 for 1, -, -); three float4 per
+  // material: (diffuse, alpha), (f0, p_specular), (ms, p_cosine).
   Result<std::vector<float4>> make_bsdf(Build build, const std::vector<float4>& base_metallic,
                                         const std::vector<float4>& roughness);
   // u_layer_override < 0: the layer is chosen with the uniforms' z.
