@@ -40,21 +40,7 @@ inline int lux_trace(__global const LuxBvhNode* nodes,
       const float entry = left ? tl : tr;
       if (count == 0 || !(entry <= t_best) || entry == INFINITY) continue;
       const int first = left ? lref : rref;
-      for (int i = first; i < first + count; ++i) {
-        const LuxTriangle tri = tris[i];
-        float t = t_best, u, v;
-        if (lux_intersect_triangle(&shear, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tmin, &t, &u, &v) &&
-            LUX_ALPHA_ACCEPT(i, tri, u, v)) {
-          t_best = t;
-          hit_u = u;
-          hit_v = v;
-          hit_prim = as_int(tri.v0.w);
-          if (any_hit) {
-            *t_out = t_best;
-            return hit_prim;
-          }
-        }
-      }
+      LUX_INTERSECT_LEAF(first, count);
       if (left)
         tl = INFINITY;
       else

@@ -119,21 +119,7 @@ inline int lux_trace(__global const LuxBvh4Node* nodes,
       __global const int* slots = (__global const int*)&nodes[leaf >> 2].child;
       const int first = slots[leaf & 3];
       const int count = slots[4 + (leaf & 3)]; /* count follows child */
-      for (int i = first; i < first + count; ++i) {
-        const LuxTriangle tri = tris[i];
-        float t = t_best, u, v;
-        if (lux_intersect_triangle(&shear, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tmin, &t, &u, &v) &&
-            LUX_ALPHA_ACCEPT(i, tri, u, v)) {
-          t_best = t;
-          hit_u = u;
-          hit_v = v;
-          hit_prim = as_int(tri.v0.w);
-          if (any_hit) {
-            *t_out = t_best;
-            return hit_prim;
-          }
-        }
-      }
+      LUX_INTERSECT_LEAF(first, count);
     }
     /* Pop, skipping subtrees and leaves that start behind the closest hit. */
     int found = 0;

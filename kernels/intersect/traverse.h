@@ -24,6 +24,28 @@
 /* 1 + 2 * gamma(3), gamma(n) = n eps / (1 - n eps), eps = 2^-24. */
 #define LUX_BOX_EXIT_SCALE 1.0000003576278687f
 
+/* The triangles [first, first + count) of a leaf against the ray, shared by
+ * both traversals (trace_bvh2.h, trace_bvh4.h). A macro over the caller's
+ * names (tris, shear, tmin, t_best, hit_u, hit_v, hit_prim, any_hit, t_out)
+ * and LUX_ALPHA_ACCEPT, so both compile to the loop they had inline: an
+ * any-hit query returns from the caller at its first accepted hit. */
+#define LUX_INTERSECT_LEAF(first, count)                                                        \
+  for (int i = (first); i < (first) + (count); ++i) {                                           \
+    const LuxTriangle tri = tris[i];                                                            \
+    float t = t_best, u, v;                                                                     \
+    if (lux_intersect_triangle(&shear, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tmin, &t, &u, &v) && \
+        LUX_ALPHA_ACCEPT(i, tri, u, v)) {                                                       \
+      t_best = t;                                                                               \
+      hit_u = u;                                                                                \
+      hit_v = v;                                                                                \
+      hit_prim = as_int(tri.v0.w);                                                              \
+      if (any_hit) {                                                                            \
+        *t_out = t_best;                                                                        \
+        return hit_prim;                                                                        \
+      }                                                                                         \
+    }                                                                                           \
+  }
+
 inline float3 lux_safe_inv_dir(float3 d) {
   const float eps = 1e-20f;
   float3 s;
