@@ -94,17 +94,19 @@
 /* pbrt-v4 treats alpha < 1e-3 as a perfect mirror; this keeps it a lobe. */
 #define LUX_BSDF_MIN_ALPHA 1e-3f
 #define LUX_BSDF_MIN_P_LAYER 0.1f
-/* Appendix B's dielectric: ior 1.5, f0 = ((1.5 - 1) / (1.5 + 1))^2. */
+/* Appendix B's dielectric: ior 1.5, f0 = ((1.5 - 1) / (1.5 + 1))^2. A
+ * material's KHR_materials_ior changes it (LuxMaterial.dielectric_f0). */
 #define LUX_BSDF_DIELECTRIC_F0 0.04f
 
 typedef struct {
-  float3 diffuse;   /* Lambert albedo, base_color (1 - metallic) */
-  float3 f0;        /* Fresnel reflectance at normal incidence */
-  float3 ms;        /* F_ms (1 - E(wo.z)) / (pi (1 - E_avg)): f_ms = ms (1 - E(wi.z)) */
-  float alpha;      /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
-  float roughness;  /* saturated roughness, the table coordinate */
-  float p_specular; /* probability of sampling the specular layer */
-  float p_cosine;   /* within layer 0: probability of cosine (vs compensation) sampling */
+  float3 diffuse;      /* Lambert albedo, base_color (1 - metallic) */
+  float3 f0;           /* Fresnel reflectance at normal incidence */
+  float f0_dielectric; /* f0 of the dielectric layer (weights the diffuse) */
+  float3 ms;           /* F_ms (1 - E(wo.z)) / (pi (1 - E_avg)): f_ms = ms (1 - E(wi.z)) */
+  float alpha;         /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
+  float roughness;     /* saturated roughness, the table coordinate */
+  float p_specular;    /* probability of sampling the specular layer */
+  float p_cosine;      /* within layer 0: probability of cosine (vs compensation) sampling */
 } LuxBsdf;
 
 /* Rec. 709 luminance of linear RGB. */
@@ -203,13 +205,16 @@ inline float3 lux_ggx_ms_sample(float roughness, float u_row, float2 u) {
 
 /* wo_z: cos theta of the direction the BSDF will be used with (the
  * compensation and p_specular depend on it); callers clamp it above 0. */
-inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness, float wo_z) {
+inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
+                             float dielectric_f0, float wo_z) {
   LuxBsdf m;
   base_color = fmax(base_color, (float3)(0.0f));
   metallic = lux_saturate(metallic);
   roughness = lux_saturate(roughness);
   m.diffuse = base_color * (1.0f - metallic);
-  m.f0 = mix((float3)(LUX_BSDF_DIELECTRIC_F0), base_color, metallic);
+  dielectric_f0 = lux_saturate(dielectric_f0);
+  m.f0_dielectric = dielectric_f0;
+  m.f0 = mix((float3)(dielectric_f0), base_color, metallic);
   m.alpha = fmax(roughness * roughness, LUX_BSDF_MIN_ALPHA);
   m.roughness = roughness;
   m.ms = (float3)(0.0f);
@@ -221,9 +226,8 @@ inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
   /* Keeps 1 / (1 - E_avg) finite; the smoothest row (roughness 0, alpha
    * 1e-3) still loses ~1e-5 on average, at grazing angles. */
   if (1.0f - e_avg > 1e-7f) {
-    const float3 fms =
-        (1.0f - metallic) * lux_kulla_conty_fms((float3)(LUX_BSDF_DIELECTRIC_F0), e_avg) +
-        metallic * lux_kulla_conty_fms(base_color, e_avg);
+    const float3 fms = (1.0f - metallic) * lux_kulla_conty_fms((float3)(dielectric_f0), e_avg) +
+                       metallic * lux_kulla_conty_fms(base_color, e_avg);
     ms_albedo = fms * fmax(1.0f - e_o, 0.0f);
     m.ms = ms_albedo * (LUX_INV_PI / (1.0f - e_avg));
   }
@@ -307,10 +311,10 @@ inline float3 lux_bsdf_eval_layer(const LuxBsdf* m, int layer, float3 wo, float3
   if (wo.z <= 0.0f || wi.z <= 0.0f) return (float3)(0.0f);
   if (layer == LUX_BSDF_LAYER_DIFFUSE) {
 #if LUX_SPECULAR
-    /* Appendix B fresnel_mix: the dielectric's F(wo.h), ior 1.5. */
+    /* Appendix B fresnel_mix: the dielectric's F(wo.h), f0 from its ior. */
     const float3 h = normalize(wo + wi);
     const float c = 1.0f - lux_saturate(dot(wo, h));
-    const float f = LUX_BSDF_DIELECTRIC_F0 + (1.0f - LUX_BSDF_DIELECTRIC_F0) * (c * c * c * c * c);
+    const float f = m->f0_dielectric + (1.0f - m->f0_dielectric) * (c * c * c * c * c);
     return m->diffuse * (LUX_INV_PI * (1.0f - f)) +
            m->ms * fmax(1.0f - lux_ggx_albedo(wi.z, m->roughness), 0.0f);
 #else

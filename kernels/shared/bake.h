@@ -35,7 +35,9 @@ typedef struct LuxSurfaceTri {
 } LuxSurfaceTri;
 
 /* Device material, 64 bytes. Texture indices are -1 when absent.
- *   flags bit 0: double-sided; bit 1: emits light. */
+ *   flags bit 0: double-sided; bit 1: emits light.
+ *   dielectric_f0: Schlick f0 of the dielectric layer, ((ior - 1) / (ior +
+ *   1))^2 (KHR_materials_ior; 0.04 at the glTF default ior 1.5). */
 typedef struct LuxMaterial {
   float4 base_color; /* linear rgb, a = alpha factor */
   float4 emission;   /* rgb = emissiveFactor * strength (radiance), w unused */
@@ -46,7 +48,7 @@ typedef struct LuxMaterial {
   int emissive_tex;
   int flags;
   float alpha_cutoff;
-  int pad;
+  float dielectric_f0;
 } LuxMaterial;
 
 #define LUX_MATERIAL_DOUBLE_SIDED 1

@@ -77,7 +77,8 @@ __kernel void probe_onb(__global const float4* normals, __global const float4* v
   out[4 * i + 3] = (float4)(lux_to_local(w, t, b, n), 0.0f);
 }
 
-/* material = (base_color, metallic), rough[i] = (roughness, wo.z; 0 means 1).
+/* material = (base_color, metallic), rough[i] = (roughness, wo.z; 0 means 1,
+ * dielectric f0; 0 means 0.04).
  * out[3i] = (diffuse, alpha), out[3i+1] = (f0, p_specular),
  * out[3i+2] = (ms, p_cosine): ms = f_ms / (1 - E(wi.z)). */
 __kernel void probe_make_bsdf(__global const float4* material, __global const float4* rough,
@@ -85,6 +86,7 @@ __kernel void probe_make_bsdf(__global const float4* material, __global const fl
   const uint i = get_global_id(0);
   if (i >= count) return;
   const LuxBsdf m = lux_make_bsdf(material[i].xyz, material[i].w, rough[i].x,
+                                  rough[i].z > 0.0f ? rough[i].z : LUX_BSDF_DIELECTRIC_F0,
                                   rough[i].y > 0.0f ? rough[i].y : 1.0f);
   out[3 * i + 0] = (float4)(m.diffuse, m.alpha);
   out[3 * i + 1] = (float4)(m.f0, m.p_specular);
@@ -93,7 +95,7 @@ __kernel void probe_make_bsdf(__global const float4* material, __global const fl
 
 /* lux_bsdf_sample for one material and wo; u[i] = (u.x, u.y, u_layer, -).
  * A u_layer_override >= 0 replaces every u_layer (0 forces the specular
- * layer when p_specular > 0).
+ * layer when p_specular > 0). wo4.w: the dielectric f0 (0 means 0.04).
  *   sample[i] = (wi, layer)            weight[i] = (weight, pdf)
  *   check[i]  = (f_layer(wi) cos / pdf, lux_bsdf_pdf_layer(layer, wi))   (0 for -1) */
 __kernel void probe_bsdf_sample(const float4 material, const float roughness, const float4 wo4,
@@ -102,7 +104,8 @@ __kernel void probe_bsdf_sample(const float4 material, const float roughness, co
                                 __global float4* check) {
   const uint i = get_global_id(0);
   if (i >= count) return;
-  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness, wo4.z);
+  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness,
+                                  wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0, wo4.z);
   const float3 wo = wo4.xyz;
   const float4 ui = u[i];
   float3 wi = (float3)(0.0f), w;
@@ -125,7 +128,8 @@ __kernel void probe_bsdf_eval(const float4 material, const float roughness, cons
                               __global const float4* dirs, const uint count, __global float4* out) {
   const uint i = get_global_id(0);
   if (i >= count) return;
-  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness, wo4.z);
+  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness,
+                                  wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0, wo4.z);
   const float3 wo = wo4.xyz, wi = dirs[i].xyz;
   for (int layer = 0; layer < 2; ++layer)
     out[2 * i + layer] =

@@ -203,7 +203,8 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   // Extensions the file uses that the importer does not read, by name
   // (materials and textures name where each one appears).
   for (const std::string& name : model.extensionsUsed)
-    if (name != "KHR_lights_punctual" && name != "KHR_materials_emissive_strength")
+    if (name != "KHR_lights_punctual" && name != "KHR_materials_emissive_strength" &&
+        name != "KHR_materials_ior")
       scene.import_stats.warnings.push_back("extension " + name +
                                             " is used by the file and not supported (ignored)");
   LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));

@@ -154,6 +154,18 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
     m.emissive_strength = static_cast<float>(s);
   }
 
+  // KHR_materials_ior: ior >= 1, or 0 (f0 = 1), per the extension's spec.
+  ext = gm.extensions.find("KHR_materials_ior");
+  if (ext != gm.extensions.end() && ext->second.IsObject() && ext->second.Has("ior")) {
+    const auto& v = ext->second.Get("ior");
+    if (!v.IsNumber()) return invalid_argument(label + ": KHR_materials_ior ior is not a number");
+    const double ior = v.GetNumberAsDouble();
+    if (!(std::isfinite(ior) && (ior == 0.0 || (ior >= 1.0 && ior <= 1e6))))
+      return invalid_argument(
+          strprintf("%s: KHR_materials_ior ior %g is not 0 or in [1, 1e6]", label.c_str(), ior));
+    m.ior = static_cast<float>(ior);
+  }
+
   m.double_sided = gm.doubleSided;
   if (gm.alphaMode == "OPAQUE" || gm.alphaMode.empty()) {
     m.alpha_mode = AlphaMode::kOpaque;
@@ -186,7 +198,7 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
                        ": normalTexture is not supported; the interpolated vertex "
                        "normal is used");
   for (const auto& [name, value] : gm.extensions)
-    if (name != "KHR_materials_emissive_strength")
+    if (name != "KHR_materials_emissive_strength" && name != "KHR_materials_ior")
       warnings.push_back(label + ": material extension " + name +
                          " is not supported (the metallic-roughness core is used)");
   return m;

@@ -60,6 +60,17 @@ struct Material {
   bool double_sided = false;
   AlphaMode alpha_mode = AlphaMode::kOpaque;
   float alpha_cutoff = 0.5f;
+  // KHR_materials_ior: index of refraction of the dielectric (the glTF
+  // default 1.5 gives f0 = 0.04); 0 is allowed and means f0 = 1.
+  float ior = 1.5f;
+
+  // Schlick f0 of the dielectric layer, ((ior - 1) / (ior + 1))^2, in
+  // double and rounded once (ior 1.5 gives 0.04f exactly, as Appendix B).
+  float dielectric_f0() const {
+    if (ior == 0.0f) return 1.0f;
+    const double r = (double(ior) - 1.0) / (double(ior) + 1.0);
+    return static_cast<float>(r * r);
+  }
 
   bool is_emissive() const {
     return emissive_strength > 0 &&

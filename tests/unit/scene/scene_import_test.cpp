@@ -252,8 +252,8 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
   b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(png)}}});
   b.doc["samplers"] = json::array({{{"wrapS", 33071}, {"wrapT", 10497}}});  // CLAMP_TO_EDGE
   b.doc["textures"] = json::array({{{"source", 0}}, {{"source", 0}, {"sampler", 0}}});
-  b.doc["extensionsUsed"] = json::array(
-      {"KHR_texture_transform", "KHR_materials_ior", "KHR_materials_emissive_strength"});
+  b.doc["extensionsUsed"] = json::array({"KHR_texture_transform", "KHR_materials_clearcoat",
+                                         "KHR_materials_ior", "KHR_materials_emissive_strength"});
   const int mat = b.add_material(
       {{"name", "painted"},
        {"pbrMetallicRoughness",
@@ -263,7 +263,8 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
        {"emissiveTexture", {{"index", 0}, {"texCoord", 1}}},
        {"normalTexture", {{"index", 0}}},
        {"extensions",
-        {{"KHR_materials_ior", {{"ior", 1.7}}},
+        {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}},
+         {"KHR_materials_ior", {{"ior", 1.7}}},
          {"KHR_materials_emissive_strength", {{"emissiveStrength", 2}}}}}});
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   prim["material"] = mat;
@@ -280,19 +281,47 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
     return false;
   };
   EXPECT_TRUE(has({"extension KHR_texture_transform", "not supported"}));
-  EXPECT_TRUE(has({"extension KHR_materials_ior", "not supported"}));
-  EXPECT_FALSE(has({"extension KHR_materials_emissive_strength"})) << "it is supported";
+  EXPECT_TRUE(has({"extension KHR_materials_clearcoat", "not supported"}));
+  EXPECT_FALSE(has({"KHR_materials_emissive_strength"})) << "it is supported";
+  EXPECT_FALSE(has({"KHR_materials_ior"})) << "it is supported";
+  // ior 1.7: f0 = (0.7 / 2.7)^2.
+  EXPECT_FLOAT_EQ(r->materials[0].ior, 1.7f);
+  EXPECT_NEAR(r->materials[0].dielectric_f0(), (0.7 / 2.7) * (0.7 / 2.7), 1e-7);
   EXPECT_TRUE(has({"material 'painted'", "baseColorTexture", "KHR_texture_transform"}));
   EXPECT_TRUE(has({"material 'painted'", "metallicRoughnessTexture", "sampler 0", "33071"}));
   EXPECT_TRUE(has({"material 'painted'", "emissiveTexture", "texCoord 1"}));
   EXPECT_TRUE(has({"material 'painted'", "normalTexture"}));
-  EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_ior"}));
+  EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_clearcoat"}));
   EXPECT_EQ(w.size(), 7u) << "one line per input";
 
-  // The plain quad of the other tests: nothing to report.
+  // The plain quad of the other tests: nothing to report, the default ior.
   auto plain = load(quad_scene().gltf_embedded());
   ASSERT_TRUE(plain.is_ok());
   EXPECT_TRUE(plain->import_stats.warnings.empty());
+  EXPECT_FLOAT_EQ(plain->materials[0].dielectric_f0(), 0.04f);
+}
+
+TEST(SceneImportErrors, IorOutsideTheExtensionsRange) {
+  for (double ior : {0.5, -1.0}) {
+    GltfBuilder b;
+    const int mat = b.add_material(
+        {{"name", "glass"}, {"extensions", {{"KHR_materials_ior", {{"ior", ior}}}}}});
+    json prim = b.triangles(kQuadPositions, kQuadIndices);
+    prim["material"] = mat;
+    b.add_node({{"mesh", b.add_mesh("m", {prim})}});
+    expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+                 {"material 'glass'", "KHR_materials_ior ior", "is not 0 or in [1, 1e6]"});
+  }
+  // ior 0 is allowed: f0 = 1.
+  GltfBuilder b;
+  const int mat =
+      b.add_material({{"name", "mirror"}, {"extensions", {{"KHR_materials_ior", {{"ior", 0}}}}}});
+  json prim = b.triangles(kQuadPositions, kQuadIndices);
+  prim["material"] = mat;
+  b.add_node({{"mesh", b.add_mesh("m", {prim})}});
+  auto r = load(b.gltf_embedded());
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  EXPECT_EQ(r->materials[0].dielectric_f0(), 1.0f);
 }
 
 TEST(SceneImport, SixteenBitGreyImageExpandsToRgba) {

@@ -7,7 +7,8 @@
 //
 // The model, as the glTF 2.0 specification's Appendix B (B.3) states it:
 //   metal      = Schlick(base, V.H) D G2 / (4 N.V N.L)
-//   dielectric = mix(base / pi, D G2 / (4 N.V N.L), Schlick(0.04, V.H))
+//   dielectric = mix(base / pi, D G2 / (4 N.V N.L), Schlick(f0, V.H)), f0 0.04
+//                at the default ior 1.5 (KHR_materials_ior changes it)
 //   f          = mix(dielectric, metal, metallic),  alpha = roughness^2
 // plus the Kulla & Conty 2017 lobe ("Revisiting Physically Based Shading at
 // Imageworks"), whose albedo is F_ms (1 - E(N.V)) by construction, with
@@ -68,16 +69,16 @@ Albedo specular_albedo(const Vec3& v, double alpha, const double f0[3], int nu, 
   return a;
 }
 
-// int (1 - Schlick(0.04, V.H)) / pi N.L dL, midpoint in the cosine-weighted
+// int (1 - Schlick(f0, V.H)) / pi N.L dL, midpoint in the cosine-weighted
 // parametrization N.L = sqrt(u), phi = 2 pi v (N.L / pi dL = du dv).
-double diffuse_transmission(const Vec3& v, int n) {
+double diffuse_transmission(const Vec3& v, double f0, int n) {
   double sum = 0.0;
   for (int i = 0; i < n; ++i) {
     const double z = std::sqrt((i + 0.5) / n), r = std::sqrt(1.0 - z * z);
     for (int j = 0; j < n; ++j) {
       const double phi = 2.0 * kPi * (j + 0.5) / n;
       const Vec3 h = normalize(Vec3{v.x + r * std::cos(phi), v.y + r * std::sin(phi), v.z + z});
-      sum += 1.0 - schlick(0.04, dot(v, h));
+      sum += 1.0 - schlick(f0, dot(v, h));
     }
   }
   return sum / (double(n) * n);
@@ -115,15 +116,16 @@ Expected quadrature(const Material& m, double cz, double e_avg) {
   const double alpha = std::max(double(m.roughness) * m.roughness, 1e-3);
   const Vec3 v = spherical_direction(cz, 0.7);
   double f0[3];
-  for (int c = 0; c < 3; ++c) f0[c] = 0.04 * (1 - metallic) + base[c] * metallic;
+  const double f0_d = m.dielectric_f0;
+  for (int c = 0; c < 3; ++c) f0[c] = f0_d * (1 - metallic) + base[c] * metallic;
   const Albedo spec = specular_albedo(v, alpha, f0, 2048, 1024);
-  const double t = diffuse_transmission(v, 512);
+  const double t = diffuse_transmission(v, f0_d, 512);
   const double e_o = white_albedo(cz, alpha, 2048, 1024);
   Expected e;
   for (int c = 0; c < 3; ++c) {
     e.single.rgb[c] = spec.rgb[c] + base[c] * (1 - metallic) * t;
     const double fms =
-        (1 - metallic) * kulla_conty_fms(0.04, e_avg) + metallic * kulla_conty_fms(base[c], e_avg);
+        (1 - metallic) * kulla_conty_fms(f0_d, e_avg) + metallic * kulla_conty_fms(base[c], e_avg);
     e.total.rgb[c] = e.single.rgb[c] + fms * (1.0 - e_o);
     e.old.rgb[c] = spec.rgb[c] + base[c] * (1 - metallic) * (1.0 - schlick(f0[c], cz));
   }
@@ -134,12 +136,18 @@ using BsdfAlbedoTest = SamplingTest;
 
 TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
   const size_t n = Probe::kMaxSamples;
-  const Material materials[] = {
-      {{0.8f, 0.5f, 0.3f, 0.0f}, 0.2f},    {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f},
-      {{1.0f, 1.0f, 1.0f, 0.0f}, 0.5f},    {{0.1f, 0.1f, 0.1f, 0.0f}, 0.8f},
-      {{1.0f, 1.0f, 1.0f, 0.0f}, 1.0f},    {{0.95f, 0.64f, 0.54f, 1.0f}, 0.2f},
-      {{0.95f, 0.64f, 0.54f, 1.0f}, 0.5f}, {{1.0f, 1.0f, 1.0f, 1.0f}, 1.0f},
-      {{0.9f, 0.6f, 0.3f, 0.5f}, 0.6f}};
+  const Material materials[] = {{{0.8f, 0.5f, 0.3f, 0.0f}, 0.2f},
+                                {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f},
+                                {{1.0f, 1.0f, 1.0f, 0.0f}, 0.5f},
+                                {{0.1f, 0.1f, 0.1f, 0.0f}, 0.8f},
+                                {{1.0f, 1.0f, 1.0f, 0.0f}, 1.0f},
+                                {{0.95f, 0.64f, 0.54f, 1.0f}, 0.2f},
+                                {{0.95f, 0.64f, 0.54f, 1.0f}, 0.5f},
+                                {{1.0f, 1.0f, 1.0f, 1.0f}, 1.0f},
+                                {{0.9f, 0.6f, 0.3f, 0.5f}, 0.6f},
+                                // KHR_materials_ior: ior 2.0 (f0 1/9) and 1.33 (f0 0.0201).
+                                {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f, 1.0f / 9.0f},
+                                {{0.3f, 0.6f, 0.9f, 0.0f}, 0.3f, 0.0201f}};
   double worst_gap = 0.0, worst_uncompensated = 0.0;
   int rejected_old = 0, cases = 0;
   for (const Material& m : materials) {
@@ -152,6 +160,11 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
       ASSIGN_OR_FAIL(s, probe().bsdf_sample(Build::kSobolSpecular, m,
                                             to_float4(spherical_direction(cz, 0.7)), -1.0f, n));
       const Expected e = quadrature(m, cz, e_avg);
+      // A material with its own ior must not pass as the default one.
+      const bool own_ior = m.dielectric_f0 != 0.04f;
+      const Expected e_default_ior =
+          own_ior ? quadrature(Material{m.base_metallic, m.roughness}, cz, e_avg) : e;
+      bool default_ior_rejected = false;
       bool old_rejected = false;
       for (int c = 0; c < 3; ++c) {
         std::vector<double> w(n);
@@ -168,7 +181,11 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
         if (std::fabs(est.mean - e.old.rgb[c]) > kZ * est.standard_error + kTableTolerance)
           old_rejected = true;
         worst_uncompensated = std::max(worst_uncompensated, e.total.rgb[c] - e.single.rgb[c]);
+        if (std::fabs(est.mean - e_default_ior.total.rgb[c]) >
+            kZ * est.standard_error + kTableTolerance)
+          default_ior_rejected = true;
       }
+      if (own_ior) EXPECT_TRUE(default_ior_rejected) << "the ior makes no difference";
       // At wo.z 0.1 both changes show for every material: the (1 - F(N.V))
       // diffuse weight for dielectrics, the missing compensation for metals.
       if (cz < 0.2) EXPECT_TRUE(old_rejected) << "the previous model would pass";

@@ -38,6 +38,7 @@ enum class Warp : int {
 struct Material {
   float4 base_metallic;  // base colour rgb, metallic
   float roughness;
+  float dielectric_f0 = 0.04f;  // ((ior - 1) / (ior + 1))^2; passed in wo.w
 };
 
 struct BsdfSamples {
