@@ -310,14 +310,14 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.string("device", m.device));
   if (j.contains("intersector")) LUXEL_RETURN_IF_ERROR(f.string("intersector", m.intersector));
   if (j.contains("import_warnings")) {
-    const Json* list = nullptr;
-    LUXEL_RETURN_IF_ERROR(f.array("import_warnings", list));
+    const Json* warnings = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.array("import_warnings", warnings));
     m.import_warnings.clear();
-    for (size_t i = 0; i < list->size(); ++i) {
-      if (!(*list)[i].is_string())
+    for (size_t i = 0; i < warnings->size(); ++i) {
+      if (!(*warnings)[i].is_string())
         return invalid_argument(
             strprintf("%s: field 'import_warnings[%zu]' must be a string", what.c_str(), i));
-      m.import_warnings.push_back((*list)[i].get<std::string>());
+      m.import_warnings.push_back((*warnings)[i].get<std::string>());
     }
   }
   if (j.contains("encodings")) {

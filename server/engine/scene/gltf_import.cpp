@@ -202,10 +202,9 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   scene.source_name = name;
   // Extensions the file uses that the importer does not read, by name
   // (materials and textures name where each one appears).
-  for (const std::string& name : model.extensionsUsed)
-    if (name != "KHR_lights_punctual" && name != "KHR_materials_emissive_strength" &&
-        name != "KHR_materials_ior")
-      scene.import_stats.warnings.push_back("extension " + name +
+  for (const std::string& ext : model.extensionsUsed)
+    if (!detail::is_supported_extension(ext))
+      scene.import_stats.warnings.push_back("extension " + ext +
                                             " is used by the file and not supported (ignored)");
   LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
   LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));

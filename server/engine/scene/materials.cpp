@@ -198,13 +198,18 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
                        ": normalTexture is not supported; the interpolated vertex "
                        "normal is used");
   for (const auto& [name, value] : gm.extensions)
-    if (name != "KHR_materials_emissive_strength" && name != "KHR_materials_ior")
+    if (!is_supported_extension(name))
       warnings.push_back(label + ": material extension " + name +
                          " is not supported (the metallic-roughness core is used)");
   return m;
 }
 
 }  // namespace
+
+bool is_supported_extension(const std::string& name) {
+  return name == "KHR_lights_punctual" || name == "KHR_materials_emissive_strength" ||
+         name == "KHR_materials_ior";
+}
 
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
   TextureTable table(model, options, scene);

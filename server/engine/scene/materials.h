@@ -1,6 +1,8 @@
 // glTF materials -> scene::Material (same indices) and the textures they use.
 #pragma once
 
+#include <string>
+
 #include "common/status.h"
 #include "scene/gltf_import.h"
 #include "scene/scene.h"
@@ -12,5 +14,10 @@ namespace luxel::scene::detail {
 // material i is Scene material i) and decodes each (image, colour space) pair
 // they reference once into scene->textures.
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene);
+
+// Whether the importer reads glTF extension `name` (KHR_lights_punctual,
+// KHR_materials_emissive_strength, KHR_materials_ior); the others are named
+// in the import warnings.
+bool is_supported_extension(const std::string& name);
 
 }  // namespace luxel::scene::detail

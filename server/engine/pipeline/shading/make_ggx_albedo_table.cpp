@@ -34,6 +34,8 @@
 #include <string>
 #include <vector>
 
+#include "common/dvec3.h"
+
 namespace luxel_ggx_albedo {
 
 struct Settings {
@@ -45,46 +47,33 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kMinAlpha = 1e-3;  // LUX_BSDF_MIN_ALPHA
 constexpr double kMinMu = 1e-4;     // shade.h clamps wo.z to at least this
 
-struct V3 {
-  double x, y, z;
-};
-inline V3 operator+(V3 a, V3 b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-inline V3 operator*(V3 a, double s) {
-  return {a.x * s, a.y * s, a.z * s};
-}
-inline double dot(V3 a, V3 b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-inline V3 cross(V3 a, V3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-inline V3 normalize(V3 a) {
-  return a * (1.0 / std::sqrt(dot(a, a)));
-}
+using luxel::cross;
+using luxel::dot;
+using luxel::DVec3;
+using luxel::normalize;
 
 inline double alpha_of(double roughness) {
   return std::max(roughness * roughness, kMinAlpha);
 }
 
 // Smith Lambda for GGX (Heitz 2014, Eq. 72), z = cos theta of w.
-inline double lambda(V3 w, double alpha) {
+inline double lambda(DVec3 w, double alpha) {
   const double t2 = (w.x * w.x + w.y * w.y) / (w.z * w.z);
   return 0.5 * (std::sqrt(1.0 + alpha * alpha * t2) - 1.0);
 }
 
 // Heitz 2018, Listing 1.
-inline V3 sample_vndf(V3 v, double alpha, double u1, double u2) {
-  const V3 vh = normalize({alpha * v.x, alpha * v.y, v.z});
+inline DVec3 sample_vndf(DVec3 v, double alpha, double u1, double u2) {
+  const DVec3 vh = normalize({alpha * v.x, alpha * v.y, v.z});
   const double len2 = vh.x * vh.x + vh.y * vh.y;
-  const V3 t1 = len2 > 0.0 ? V3{-vh.y, vh.x, 0.0} * (1.0 / std::sqrt(len2)) : V3{1.0, 0.0, 0.0};
-  const V3 t2 = cross(vh, t1);
+  const DVec3 t1 =
+      len2 > 0.0 ? DVec3{-vh.y, vh.x, 0.0} * (1.0 / std::sqrt(len2)) : DVec3{1.0, 0.0, 0.0};
+  const DVec3 t2 = cross(vh, t1);
   const double r = std::sqrt(u1), phi = 2.0 * kPi * u2;
   const double p1 = r * std::cos(phi);
   const double s = 0.5 * (1.0 + vh.z);
   const double p2 = (1.0 - s) * std::sqrt(std::max(0.0, 1.0 - p1 * p1)) + s * r * std::sin(phi);
-  const V3 nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0, 1.0 - p1 * p1 - p2 * p2));
+  const DVec3 nh = t1 * p1 + t2 * p2 + vh * std::sqrt(std::max(0.0, 1.0 - p1 * p1 - p2 * p2));
   return normalize({alpha * nh.x, alpha * nh.y, std::max(0.0, nh.z)});
 }
 
@@ -103,7 +92,7 @@ inline double radical_inverse2(uint32_t i) {
 inline double directional_albedo(double mu, double roughness, int samples) {
   mu = std::clamp(mu, kMinMu, 1.0);
   const double alpha = alpha_of(roughness);
-  const V3 v{std::sqrt(std::max(0.0, 1.0 - mu * mu)), 0.0, mu};
+  const DVec3 v{std::sqrt(std::max(0.0, 1.0 - mu * mu)), 0.0, mu};
   const double lv = lambda(v, alpha);
   double sum = 0.0;
   for (int k = 0; k < samples; ++k) {
@@ -112,8 +101,8 @@ inline double directional_albedo(double mu, double roughness, int samples) {
     double u2 = (k + 0.5) / samples + 0.6180339887498949;
     u1 -= std::floor(u1);
     u2 -= std::floor(u2);
-    const V3 h = sample_vndf(v, alpha, u1, u2);
-    const V3 l = h * (2.0 * dot(v, h)) + v * -1.0;
+    const DVec3 h = sample_vndf(v, alpha, u1, u2);
+    const DVec3 l = h * (2.0 * dot(v, h)) + v * -1.0;
     if (l.z <= 0.0) continue;
     sum += (1.0 + lv) / (1.0 + lv + lambda(l, alpha));
   }

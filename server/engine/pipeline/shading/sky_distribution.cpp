@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/dvec3.h"
 #include "common/status.h"
 #include "pipeline/shading/color.h"
 #include "pipeline/shading/distribution.h"
@@ -13,37 +14,20 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kHalfPi = 0.5 * kPi;
 
-struct D3 {
-  double x, y, z;
-};
-
-double dot(const D3& a, const D3& b) {
-  return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
-D3 normalized(const D3& v) {
-  const double l = std::sqrt(dot(v, v));
-  return {v.x / l, v.y / l, v.z / l};
-}
-
-double angle(const D3& a, const D3& b) {
-  return std::acos(std::clamp(dot(a, b), -1.0, 1.0));
-}
-
 // Inverse of the octahedral map at (u, v) in [0, 1]^2 (y up, the (x, z)
 // plane folded over the lower faces).
-D3 octahedral_decode(double u, double v) {
+DVec3 octahedral_decode(double u, double v) {
   const double px = 2 * u - 1, pz = 2 * v - 1;
-  D3 n{px, 1 - std::fabs(px) - std::fabs(pz), pz};
+  DVec3 n{px, 1 - std::fabs(px) - std::fabs(pz), pz};
   if (n.y < 0) {
     n.x = (1 - std::fabs(pz)) * (px >= 0 ? 1 : -1);
     n.z = (1 - std::fabs(px)) * (pz >= 0 ? 1 : -1);
   }
-  return normalized(n);
+  return normalize(n);
 }
 
 // Local direction at image coordinates (s, t) (kernels/shared/light.h).
-D3 equirect_direction(double s, double t) {
+DVec3 equirect_direction(double s, double t) {
   const double theta = kPi * t, phi = 2 * kPi * (s - 0.5);
   return {std::sin(theta) * std::sin(phi), std::cos(theta), -std::sin(theta) * std::cos(phi)};
 }
@@ -51,14 +35,14 @@ D3 equirect_direction(double s, double t) {
 // Largest angle between the centre of a normal cell and any normal of it:
 // a dense grid over the cell, edges included, plus a margin for the float
 // arithmetic of the kernel's cell lookup.
-double normal_cell_radius(int bin, int side, const D3& centre) {
+double normal_cell_radius(int bin, int side, const DVec3& centre) {
   const int steps = 16;
   const int bx = bin % side, by = bin / side;
   double worst = 0;
   for (int i = 0; i <= steps; ++i)
     for (int j = 0; j <= steps; ++j) {
       const double u = (bx + double(j) / steps) / side, v = (by + double(i) / steps) / side;
-      worst = std::max(worst, angle(centre, octahedral_decode(u, v)));
+      worst = std::max(worst, angle_between(centre, octahedral_decode(u, v)));
     }
   return worst * 1.01 + 1e-3;
 }
@@ -66,12 +50,12 @@ double normal_cell_radius(int bin, int side, const D3& centre) {
 // Largest angle between the centre of the (s, t) rectangle [s0, s1] x
 // [t0, t1] and its corners and edge midpoints (the distance from the centre
 // grows along each edge towards the corners).
-double rectangle_radius(double s0, double s1, double t0, double t1, D3* centre) {
+double rectangle_radius(double s0, double s1, double t0, double t1, DVec3* centre) {
   *centre = equirect_direction(0.5 * (s0 + s1), 0.5 * (t0 + t1));
   double worst = 0;
   for (double s : {s0, 0.5 * (s0 + s1), s1})
     for (double t : {t0, 0.5 * (t0 + t1), t1})
-      worst = std::max(worst, angle(*centre, equirect_direction(s, t)));
+      worst = std::max(worst, angle_between(*centre, equirect_direction(s, t)));
   return worst * 1.01 + 1e-4;
 }
 
@@ -114,7 +98,7 @@ int sky_normal_bin(Vec3 n, int side) {
 }
 
 Vec3 sky_normal_bin_centre(int bin, int side) {
-  const D3 c = octahedral_decode((bin % side + 0.5) / side, (bin / side + 0.5) / side);
+  const DVec3 c = octahedral_decode((bin % side + 0.5) / side, (bin / side + 0.5) / side);
   return {float(c.x), float(c.y), float(c.z)};
 }
 
@@ -159,7 +143,7 @@ SkyDistributions build_sky_distributions(const std::vector<float>& rgb, int widt
     }
 
   // Level 1: per normal cell, blocks by mass x the cosine bound.
-  std::vector<D3> block_dir(mass.size());
+  std::vector<DVec3> block_dir(mass.size());
   std::vector<double> block_radius(mass.size());
   for (int by = 0; by < nby; ++by)
     for (int bx = 0; bx < nbx; ++bx) {
@@ -172,12 +156,12 @@ SkyDistributions build_sky_distributions(const std::vector<float>& rgb, int widt
   std::vector<double> block_weights(mass.size());
   for (int b = 0; b < normal_bins * normal_bins; ++b) {
     const Vec3 cf = sky_normal_bin_centre(b, normal_bins);
-    const D3 centre{cf.x, cf.y, cf.z};
+    const DVec3 centre{cf.x, cf.y, cf.z};
     const double spread = normal_cell_radius(b, normal_bins, centre);
     for (size_t k = 0; k < mass.size(); ++k) {
       // No normal of the cell is closer than this to a direction of the
       // block; the cosine of it bounds n.w.
-      const double closest = angle(centre, block_dir[k]) - spread - block_radius[k];
+      const double closest = angle_between(centre, block_dir[k]) - spread - block_radius[k];
       block_weights[k] = closest < kHalfPi ? mass[k] * std::cos(std::max(closest, 0.0)) : 0.0;
     }
     append_table(block_weights, nby, nbx, &d.block_cdfs);
