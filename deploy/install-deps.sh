@@ -12,6 +12,8 @@ PACKAGES=(
   # geometry and images
   libembree-dev libopenimageio-dev openimageio-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
+  # lightmap UV generation: sparse least squares for LSCM (uv/)
+  libeigen3-dev
   # service: gRPC + protobuf (C++ and Python), OpenSSL for SHA-256 and TLS
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libssl-dev
   python3-grpcio python3-protobuf
