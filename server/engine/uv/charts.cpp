@@ -8,6 +8,7 @@
 #include "uv/lscm.h"
 #include "uv/parametrize.h"
 #include "uv/segment.h"
+#include "uv/stretch.h"
 #include "uv/topology.h"
 #include "uv/validate.h"
 
@@ -31,6 +32,8 @@ Status check_options(const ChartOptions& o) {
   if (o.max_chart_triangles < 1)
     return invalid_argument("chart options: max_chart_triangles must be at least 1");
   if (!(o.max_aspect >= 1)) return invalid_argument("chart options: max_aspect must be at least 1");
+  if (!(o.max_stretch_l2 == 0 || (std::isfinite(o.max_stretch_l2) && o.max_stretch_l2 >= 1)))
+    return invalid_argument("chart options: max_stretch_l2 must be 0 (no limit) or at least 1");
   return Status::ok();
 }
 
@@ -121,6 +124,12 @@ Result<std::vector<Chart>> build_charts(const scene::Mesh& mesh, const ChartOpti
     const double lo = std::min(laid.width, laid.height), hi = std::max(laid.width, laid.height);
     if (n > 2 && hi > options.max_aspect * lo) {
       ++st.aspect_splits;
+      push_split(local.triangles);
+      continue;
+    }
+    if (n > 1 && options.max_stretch_l2 > 0 &&
+        indexed_stretch(local.position, laid.uv, local.indices).l2 > options.max_stretch_l2) {
+      ++st.stretch_splits;
       push_split(local.triangles);
       continue;
     }

@@ -13,8 +13,9 @@
 //   4. Validation (validate.h): no flipped or zero-area UV triangle, no
 //      crossing boundary edges; a rejected chart is split in two along the
 //      principal axis of its triangle centroids and each part is retried. A
-//      long thin chart (bounding-rectangle aspect over the limit) is split the
-//      same way. A single triangle is always valid.
+//      long thin chart (bounding-rectangle aspect over the limit) or one whose
+//      L2 stretch is over the limit is split the same way. A single triangle
+//      is always valid.
 //   5. Layout (chart_layout.h): scale to UV area == 3D area, rotate to the
 //      minimum-area bounding rectangle (long side along u), bbox min at (0,0).
 //
@@ -59,6 +60,9 @@ struct ChartOptions {
   // Charts of more than two triangles whose minimum bounding rectangle is
   // longer than this ratio are split.
   double max_aspect = 16.0;
+  // Charts whose L2 stretch (Sander et al. 2001; stretch.h) exceeds this are
+  // split; LSCM keeps angles, so this bounds its area distortion. 0: no limit.
+  double max_stretch_l2 = 1.2;
   // Rotate each chart to its minimum-area bounding rectangle.
   bool rotate_to_min_rect = true;
 };
@@ -71,6 +75,7 @@ struct ChartStats {
   size_t lscm_charts = 0;             // parametrized by LSCM
   size_t rejected_splits = 0;         // charts split because validation failed
   size_t aspect_splits = 0;           // charts split because they were long and thin
+  size_t stretch_splits = 0;          // charts split because their L2 stretch was too high
   size_t welded_vertices = 0;         // topological vertices after welding
 };
 

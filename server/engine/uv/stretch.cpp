@@ -25,16 +25,16 @@ Stretch triangle_stretch(const DVec3 q[3], const Vec2 p[3]) {
   return r;
 }
 
-Stretch chart_stretch(const scene::Mesh& mesh, const Chart& chart) {
+namespace {
+
+// Accumulates triangles; corner(k, q, p) fills triangle k's corners.
+template <typename Corners>
+Stretch accumulate(size_t count, Corners corner) {
   double sum_l2 = 0, linf = 0, a3 = 0, auv = 0;
-  for (size_t k = 0; k < chart.triangles.size(); ++k) {
+  for (size_t k = 0; k < count; ++k) {
     DVec3 q[3];
     Vec2 p[3];
-    for (int j = 0; j < 3; ++j) {
-      const Vec3 v = mesh.positions[mesh.indices[3 * chart.triangles[k] + j]];
-      q[j] = {v.x, v.y, v.z};
-      p[j] = chart.uv[chart.indices[3 * k + j]];
-    }
+    corner(k, q, p);
     const Stretch t = triangle_stretch(q, p);
     sum_l2 += t.l2 * t.l2 * t.area_3d;
     linf = std::max(linf, t.linf);
@@ -50,6 +50,28 @@ Stretch chart_stretch(const scene::Mesh& mesh, const Chart& chart) {
     r.linf = linf * norm;
   }
   return r;
+}
+
+}  // namespace
+
+Stretch indexed_stretch(const std::vector<DVec3>& position, const std::vector<Vec2>& uv,
+                        const std::vector<uint32_t>& indices) {
+  return accumulate(indices.size() / 3, [&](size_t k, DVec3* q, Vec2* p) {
+    for (int j = 0; j < 3; ++j) {
+      q[j] = position[indices[3 * k + j]];
+      p[j] = uv[indices[3 * k + j]];
+    }
+  });
+}
+
+Stretch chart_stretch(const scene::Mesh& mesh, const Chart& chart) {
+  return accumulate(chart.triangles.size(), [&](size_t k, DVec3* q, Vec2* p) {
+    for (int j = 0; j < 3; ++j) {
+      const Vec3 v = mesh.positions[mesh.indices[3 * chart.triangles[k] + j]];
+      q[j] = {v.x, v.y, v.z};
+      p[j] = chart.uv[chart.indices[3 * k + j]];
+    }
+  });
 }
 
 Stretch mesh_stretch(const scene::Mesh& mesh, const std::vector<Chart>& charts) {

@@ -13,6 +13,7 @@
 // has area gives infinite stretch.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "common/dvec3.h"
@@ -32,6 +33,11 @@ struct Stretch {
 // Unnormalised stretch of one triangle (area_3d and area_uv set; area_uv is
 // the absolute UV area).
 Stretch triangle_stretch(const DVec3 q[3], const Vec2 p[3]);
+
+// Normalised stretch of indexed triangles (3 indices per triangle into both
+// position and uv).
+Stretch indexed_stretch(const std::vector<DVec3>& position, const std::vector<Vec2>& uv,
+                        const std::vector<uint32_t>& indices);
 
 // Normalised stretch of a chart's UVs against the mesh's triangles.
 Stretch chart_stretch(const scene::Mesh& mesh, const Chart& chart);

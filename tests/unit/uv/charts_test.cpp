@@ -191,6 +191,23 @@ TEST(UvCharts, ThinLWallIsCutToTheAspectLimit) {
   }
 }
 
+TEST(UvCharts, StretchLimitSplitsCharts) {
+  // Wide cones let LSCM flatten large caps of the sphere, with area
+  // distortion; the stretch limit must split them until it holds.
+  const scene::Mesh m = sphere(1.0f, 24, 48);
+  ChartOptions wide;
+  wide.max_cone_half_angle_deg = 80;
+  wide.max_dihedral_deg = 90;
+  wide.max_stretch_l2 = 0;
+  double worst = 0;
+  for (const Chart& c : charts_checked(m, nullptr, wide)) worst = std::max(worst, chart_stretch(m, c).l2);
+  EXPECT_GT(worst, 1.05);  // else the limit below is not exercised
+  wide.max_stretch_l2 = 1.05;
+  ChartStats st;
+  for (const Chart& c : charts_checked(m, &st, wide)) EXPECT_LE(chart_stretch(m, c).l2, 1.05 + 1e-6);
+  EXPECT_GT(st.stretch_splits, 0u);
+}
+
 TEST(UvCharts, ChartSizeIsCapped) {
   ChartOptions o;
   o.max_chart_triangles = 50;
