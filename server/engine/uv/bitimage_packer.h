@@ -56,8 +56,8 @@ struct PackOptions {
   int padding_texels = 2;
   // Fixed atlas size in texels (both > 0), or both 0: the smallest square
   // whose side is a multiple of 4 that holds every shape, found by starting at
-  // sqrt(footprint / 0.85) + padding (footprint: see pack_shapes) and growing
-  // by 5 % until the shapes fit.
+  // sqrt(footprint / 0.88) + padding (footprint: see pack_shapes) and growing
+  // by 2.5 % until the shapes fit.
   int width = 0, height = 0;
   // Largest side the automatic size may reach (and a fixed size may have).
   int max_resolution = 8192;
@@ -74,6 +74,7 @@ struct PackResult {
   int width = 0, height = 0;               // atlas size in texels
   std::vector<ShapePlacement> placements;  // in input order
   long long covered_texels = 0;            // sum of the shapes' mask texel counts
+  long long footprint_texels = 0;          // sum of the masks dilated by padding towards +x, +y
   double efficiency = 0;                   // covered_texels / (width * height)
   int attempts = 0;                        // atlas sizes tried (1 for a fixed size)
 };

@@ -101,8 +101,9 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("shapes %d  sizes %.0f-%.0f  padding %d  atlas %d x %d  attempts %d  "
-              "covered %lld  efficiency %.1f %%  time %.3f s\n",
+              "efficiency %.1f %%  footprint/atlas %.1f %%  time %.3f s\n",
               count, min_size, max_size, padding, r->width, r->height, r->attempts,
-              r->covered_texels, 100 * r->efficiency, best);
+              100 * r->efficiency,
+              100.0 * r->footprint_texels / (static_cast<double>(r->width) * r->height), best);
   return 0;
 }
