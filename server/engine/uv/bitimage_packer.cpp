@@ -24,7 +24,9 @@ struct BitImage {
 
   BitImage() = default;
   BitImage(int w, int h, int extra_words = 0)
-      : width(w), height(h), stride(words_for(w) + extra_words),
+      : width(w),
+        height(h),
+        stride(words_for(w) + extra_words),
         bits(static_cast<size_t>(stride) * static_cast<size_t>(h), 0) {}
   uint64_t* row(int y) { return bits.data() + static_cast<size_t>(y) * stride; }
   const uint64_t* row(int y) const { return bits.data() + static_cast<size_t>(y) * stride; }
@@ -198,10 +200,14 @@ struct ShapeInfo {
 
 DVec2 rotate(DVec2 p, int k) {
   switch (k & 3) {
-    case 1: return {-p.y, p.x};
-    case 2: return {-p.x, -p.y};
-    case 3: return {p.y, -p.x};
-    default: return p;
+    case 1:
+      return {-p.y, p.x};
+    case 2:
+      return {-p.x, -p.y};
+    case 3:
+      return {p.y, -p.x};
+    default:
+      return p;
   }
 }
 
@@ -237,8 +243,8 @@ void longest_runs(Variant* v) {
 Result<ShapeInfo> build_shape(const PackShape& shape, size_t index, int padding, int max_side) {
   const size_t n_corners = shape.corners.size();
   if (n_corners == 0 || n_corners % 3 != 0) {
-    return invalid_argument(strprintf("shape %zu: %zu corners (want 3 per triangle, at least 3)",
-                                      index, n_corners));
+    return invalid_argument(
+        strprintf("shape %zu: %zu corners (want 3 per triangle, at least 3)", index, n_corners));
   }
   std::vector<DVec2> p(n_corners);
   for (size_t c = 0; c < n_corners; ++c) {
@@ -250,7 +256,8 @@ Result<ShapeInfo> build_shape(const PackShape& shape, size_t index, int padding,
   ShapeInfo info;
   const int rotations = shape.allow_rotation ? 4 : 1;
   for (int k = 0; k < rotations; ++k) {
-    double lo[2] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    double lo[2] = {std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
     double hi[2] = {-lo[0], -lo[1]};
     for (const DVec2& c : p) {
       const DVec2 r = rotate(c, k);
@@ -264,9 +271,9 @@ Result<ShapeInfo> build_shape(const PackShape& shape, size_t index, int padding,
       const double extent = hi[a] - lo[a];
       const double cells = std::floor(extent + 2 * kMaskSlopTexels) + 1;
       if (!(cells + 2.0 * padding <= max_side)) {
-        return resource_exhausted(strprintf(
-            "shape %zu spans %.1f texels, more than fits an atlas of %d with padding %d", index,
-            extent, max_side, padding));
+        return resource_exhausted(
+            strprintf("shape %zu spans %.1f texels, more than fits an atlas of %d with padding %d",
+                      index, extent, max_side, padding));
       }
       n[a] = static_cast<int>(cells);
       v.shift[a] = -lo[a] + (n[a] - extent) / 2;
@@ -357,8 +364,8 @@ class Atlas {
     int x = x_begin, agreed = 0, r = 0;
     while (x <= x_end) {
       // Move x until every row's longest run lands on free texels.
-      const int fit = next_fit(image_.row(y + r), x + v.run_start[r], v.run_length[r]) -
-                      v.run_start[r];
+      const int fit =
+          next_fit(image_.row(y + r), x + v.run_start[r], v.run_length[r]) - v.run_start[r];
       if (fit != x) {
         x = fit;
         agreed = 1;
@@ -480,11 +487,12 @@ Result<PackResult> pack_shapes(const std::vector<PackShape>& shapes, const PackO
     return invalid_argument(strprintf("max_resolution %d is not positive", options.max_resolution));
   }
   const bool fixed = options.width != 0 || options.height != 0;
-  if (fixed && (options.width <= 0 || options.height <= 0 ||
-                options.width > options.max_resolution ||
-                options.height > options.max_resolution)) {
-    return invalid_argument(strprintf("atlas size %d x %d: want both in [1, max_resolution %d] or both 0",
-                                      options.width, options.height, options.max_resolution));
+  if (fixed &&
+      (options.width <= 0 || options.height <= 0 || options.width > options.max_resolution ||
+       options.height > options.max_resolution)) {
+    return invalid_argument(
+        strprintf("atlas size %d x %d: want both in [1, max_resolution %d] or both 0",
+                  options.width, options.height, options.max_resolution));
   }
   const int max_side = fixed ? std::max(options.width, options.height) : options.max_resolution;
 
@@ -498,7 +506,8 @@ Result<PackResult> pack_shapes(const std::vector<PackShape>& shapes, const PackO
     covered += info->covered;
     footprint += info->footprint;
     int side = std::numeric_limits<int>::max();
-    for (const Variant& v : info->variants) side = std::min(side, std::max(v.dilated.width, v.dilated.height));
+    for (const Variant& v : info->variants)
+      side = std::min(side, std::max(v.dilated.width, v.dilated.height));
     smallest_side = std::max(smallest_side, side);
     infos.push_back(std::move(info.value()));
   }
@@ -540,7 +549,8 @@ Result<PackResult> pack_shapes(const std::vector<PackShape>& shapes, const PackO
   }
   result.covered_texels = covered;
   result.footprint_texels = footprint;
-  result.efficiency = static_cast<double>(covered) / (static_cast<double>(result.width) * result.height);
+  result.efficiency =
+      static_cast<double>(covered) / (static_cast<double>(result.width) * result.height);
   return result;
 }
 

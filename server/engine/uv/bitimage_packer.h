@@ -79,9 +79,13 @@ struct PackResult {
   int attempts = 0;                        // atlas sizes tried (1 for a fixed size)
 };
 
-// Places `shapes` in one atlas. Largest mask first; for each shape the first
-// free position in row-major order over its (up to 4 distinct) rotations,
-// the topmost winning (then the leftmost, then the lower rotation).
+// Places `shapes` in one atlas. Shapes go in order of size bucket (mask
+// perimeter, 4 buckets per octave), then mask area, then input order. Each
+// of a shape's (up to 4 distinct) turns is placed at its first free position
+// in row-major order, searched from where the previous shape went when both
+// share a bucket and from the top otherwise (thesis §4.1, steps 4-6); the
+// turn whose padded mask ends highest wins, then the leftmost, then the
+// lower rotation.
 //
 // Errors: INVALID_ARGUMENT for a shape without triangles or whose corner
 // count is not a multiple of 3, a non-finite corner, negative padding, a

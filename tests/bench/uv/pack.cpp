@@ -71,14 +71,22 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const char* k = argv[i];
     const char* v = argv[i + 1];
-    if (!std::strcmp(k, "--count")) count = std::atoi(v);
-    else if (!std::strcmp(k, "--padding")) padding = std::atoi(v);
-    else if (!std::strcmp(k, "--side")) side = std::atoi(v);
-    else if (!std::strcmp(k, "--repeats")) repeats = std::atoi(v);
-    else if (!std::strcmp(k, "--seed")) seed = static_cast<unsigned>(std::atoi(v));
-    else if (!std::strcmp(k, "--min-size")) min_size = std::atof(v);
-    else if (!std::strcmp(k, "--max-size")) max_size = std::atof(v);
-    else if (!std::strcmp(k, "--aspect")) aspect = std::atof(v);
+    if (!std::strcmp(k, "--count"))
+      count = std::atoi(v);
+    else if (!std::strcmp(k, "--padding"))
+      padding = std::atoi(v);
+    else if (!std::strcmp(k, "--side"))
+      side = std::atoi(v);
+    else if (!std::strcmp(k, "--repeats"))
+      repeats = std::atoi(v);
+    else if (!std::strcmp(k, "--seed"))
+      seed = static_cast<unsigned>(std::atoi(v));
+    else if (!std::strcmp(k, "--min-size"))
+      min_size = std::atof(v);
+    else if (!std::strcmp(k, "--max-size"))
+      max_size = std::atof(v);
+    else if (!std::strcmp(k, "--aspect"))
+      aspect = std::atof(v);
     else {
       std::fprintf(stderr, "unknown option %s\n", k);
       return 2;
@@ -100,10 +108,10 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  std::printf("shapes %d  sizes %.0f-%.0f  padding %d  atlas %d x %d  attempts %d  "
-              "efficiency %.1f %%  footprint/atlas %.1f %%  time %.3f s\n",
-              count, min_size, max_size, padding, r->width, r->height, r->attempts,
-              100 * r->efficiency,
-              100.0 * r->footprint_texels / (static_cast<double>(r->width) * r->height), best);
+  std::printf(
+      "shapes %d  sizes %.0f-%.0f  padding %d  atlas %d x %d  attempts %d  "
+      "efficiency %.1f %%  footprint/atlas %.1f %%  time %.3f s\n",
+      count, min_size, max_size, padding, r->width, r->height, r->attempts, 100 * r->efficiency,
+      100.0 * r->footprint_texels / (static_cast<double>(r->width) * r->height), best);
   return 0;
 }

@@ -141,7 +141,8 @@ std::string check_packing(const std::vector<PackShape>& shapes, const PackResult
         for (int dx = -padding; dx <= padding; ++dx) {
           const int o = owner[static_cast<size_t>(y + dy) * w + (x + dx)];
           if (o >= 0 && o != static_cast<int>(s))
-            return "shapes " + std::to_string(s) + " and " + std::to_string(o) + " are closer than the padding";
+            return "shapes " + std::to_string(s) + " and " + std::to_string(o) +
+                   " are closer than the padding";
         }
       }
     }
@@ -161,11 +162,13 @@ TEST(BitImagePacker, RandomShapesKeepPaddingAndBorder) {
       ASSERT_TRUE(r) << r.status().to_string();
       EXPECT_EQ(r->width, r->height);
       EXPECT_EQ(r->width % 4, 0);
-      EXPECT_EQ(check_packing(shapes, r.value(), padding), "") << "seed " << seed << " padding " << padding;
+      EXPECT_EQ(check_packing(shapes, r.value(), padding), "")
+          << "seed " << seed << " padding " << padding;
       for (size_t i = 0; i < shapes.size(); ++i) {
         if (!shapes[i].allow_rotation) EXPECT_EQ(r->placements[i].rotation, 0) << i;
       }
-      EXPECT_DOUBLE_EQ(r->efficiency, static_cast<double>(r->covered_texels) / (r->width * r->height));
+      EXPECT_DOUBLE_EQ(r->efficiency,
+                       static_cast<double>(r->covered_texels) / (r->width * r->height));
     }
   }
 }
@@ -258,9 +261,12 @@ TEST(BitImagePacker, CoveredTexelsOfRectanglesFollowTheClosedForm) {
     const double h = i % 7 == 0 ? std::floor(u(rng)) + 1 : u(rng);
     shapes.push_back(rect_shape(0.125 * i, 0.5 * i, w, h));
     // The extents the packer sees: of the float corners, in double.
-    const double fw = static_cast<double>(static_cast<float>(0.125 * i + w)) - static_cast<float>(0.125 * i);
-    const double fh = static_cast<double>(static_cast<float>(0.5 * i + h)) - static_cast<float>(0.5 * i);
-    expected += static_cast<long long>(std::floor(fw + 2e-4) + 1) * static_cast<long long>(std::floor(fh + 2e-4) + 1);
+    const double fw =
+        static_cast<double>(static_cast<float>(0.125 * i + w)) - static_cast<float>(0.125 * i);
+    const double fh =
+        static_cast<double>(static_cast<float>(0.5 * i + h)) - static_cast<float>(0.5 * i);
+    expected += static_cast<long long>(std::floor(fw + 2e-4) + 1) *
+                static_cast<long long>(std::floor(fh + 2e-4) + 1);
   }
   const auto r = pack_shapes(shapes, {});
   ASSERT_TRUE(r) << r.status().to_string();
