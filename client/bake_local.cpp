@@ -90,7 +90,7 @@ int run_bake(const std::vector<std::string>& args) {
     return 1;
   }
   const auto& r = result.value();
-  auto paths = pipeline::write_bake_outputs(a.out, scene.value(), a.settings, r);
+  auto paths = pipeline::write_bake_outputs(a.out, scene.value(), a.settings, r, "", a.scene);
   if (!paths) {
     std::fprintf(stderr, "luxel bake: %s\n", paths.status().to_string().c_str());
     return 1;
@@ -98,6 +98,14 @@ int run_bake(const std::vector<std::string>& args) {
   std::printf("lightmap   %dx%d (%s atlas), %zu covered texels, sample-info buffer %.1f MiB\n",
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
+  if (r.uv_layout) {
+    const uv::UvReport& u = r.uv_layout->report;
+    std::printf(
+        "uv         generated (%s): %zu charts on %zu meshes in %.2f s (charts %.2f s, packing "
+        "%.2f s), packing efficiency %.1f %%, stretch L2 %.3f Linf %.3f\n",
+        r.uv_layout->reason.c_str(), u.charts, u.meshes, u.total_seconds, u.chart_seconds,
+        u.pack_seconds, 100 * u.efficiency, u.stretch_l2, u.stretch_linf);
+  }
   std::printf("features   %s\n", r.features.c_str());
   std::printf("intersector %s\n", r.intersector.c_str());
   std::printf(
@@ -127,6 +135,8 @@ int run_bake(const std::vector<std::string>& args) {
               paths.value().irradiance_exr.c_str(), paths.value().preview_png.c_str(),
               paths.value().manifest_json.c_str());
   for (const auto& f : paths.value().encodings) std::printf("           %s\n", f.c_str());
+  if (!paths.value().lightmapped_glb.empty())
+    std::printf("           %s\n", paths.value().lightmapped_glb.c_str());
   return 0;
 }
 

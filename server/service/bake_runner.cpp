@@ -277,7 +277,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   remove_tree(partial);
   remove_tree(final_dir);
   auto written =
-      pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r, info->scene_id());
+      pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r, info->scene_id(),
+                                   scenes_.main_file_path(scene_info.value()));
   if (!written) return finish_failed(bake_id, written.status());
   if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
   if (Status st = rename_durable(partial, final_dir); !st.is_ok())
@@ -307,6 +308,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
         b.clear_artifacts();
         for (const char* a : kArtifacts) b.add_artifacts(a);
         for (const auto& e : r.encodings) b.add_artifacts(e.name + ".exr");
+        if (!written.value().lightmapped_glb.empty())
+          b.add_artifacts(fs::path(written.value().lightmapped_glb).filename().string());
       },
       true);
   // Only once the record says SUCCEEDED: a crash before this line re-runs

@@ -5,6 +5,7 @@
 
 #include "atlas/chart_geometry.h"
 #include "atlas/shelf_packer.h"
+#include "atlas/texel_raster.h"
 
 namespace luxel::atlas {
 namespace {
@@ -126,10 +127,118 @@ Result<Atlas> build_packed(const std::vector<InstanceChart>& charts,
   return atlas;
 }
 
+// No texel centre inside triangles of two different instances (placed
+// layouts come from the client, so they are checked, not trusted).
+Status check_instances_disjoint(const scene::Scene& scene, const Atlas& atlas) {
+  std::vector<int32_t> owner(size_t(atlas.width) * size_t(atlas.height), -1);
+  for (uint32_t i = 0; i < scene.instances.size(); ++i) {
+    const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(scene.instances[i].mesh)];
+    for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+      const TexelTriangle tt = texel_triangle(scene, atlas, i, t);
+      const double x0 = std::min({tt.x[0], tt.x[1], tt.x[2]}), x1 = std::max({tt.x[0], tt.x[1], tt.x[2]});
+      const double y0 = std::min({tt.y[0], tt.y[1], tt.y[2]}), y1 = std::max({tt.y[0], tt.y[1], tt.y[2]});
+      auto edge = [&](int a, int b, double px, double py) {
+        return (tt.x[b] - tt.x[a]) * (py - tt.y[a]) - (tt.y[b] - tt.y[a]) * (px - tt.x[a]);
+      };
+      const int ya = std::max(0, static_cast<int>(std::ceil(y0 - 0.5)));
+      const int yb = std::min(atlas.height - 1, static_cast<int>(std::floor(y1 - 0.5)));
+      const int xa = std::max(0, static_cast<int>(std::ceil(x0 - 0.5)));
+      const int xb = std::min(atlas.width - 1, static_cast<int>(std::floor(x1 - 0.5)));
+      for (int y = ya; y <= yb; ++y) {
+        for (int x = xa; x <= xb; ++x) {
+          const double px = x + 0.5, py = y + 0.5;
+          const double e0 = edge(0, 1, px, py), e1 = edge(1, 2, px, py), e2 = edge(2, 0, px, py);
+          const bool inside = (e0 > 0 && e1 > 0 && e2 > 0) || (e0 < 0 && e1 < 0 && e2 < 0);
+          if (!inside) continue;
+          int32_t& o = owner[size_t(y) * size_t(atlas.width) + size_t(x)];
+          if (o >= 0 && o != static_cast<int32_t>(i))
+            return invalid_argument(strprintf(
+                "the lightmap placements of instances '%s' and '%s' overlap (texel %d, %d of the "
+                "%dx%d atlas; extras.lightmapScaleOffset)",
+                scene.instances[static_cast<size_t>(o)].name.c_str(),
+                scene.instances[i].name.c_str(), x, y, atlas.width, atlas.height));
+          o = static_cast<int32_t>(i);
+        }
+      }
+    }
+  }
+  return Status::ok();
+}
+
+// Every instance where its node's extras.lightmapScaleOffset puts it.
+Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<InstanceChart>& charts,
+                           const AtlasSettings& settings) {
+  for (const auto& inst : scene.instances)
+    if (!inst.has_lightmap_scale_offset)
+      return invalid_argument(strprintf(
+          "instance '%s' has no extras.lightmapScaleOffset while other nodes do; give every "
+          "baked node one, or none (to have Luxel pack the atlas)",
+          inst.name.c_str()));
+  Atlas atlas;
+  atlas.mode = AtlasMode::kPlaced;
+  double world_area = 0, atlas_uv_area = 0;
+  for (size_t i = 0; i < charts.size(); ++i) {
+    const float* so = scene.instances[i].lightmap_scale_offset;
+    world_area += charts[i].world_area;
+    atlas_uv_area += charts[i].layout->area * std::fabs(double(so[0]) * so[1]);
+  }
+  int side = settings.resolution;
+  if (side == 0) {
+    const double d = settings.texel_density;
+    const double needed = std::ceil(std::sqrt(world_area * d * d / atlas_uv_area));
+    if (!(needed <= settings.max_resolution))
+      return resource_exhausted(
+          strprintf("texel_density %g needs a %.0fx%.0f lightmap atlas; max_resolution is %d", d,
+                    needed, needed, settings.max_resolution));
+    side = std::max(1, static_cast<int>(needed));
+  }
+  atlas.width = atlas.height = side;
+  atlas.texels_per_unit = world_area > 0 ? std::sqrt(atlas_uv_area / world_area) * side : 0;
+  for (size_t i = 0; i < charts.size(); ++i) {
+    const float* so = scene.instances[i].lightmap_scale_offset;
+    InstancePlacement p;
+    p.instance = static_cast<uint32_t>(i);
+    p.scale[0] = so[0];
+    p.scale[1] = so[1];
+    p.offset[0] = so[2];
+    p.offset[1] = so[3];
+    const UvBounds& b = charts[i].layout->bounds;
+    double lo[2], hi[2];
+    for (int a = 0; a < 2; ++a) {
+      const double e0 = (b.lo[a] * p.scale[a] + p.offset[a]) * side;
+      const double e1 = (b.hi[a] * p.scale[a] + p.offset[a]) * side;
+      lo[a] = std::min(e0, e1);
+      hi[a] = std::max(e0, e1);
+      if (lo[a] < -1e-3 || hi[a] > side + 1e-3)
+        return invalid_argument(strprintf(
+            "instance '%s': extras.lightmapScaleOffset puts its lightmap UVs outside the atlas "
+            "(texels %.1f..%.1f on axis %c of %d)",
+            scene.instances[i].name.c_str(), lo[a], hi[a], a == 0 ? 'x' : 'y', side));
+    }
+    p.rect[0] = static_cast<int>(std::floor(lo[0]));
+    p.rect[1] = static_cast<int>(std::floor(lo[1]));
+    p.rect[2] = std::min(side - p.rect[0], static_cast<int>(std::ceil(hi[0])) - p.rect[0]);
+    p.rect[3] = std::min(side - p.rect[1], static_cast<int>(std::ceil(hi[1])) - p.rect[1]);
+    atlas.placements.push_back(p);
+  }
+  LUXEL_RETURN_IF_ERROR(check_instances_disjoint(scene, atlas));
+  return atlas;
+}
+
 }  // namespace
 
 const char* atlas_mode_name(AtlasMode mode) {
-  return mode == AtlasMode::kShared ? "shared" : "packed";
+  switch (mode) {
+    case AtlasMode::kPacked:
+      return "packed";
+    case AtlasMode::kGenerated:
+      return "generated";
+    case AtlasMode::kPlaced:
+      return "placed";
+    case AtlasMode::kShared:
+      break;
+  }
+  return "shared";
 }
 
 Result<Atlas> build_atlas(const scene::Scene& scene, const AtlasSettings& settings) {
@@ -160,6 +269,10 @@ Result<Atlas> build_atlas(const scene::Scene& scene, const AtlasSettings& settin
                                         inst.name.c_str(), scene.meshes[m].name.c_str()));
     charts.push_back({&layouts[m], area});
   }
+  const size_t placed = static_cast<size_t>(
+      std::count_if(scene.instances.begin(), scene.instances.end(),
+                    [](const scene::Instance& i) { return i.has_lightmap_scale_offset; }));
+  if (placed > 0) return build_placed(scene, charts, settings);
   const bool single_use = std::all_of(uses.begin(), uses.end(), [](int n) { return n <= 1; });
   if (single_use && !instances_share_uv_space(scene, kOverlapCheckResolution))
     return build_shared(scene, charts, settings);

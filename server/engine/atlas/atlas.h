@@ -12,6 +12,15 @@
 //            unit square): every instance gets its own rectangle, its mesh's
 //            TEXCOORD_1 bounding box scaled to one texel density for the whole
 //            scene (see shelf_packer.h).
+//   kGenerated lightmap UVs were generated (uv/generate.h): charts of every
+//            mesh packed at one texel density; a mesh used once carries atlas
+//            UVs (scale 1, offset 0), an instanced mesh one layout placed per
+//            instance by scale and offset as in kPacked.
+//   kPlaced  every instance's node carries extras.lightmapScaleOffset (a
+//            client such as an editor plugin owns the layout, or the scene
+//            was written back by Luxel): each instance's TEXCOORD_1 goes
+//            exactly where its scale and offset put it; texel centres covered
+//            by two instances are an INVALID_ARGUMENT naming both nodes.
 //
 // UV convention: glTF UV (0,0) is the top-left corner; atlas UV (u, v) is the
 // point (u * width, v * height) in texel units, row 0 at the top. Texel (x, y)
@@ -39,7 +48,7 @@ struct AtlasSettings {
   int max_resolution = 8192;  // larger atlases are RESOURCE_EXHAUSTED
 };
 
-enum class AtlasMode { kShared, kPacked };
+enum class AtlasMode { kShared, kPacked, kGenerated, kPlaced };
 
 const char* atlas_mode_name(AtlasMode mode);
 

@@ -14,9 +14,11 @@ bool is_zero_area(double ax, double ay, double bx, double by, double cx, double 
 
 Result<MeshUvLayout> measure_mesh_uvs(const scene::Mesh& mesh) {
   const char* name = mesh.name.c_str();
-  if (mesh.uv1.empty())
+  if (mesh.uv1.empty() || !mesh.has_lightmap_uvs)
     return invalid_argument(strprintf(
-        "mesh '%s' has no TEXCOORD_1 lightmap UVs; Luxel does not generate them yet", name));
+        "mesh '%s' has no TEXCOORD_1 lightmap UVs (bake with --uv auto or generate to generate "
+        "them)",
+        name));
   if (mesh.uv1.size() != mesh.positions.size())
     return invalid_argument(strprintf("mesh '%s' has %zu TEXCOORD_1 values for %zu vertices", name,
                                       mesh.uv1.size(), mesh.positions.size()));

@@ -121,8 +121,8 @@ Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atl
     const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(scene.instances[i].mesh)];
     if (mesh.uv1.size() != mesh.positions.size())
       return invalid_argument(
-          strprintf("mesh '%s' has no TEXCOORD_1 lightmap UVs; Luxel does not generate them yet",
-                    mesh.name.c_str()));
+          strprintf("mesh '%s' has %zu lightmap UVs for %zu vertices", mesh.name.c_str(),
+                    mesh.uv1.size(), mesh.positions.size()));
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       const TexelTriangle tt = texel_triangle(scene, atlas, i, t);
       if (TriangleCoverage(tt).zero_area()) {

@@ -87,6 +87,7 @@ Json to_json(const Manifest& m) {
   if (!m.intersector.empty()) j["intersector"] = m.intersector;
   if (!m.import_warnings.empty()) j["import_warnings"] = m.import_warnings;
   j["stats"] = stats_to_json(m.stats);
+  if (!m.uv_layout_json.empty()) j["uv_layout"] = Json::parse(m.uv_layout_json);
   if (!m.encodings_json.empty()) {
     j["encodings"] = Json::array();
     for (const auto& e : m.encodings_json) j["encodings"].push_back(Json::parse(e));
@@ -283,9 +284,11 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.string("units", m.units, true));
   LUXEL_RETURN_IF_ERROR(f.string("uv_set", m.uv_set, true));
   LUXEL_RETURN_IF_ERROR(f.string("atlas_mode", m.atlas_mode));
-  if (m.atlas_mode != "shared" && m.atlas_mode != "packed")
+  if (m.atlas_mode != "shared" && m.atlas_mode != "packed" && m.atlas_mode != "generated" &&
+      m.atlas_mode != "placed")
     return f.error("atlas_mode",
-                   strprintf("is '%s', expected 'shared' or 'packed'", m.atlas_mode.c_str()));
+                   strprintf("is '%s', expected 'shared', 'packed', 'generated' or 'placed'",
+                             m.atlas_mode.c_str()));
   LUXEL_RETURN_IF_ERROR(f.integer("dilation_texels", m.dilation_texels, 0));
 
   const Json* list = nullptr;
@@ -319,6 +322,11 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
             strprintf("%s: field 'import_warnings[%zu]' must be a string", what.c_str(), i));
       m.import_warnings.push_back((*warnings)[i].get<std::string>());
     }
+  }
+  if (j.contains("uv_layout")) {
+    const Json* uv = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.object("uv_layout", uv));
+    m.uv_layout_json = uv->dump();
   }
   if (j.contains("encodings")) {
     const Json& enc = j["encodings"];

@@ -39,7 +39,9 @@ struct Manifest {
   std::string units;
   std::string uv_set = "TEXCOORD_1";  // not empty
   // "shared": every instance uses its TEXCOORD_1 as atlas UV directly (scale
-  // 1, offset 0); "packed": Luxel packed per-instance charts, see Instance.
+  // 1, offset 0); "packed": Luxel packed per-instance charts, see Instance;
+  // "generated": Luxel generated the UVs (uv_layout_json, and the scene
+  // written back with them); "placed": the nodes' extras.lightmapScaleOffset.
   std::string atlas_mode = "shared";
 
   struct Instance {
@@ -75,6 +77,11 @@ struct Manifest {
   // frame, solver, file), kept as JSON text so the engine's basis description
   // passes through unchanged. Empty for irradiance-only bakes.
   std::vector<std::string> encodings_json;
+  // Generated lightmap UVs: one JSON object (why they were generated, chart
+  // count, stretch, packing efficiency, density spread, timings; see
+  // pipeline/bake_outputs.cpp), kept as JSON text. Empty when the file's
+  // TEXCOORD_1 was used.
+  std::string uv_layout_json;
 
   struct Stats {
     double seconds = 0;

@@ -15,6 +15,7 @@
 #include "pipeline/bake_kernels.h"
 #include "pipeline/bake_policy.h"
 #include "pipeline/bake_setup.h"
+#include "pipeline/lightmap_layout.h"
 #include "pipeline/primitives/offset_buffer.h"
 #include "pipeline/primitives/radix_sort.h"
 #include "pipeline/primitives/stream_compaction.h"
@@ -32,8 +33,8 @@ double seconds_since(Clock::time_point t0) {
 
 class Baker {
  public:
-  Baker(const scene::Scene& scene, const BakeSettings& settings, device::Context& ctx)
-      : scene_(scene), settings_(settings), ctx_(ctx) {}
+  Baker(const LightmapLayout& layout, const BakeSettings& settings, device::Context& ctx)
+      : scene_(*layout.scene), layout_(layout), settings_(settings), ctx_(ctx) {}
 
   Result<BakeResult> run(const BakeHooks& hooks);
 
@@ -63,7 +64,8 @@ class Baker {
     return c;
   }
 
-  const scene::Scene& scene_;
+  const scene::Scene& scene_;  // the layout's: split vertices when UVs were generated
+  const LightmapLayout& layout_;
   const BakeSettings& settings_;
   device::Context& ctx_;
 
@@ -95,7 +97,7 @@ class Baker {
 };
 
 Status Baker::setup() {
-  auto setup = prepare_bake(scene_, settings_, ctx_);
+  auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_);
   if (!setup) return setup.status();
   s_ = std::move(setup.value());
   auto sort = RadixSort::create(ctx_, s_.capacity);
@@ -516,8 +518,16 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const BakeHooks& hooks) {
-  Baker baker(scene, settings, ctx);
-  return baker.run(hooks);
+  const auto t0 = Clock::now();
+  auto layout = lay_out_lightmap(scene, settings);
+  if (!layout) return layout.status();
+  const double layout_s = seconds_since(t0);
+  Baker baker(layout.value(), settings, ctx);
+  auto result = baker.run(hooks);
+  if (!result) return result;
+  result.value().uv_layout = layout.value().generated;
+  result.value().setup_s += layout_s;
+  return result;
 }
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,

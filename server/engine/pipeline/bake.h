@@ -21,6 +21,7 @@
 #include "device/context.h"
 #include "pipeline/bake_settings.h"
 #include "pipeline/checkpoint.h"
+#include "pipeline/lightmap_layout.h"
 #include "scene/scene.h"
 
 namespace luxel::pipeline {
@@ -69,6 +70,9 @@ struct BakeResult {
   std::vector<float> rel_error;  // relative standard error per texel (0 where uncovered)
   atlas::Atlas atlas;
   size_t covered_texels = 0;
+  // Generated lightmap UVs (null when the file's TEXCOORD_1 was used):
+  // what lightmap_layout.h decided, for the manifest and the written-back glTF.
+  std::shared_ptr<const GeneratedUvLayout> uv_layout;
 
   Termination termination = Termination::kSamples;
   double seconds = 0;

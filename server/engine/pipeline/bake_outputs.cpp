@@ -1,6 +1,8 @@
 #include "pipeline/bake_outputs.h"
 
+#include <cctype>
 #include <filesystem>
+#include <nlohmann/json.hpp>
 #include <system_error>
 
 #include "common/atomic_file.h"
@@ -8,9 +10,31 @@
 #include "output/dilate.h"
 #include "output/exr.h"
 #include "output/preview.h"
+#include "pipeline/lightmapped_gltf.h"
 
 namespace luxel::pipeline {
 namespace {
+
+// The manifest's "uv_layout" object for generated UVs.
+std::string uv_layout_json(const GeneratedUvLayout& g) {
+  const uv::UvReport& r = g.report;
+  nlohmann::json j = {{"source", "generated"},
+                      {"reason", g.reason},
+                      {"meshes", r.meshes},
+                      {"charts", r.charts},
+                      {"triangles", r.triangles},
+                      {"unplaced_triangles", r.unplaced_triangles},
+                      {"seam_vertices", r.seam_vertices},
+                      {"stretch_l2", r.stretch_l2},
+                      {"stretch_linf", r.stretch_linf},
+                      {"packing_efficiency", r.efficiency},
+                      {"texel_density_spread", r.density_spread},
+                      {"pack_attempts", r.pack_attempts},
+                      {"chart_seconds", r.chart_seconds},
+                      {"pack_seconds", r.pack_seconds},
+                      {"seconds", r.total_seconds}};
+  return j.dump();
+}
 
 output::Image to_image(int w, int h, int channels, const std::vector<float>& px) {
   output::Image img;
@@ -82,6 +106,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.stats.tiles = result.tiles;
   m.dilation_texels = settings.dilation_texels;
   for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
+  if (result.uv_layout) m.uv_layout_json = uv_layout_json(*result.uv_layout);
   if (!result.encodings.empty()) {
     m.encoding = "irradiance";
     for (const auto& e : result.encodings) m.encoding += "+" + e.name;
@@ -89,9 +114,18 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   return m;
 }
 
+std::string lightmapped_glb_name(const scene::Scene& scene) {
+  std::string stem = std::filesystem::path(scene.source_name).stem().string();
+  if (stem.empty()) stem = "scene";
+  for (char& c : stem)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
+  return stem + "_lightmapped.glb";
+}
+
 Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
                                        const BakeSettings& settings, const BakeResult& result,
-                                       const std::string& scene_sha256) {
+                                       const std::string& scene_sha256,
+                                       const std::string& source_path) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -159,6 +193,16 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       {"rel_error", "rel_error.exr", "exr", "float32 Y: relative standard error per texel"},
       {"error_series", "error_series.csv", "csv", "error estimate against time"}};
   m.files.insert(m.files.end(), encoding_files.begin(), encoding_files.end());
+  if (result.uv_layout && !source_path.empty()) {
+    const std::string name = lightmapped_glb_name(scene);
+    auto written = write_lightmapped_glb(source_path, scene, result, at(name.c_str()));
+    if (!written) return written.status();
+    for (const std::string& w : written.value().warnings) m.import_warnings.push_back(w);
+    paths.lightmapped_glb = at(name.c_str());
+    m.files.push_back({"lightmapped_gltf", name, "glb",
+                       "the scene with the generated lightmap UVs in TEXCOORD_1 and each node's "
+                       "extras.lightmapScaleOffset"});
+  }
   LUXEL_RETURN_IF_ERROR(output::write_manifest(paths.manifest_json, m));
   return paths;
 }

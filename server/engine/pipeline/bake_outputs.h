@@ -19,12 +19,21 @@ namespace luxel::pipeline {
 struct OutputPaths {
   std::string irradiance_exr, preview_png, samples_exr, error_exr, series_csv, manifest_json;
   std::vector<std::string> encodings;  // one EXR per directional encoding ("sh2.exr", ...)
+  std::string lightmapped_glb;         // "<scene>_lightmapped.glb"; empty without generated UVs
 };
 
-// Creates `dir` if needed. `scene_sha256` may be empty.
+// "<stem of the scene's file name>_lightmapped.glb" (characters outside
+// [A-Za-z0-9._-] become '_'): the scene with its generated UVs
+// (lightmapped_gltf.h).
+std::string lightmapped_glb_name(const scene::Scene& scene);
+
+// Creates `dir` if needed. `scene_sha256` may be empty. With generated UVs
+// (result.uv_layout) and the scene's file at `source_path`, also writes the
+// scene with those UVs as lightmapped_glb_name(scene).
 Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
                                        const BakeSettings& settings, const BakeResult& result,
-                                       const std::string& scene_sha256 = "");
+                                       const std::string& scene_sha256 = "",
+                                       const std::string& source_path = "");
 
 // The manifest that write_bake_outputs writes (without the file list).
 output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,

@@ -6,6 +6,18 @@
 
 namespace luxel::pipeline {
 
+const char* uv_mode_name(UvMode m) {
+  switch (m) {
+    case UvMode::kGenerate:
+      return "generate";
+    case UvMode::kExisting:
+      return "existing";
+    case UvMode::kAuto:
+      break;
+  }
+  return "auto";
+}
+
 const char* filter_name(Filter f) {
   return f == Filter::kGaussian ? "gaussian" : "box";
 }
@@ -47,6 +59,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
   m["intersector"] = accel::intersector_name(intersector);
+  m["uv"] = uv_mode_name(uv);
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";

@@ -21,6 +21,9 @@ namespace luxel::pipeline {
 
 enum class Filter { kBox, kGaussian };
 
+// Where the lightmap UVs come from (pipeline/lightmap_layout.h).
+enum class UvMode { kAuto, kGenerate, kExisting };
+
 // What target_error is compared with: the reference-free estimate (mean
 // relative standard error), or, with a reference lightmap, RMSE or relMSE.
 enum class ErrorMetric { kEstimate, kRmse, kRelMse };
@@ -67,6 +70,9 @@ struct BakeSettings {
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
   // for GPUs (auto), or either on request (accel/intersector.h).
   accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;
+  // Lightmap UVs: TEXCOORD_1 when every baked mesh has valid ones (auto),
+  // always generated, or always the file's (pipeline/lightmap_layout.h).
+  UvMode uv = UvMode::kAuto;
   float clamp_luminance = 0;   // firefly clamp on a path's luminance; 0 = off (unbiased)
   LightSettings lights;        // sky, sun, directional angular radius
   EncodingSettings encodings;  // directional encodings besides irradiance
@@ -91,5 +97,6 @@ Status validate_settings(const BakeSettings& settings,
                          const char* resolution_limit = "the engine's limit max_resolution");
 
 const char* filter_name(Filter f);
+const char* uv_mode_name(UvMode m);
 
 }  // namespace luxel::pipeline

@@ -7,12 +7,10 @@
 
 namespace luxel::pipeline {
 
-Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& settings,
-                               device::Context& ctx) {
+Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
+                               const BakeSettings& settings, device::Context& ctx) {
   BakeSetup s;
-  auto atlas = atlas::build_atlas(scene, settings.atlas);
-  if (!atlas) return atlas.status();
-  s.atlas = std::move(atlas.value());
+  s.atlas = std::move(atlas);
   auto info = atlas::build_sample_info(scene, s.atlas);
   if (!info) return info.status();
   s.info = std::move(info.value());

@@ -40,10 +40,11 @@ struct BakeSetup {
 inline constexpr uint32_t kSlotMask = 0x1FFFFFFFu;  // LUX_SLOT_MASK in kernels/bake/path.h
 inline constexpr int kTagShift = 29;
 
+// `atlas` is the scene's lightmap layout (lightmap_layout.h).
 // INVALID_ARGUMENT when no texel of the lightmap holds a sample;
-// RESOURCE_EXHAUSTED past 2^29 covered texels; errors of the atlas, BVH,
-// light table, encodings and tracer as they come.
-Result<BakeSetup> prepare_bake(const scene::Scene& scene, const BakeSettings& settings,
-                               device::Context& ctx);
+// RESOURCE_EXHAUSTED past 2^29 covered texels; errors of the BVH, light
+// table, encodings and tracer as they come.
+Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
+                               const BakeSettings& settings, device::Context& ctx);
 
 }  // namespace luxel::pipeline

@@ -140,6 +140,30 @@ Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::ve
   return roots;
 }
 
+// extras.lightmapScaleOffset of a node: absent, or four finite numbers with
+// non-zero scales; anything else is INVALID_ARGUMENT naming the node.
+Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, Instance* inst) {
+  const tinygltf::Value& extras = model.nodes[static_cast<size_t>(node_index)].extras;
+  if (!extras.IsObject() || !extras.Has("lightmapScaleOffset")) return Status::ok();
+  const tinygltf::Value& v = extras.Get("lightmapScaleOffset");
+  const std::string where = node_label(model, node_index) + ": extras.lightmapScaleOffset";
+  if (!v.IsArray() || v.ArrayLen() != 4)
+    return invalid_argument(where + " must be an array of 4 numbers [sx, sy, ox, oy]");
+  for (int k = 0; k < 4; ++k) {
+    const tinygltf::Value& e = v.Get(k);
+    if (!e.IsNumber())
+      return invalid_argument(strprintf("%s[%d] is not a number", where.c_str(), k));
+    const double d = e.GetNumberAsDouble();
+    if (!std::isfinite(d) || (k < 2 && d == 0) || std::fabs(d) > 1e6)
+      return invalid_argument(strprintf("%s[%d] is %g; scales must be non-zero and every entry "
+                                        "finite and at most 1e6 in magnitude",
+                                        where.c_str(), k, d));
+    inst->lightmap_scale_offset[k] = static_cast<float>(d);
+  }
+  inst->has_lightmap_scale_offset = true;
+  return Status::ok();
+}
+
 Status instantiate(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
   std::vector<int> parent;
   LUXEL_RETURN_IF_ERROR(check_hierarchy(model, &parent));
@@ -184,6 +208,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.node_index = item.node;
       inst.mesh = slot;
       inst.object_to_world = world;
+      LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, &inst));
       scene->instances.push_back(std::move(inst));
     }
     LUXEL_RETURN_IF_ERROR(

@@ -15,8 +15,9 @@
 namespace luxel::scene {
 
 struct ImportOptions {
-  // Lightmap UVs (TEXCOORD_1) are required for now; generated UVs come later.
-  bool require_lightmap_uvs = true;
+  // Refuse a primitive without TEXCOORD_1. Off by default: the bake generates
+  // lightmap UVs for meshes without them (Mesh::has_lightmap_uvs).
+  bool require_lightmap_uvs = false;
   // Decode textures (false: materials keep texture references, Scene::textures
   // have names and sizes but empty pixel data). Used by tools that only count.
   bool decode_textures = true;

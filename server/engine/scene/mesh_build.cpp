@@ -113,8 +113,9 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     return invalid_argument(
         ctx +
         ": TEXCOORD_1 (lightmap UVs) is missing; every primitive needs lightmap UVs "
-        "(UV generation is not implemented yet)");
+        "(ImportOptions::require_lightmap_uvs)");
   }
+  if (!attrs[4].present) mesh->has_lightmap_uvs = false;
   const size_t base = mesh->positions.size();
   if (base + vertex_count > std::numeric_limits<uint32_t>::max()) {
     return resource_exhausted(ctx + ": the mesh has more than 2^32 vertices");
@@ -150,7 +151,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   }
 
   // Keep the triangles with three distinct indices and a non-zero area.
-  std::vector<uint32_t> kept;
+  std::vector<uint32_t> kept, kept_source;
   kept.reserve(indices.size());
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
     const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
@@ -160,6 +161,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
       continue;
     }
     kept.insert(kept.end(), {a, b, c});
+    kept_source.push_back(static_cast<uint32_t>(t / 3));
   }
 
   std::vector<Vec3> normals(vertex_count, Vec3{0, 0, 0});
@@ -193,6 +195,14 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     *all_tangents = false;
     mesh->tangents.clear();
   }
+  Mesh::PrimitiveSpan span;
+  span.primitive = prim_index;
+  span.first_vertex = static_cast<uint32_t>(base);
+  span.vertex_count = static_cast<uint32_t>(vertex_count);
+  span.first_triangle = static_cast<uint32_t>(mesh->triangle_count());
+  span.triangle_count = static_cast<uint32_t>(kept.size() / 3);
+  mesh->primitive_spans.push_back(span);
+  mesh->source_triangle.insert(mesh->source_triangle.end(), kept_source.begin(), kept_source.end());
   for (uint32_t i : kept) mesh->indices.push_back(static_cast<uint32_t>(base) + i);
   mesh->triangle_material.insert(mesh->triangle_material.end(), kept.size() / 3, material);
   return Status::ok();

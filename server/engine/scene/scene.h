@@ -23,10 +23,26 @@ struct Mesh {
   std::vector<Vec3> normals;               // always present (generated when missing)
   std::vector<Vec4> tangents;              // empty unless the file had TANGENT everywhere
   std::vector<Vec2> uv0;                   // material UVs (TEXCOORD_0); zeros when absent
-  std::vector<Vec2> uv1;                   // lightmap UVs (TEXCOORD_1); required
+  std::vector<Vec2> uv1;                   // lightmap UVs (TEXCOORD_1); zeros when absent
   std::vector<uint32_t> indices;           // 3 per triangle
   std::vector<int32_t> triangle_material;  // per triangle; index into Scene::materials
+  // Where the vertices and triangles came from in the file, for writing
+  // generated lightmap UVs back (pipeline/lightmapped_gltf.h): per triangle
+  // primitive of the glTF mesh, its vertex range here (the primitive's
+  // vertices in accessor order) and its triangle range here; per triangle,
+  // its position in the primitive's triangle list (degenerate ones dropped,
+  // so positions may skip).
+  struct PrimitiveSpan {
+    int primitive = -1;  // index in the glTF mesh's primitives
+    uint32_t first_vertex = 0, vertex_count = 0;
+    uint32_t first_triangle = 0, triangle_count = 0;
+  };
+  std::vector<PrimitiveSpan> primitive_spans;
+  std::vector<uint32_t> source_triangle;
   bool generated_normals = false;
+  // Every primitive had TEXCOORD_1 (otherwise the bake generates lightmap
+  // UVs, or refuses with --uv existing; pipeline/lightmap_layout.h).
+  bool has_lightmap_uvs = true;
 
   size_t triangle_count() const { return indices.size() / 3; }
 };
@@ -36,6 +52,12 @@ struct Instance {
   int node_index = -1;   // glTF node
   int mesh = -1;         // index into Scene::meshes
   Mat4 object_to_world;  // composed down the node hierarchy
+  // The node's extras.lightmapScaleOffset = [sx, sy, ox, oy] (Unity's
+  // Renderer.lightmapScaleOffset convention, in glTF UV convention): where
+  // the client placed this instance in the atlas, atlas_uv = uv1 * (sx, sy) +
+  // (ox, oy). Honoured exactly by the atlas when every instance has one.
+  bool has_lightmap_scale_offset = false;
+  float lightmap_scale_offset[4] = {1, 1, 0, 0};
 };
 
 enum class AlphaMode { kOpaque, kMask, kBlend };

@@ -525,11 +525,15 @@ TEST(SceneImportErrors, MissingLightmapUvs) {
   GltfBuilder b;
   b.add_node({{"mesh", b.add_mesh("wall", {b.triangles(kQuadPositions, kQuadIndices, test::kUInt,
                                                        false)})}});
-  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+  ImportOptions strict;
+  strict.require_lightmap_uvs = true;
+  expect_error(load(b.gltf_embedded(), strict), StatusCode::kInvalidArgument,
                {"TEXCOORD_1", "mesh 'wall'"});
-  ImportOptions relaxed;
-  relaxed.require_lightmap_uvs = false;
-  EXPECT_TRUE(load(b.gltf_embedded(), relaxed).is_ok());
+  // By default the mesh loads and says it needs generated lightmap UVs.
+  auto scene = load(b.gltf_embedded());
+  ASSERT_TRUE(scene.is_ok()) << scene.status().message();
+  EXPECT_FALSE(scene.value().meshes[0].has_lightmap_uvs);
+  EXPECT_TRUE(load(quad_scene().gltf_embedded()).value().meshes[0].has_lightmap_uvs);
 }
 
 TEST(SceneImportErrors, NodeCycleAndSeveralParents) {

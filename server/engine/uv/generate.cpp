@@ -1,0 +1,456 @@
+#include "uv/generate.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "atlas/chart_geometry.h"
+#include "uv/bitimage_packer.h"
+#include "uv/stretch.h"
+
+namespace luxel::uv {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+struct DPoint {
+  double x = 0, y = 0;
+};
+
+// Where the packer puts a shape point (bitimage_packer.h:
+// atlas_texel(p) = rotate(p, rotation) + offset), in double.
+DPoint placed_point(double x, double y, const ShapePlacement& s) {
+  double rx = x, ry = y;
+  switch (s.rotation & 3) {
+    case 1:
+      rx = -y, ry = x;
+      break;
+    case 2:
+      rx = -x, ry = -y;
+      break;
+    case 3:
+      rx = y, ry = -x;
+      break;
+    default:
+      break;
+  }
+  return {rx + s.offset[0], ry + s.offset[1]};
+}
+
+// World-space area of a set of a mesh's triangles under one instance.
+double world_area(const scene::Mesh& mesh, const Mat4& m, const std::vector<uint32_t>& triangles) {
+  auto world = [&](uint32_t index, double out[3]) {
+    const Vec3 p = mesh.positions[index];
+    for (int r = 0; r < 3; ++r)
+      out[r] = m.at(r, 0) * p.x + m.at(r, 1) * p.y + m.at(r, 2) * p.z + m.at(r, 3);
+  };
+  double area = 0;
+  for (uint32_t t : triangles) {
+    double a[3], b[3], c[3];
+    world(mesh.indices[t * 3], a);
+    world(mesh.indices[t * 3 + 1], b);
+    world(mesh.indices[t * 3 + 2], c);
+    const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double x = e1[1] * e2[2] - e1[2] * e2[1];
+    const double y = e1[2] * e2[0] - e1[0] * e2[2];
+    const double z = e1[0] * e2[1] - e1[1] * e2[0];
+    area += 0.5 * std::sqrt(x * x + y * y + z * z);
+  }
+  return area;
+}
+
+// One baked mesh: its charts and the instances that use it.
+struct MeshCharts {
+  std::vector<Chart> charts;
+  std::vector<uint32_t> instances;
+  // Per chart: world texels per chart UV unit at density 1 (sqrt of world
+  // area over chart area) for a mesh used once; for an instanced mesh, per
+  // instance (the mesh's mean).
+  std::vector<double> chart_scale;
+  std::vector<double> instance_scale;
+  double min_instance_scale = 0;
+};
+
+// A shape handed to the packer: a chart of a mesh used once, or one
+// instance of an instanced mesh's own layout.
+struct ShapeSource {
+  uint32_t mesh = 0;
+  uint32_t chart = 0;     // chart of a mesh used once
+  int32_t instance = -1;  // instance of an instanced mesh (-1: a chart)
+};
+
+// An instanced mesh's own layout, packed once per density.
+struct MeshLayout {
+  int width = 0, height = 0;
+  std::vector<ShapePlacement> placements;  // per chart
+  double scale = 0;                        // texels per chart UV unit in the layout
+};
+
+struct PackAttempt {
+  PackResult pack;
+  std::vector<ShapeSource> sources;
+  std::vector<MeshLayout> layouts;  // per mesh (instanced ones only)
+};
+
+PackShape chart_shape(const Chart& chart, double scale, bool allow_rotation) {
+  PackShape s;
+  s.allow_rotation = allow_rotation;
+  s.corners.reserve(chart.indices.size());
+  for (uint32_t i : chart.indices) {
+    const Vec2 p = chart.uv[i];
+    s.corners.push_back({static_cast<float>(p.x * scale), static_cast<float>(p.y * scale)});
+  }
+  return s;
+}
+
+// Packs every baked mesh at `density` texels per world unit into the atlas
+// size of `pack` (0: the smallest that fits).
+Result<PackAttempt> pack_at(const std::vector<MeshCharts>& meshes, double density,
+                            const PackOptions& pack) {
+  PackAttempt a;
+  a.layouts.resize(meshes.size());
+  std::vector<PackShape> shapes;
+  for (uint32_t m = 0; m < meshes.size(); ++m) {
+    const MeshCharts& mc = meshes[m];
+    if (mc.instances.empty() || mc.charts.empty()) continue;
+    if (mc.instances.size() == 1) {
+      for (uint32_t c = 0; c < mc.charts.size(); ++c) {
+        shapes.push_back(chart_shape(mc.charts[c], density * mc.chart_scale[c], true));
+        a.sources.push_back({m, c, -1});
+      }
+      continue;
+    }
+    // The mesh's own layout at its smallest instance's scale.
+    MeshLayout& layout = a.layouts[m];
+    layout.scale = density * mc.min_instance_scale;
+    std::vector<PackShape> own;
+    for (const Chart& c : mc.charts) own.push_back(chart_shape(c, layout.scale, true));
+    PackOptions own_options;
+    own_options.padding_texels = pack.padding_texels;
+    own_options.max_resolution = pack.max_resolution;
+    auto packed = pack_shapes(own, own_options);
+    if (!packed) return packed.status();
+    layout.width = packed.value().width;
+    layout.height = packed.value().height;
+    layout.placements = std::move(packed.value().placements);
+    // Each instance: the whole layout, scaled up to its own size, unturned
+    // (a placement is a scale and an offset only).
+    for (uint32_t k = 0; k < mc.instances.size(); ++k) {
+      const double grow = mc.instance_scale[k] / mc.min_instance_scale;
+      PackShape s;
+      s.allow_rotation = false;
+      for (uint32_t c = 0; c < mc.charts.size(); ++c) {
+        const Chart& chart = mc.charts[c];
+        for (uint32_t i : chart.indices) {
+          const DPoint p = placed_point(chart.uv[i].x * layout.scale, chart.uv[i].y * layout.scale,
+                                       layout.placements[c]);
+          s.corners.push_back({static_cast<float>(p.x * grow), static_cast<float>(p.y * grow)});
+        }
+      }
+      shapes.push_back(std::move(s));
+      a.sources.push_back({m, 0, static_cast<int32_t>(mc.instances[k])});
+    }
+  }
+  if (shapes.empty()) return invalid_argument("scene has no triangle that can be laid out");
+  auto packed = pack_shapes(shapes, pack);
+  if (!packed) return packed.status();
+  a.pack = std::move(packed.value());
+  return a;
+}
+
+// Area-weighted texels per world unit the charts would need at density 1.
+double total_world_area(const std::vector<MeshCharts>& meshes) {
+  double area = 0;
+  for (const MeshCharts& mc : meshes) {
+    if (mc.instances.empty()) continue;
+    if (mc.instances.size() == 1) {
+      for (size_t c = 0; c < mc.charts.size(); ++c)
+        area += mc.charts[c].area_3d * mc.chart_scale[c] * mc.chart_scale[c];
+    } else {
+      double mesh_area = 0;
+      for (const Chart& c : mc.charts) mesh_area += c.area_3d;
+      for (double s : mc.instance_scale) area += mesh_area * s * s;
+    }
+  }
+  return area;
+}
+
+// The largest density whose packing fits `side` (within about 3 %).
+Result<std::pair<double, PackAttempt>> fit_resolution(const std::vector<MeshCharts>& meshes,
+                                                      int side, const PackOptions& base,
+                                                      int* attempts) {
+  const double area = total_world_area(meshes);
+  if (!(area > 0)) return invalid_argument("scene has no triangle that can be laid out");
+  // First guess: the packer's automatic square at a density that fills the
+  // side at 70 % efficiency, then scaled by how far off it came out.
+  double density = side * std::sqrt(0.7 / area);
+  PackOptions automatic = base;
+  automatic.max_resolution = std::numeric_limits<int>::max() / 4;
+  ++*attempts;
+  auto probe = pack_at(meshes, density, automatic);
+  if (!probe) return probe.status();
+  const int probe_side = std::max(probe.value().pack.width, probe.value().pack.height);
+  density *= 0.995 * side / probe_side;
+  PackOptions fixed = base;
+  fixed.width = fixed.height = side;
+  for (int i = 0; i < 24; ++i) {
+    ++*attempts;
+    auto a = pack_at(meshes, density, fixed);
+    if (a) return std::make_pair(density, std::move(a.value()));
+    if (a.status().code() != StatusCode::kResourceExhausted) return a.status();
+    density *= 0.97;
+  }
+  return resource_exhausted(
+      strprintf("the charts do not fit a %dx%d lightmap at any density tried (down to %g texels "
+                "per unit); raise the resolution or lower padding",
+                side, side, density));
+}
+
+}  // namespace
+
+Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
+                                           const GenerateOptions& options) {
+  const Clock::time_point t0 = Clock::now();
+  const atlas::AtlasSettings& as = options.atlas;
+  if (scene.instances.empty())
+    return invalid_argument("scene has no geometry: it has no mesh instances to bake");
+  if (as.resolution == 0 && !(std::isfinite(as.texel_density) && as.texel_density > 0))
+    return invalid_argument(strprintf(
+        "texel_density is %g with resolution 0; set a resolution >= 1 or a finite texel_density "
+        "> 0 (texels per world unit)",
+        static_cast<double>(as.texel_density)));
+
+  GeneratedUvs out;
+  UvReport& report = out.report;
+
+  // 1. Charts of every instanced mesh, and their world scales.
+  std::vector<MeshCharts> meshes(scene.meshes.size());
+  for (uint32_t i = 0; i < scene.instances.size(); ++i) {
+    const int m = scene.instances[i].mesh;
+    if (m < 0 || static_cast<size_t>(m) >= scene.meshes.size())
+      return invalid_argument(strprintf("instance '%s' refers to mesh %d of %zu",
+                                        scene.instances[i].name.c_str(), m, scene.meshes.size()));
+    meshes[static_cast<size_t>(m)].instances.push_back(i);
+  }
+  const Clock::time_point t_charts = Clock::now();
+  for (uint32_t m = 0; m < meshes.size(); ++m) {
+    MeshCharts& mc = meshes[m];
+    if (mc.instances.empty()) continue;
+    const scene::Mesh& mesh = scene.meshes[m];
+    auto charts = build_charts(mesh, options.charts);
+    if (!charts) return charts.status();
+    mc.charts = std::move(charts.value());
+    double mesh_area = 0;
+    for (const Chart& c : mc.charts) mesh_area += c.area_3d;
+    if (mc.charts.empty() || !(mesh_area > 0)) {
+      mc.charts.clear();
+      continue;
+    }
+    if (mc.instances.size() == 1) {
+      const Mat4& xf = scene.instances[mc.instances[0]].object_to_world;
+      for (const Chart& c : mc.charts) {
+        const double w = world_area(mesh, xf, c.triangles);
+        mc.chart_scale.push_back(c.area_3d > 0 && w > 0 ? std::sqrt(w / c.area_3d) : 0);
+      }
+    } else {
+      std::vector<uint32_t> all;
+      for (const Chart& c : mc.charts) all.insert(all.end(), c.triangles.begin(), c.triangles.end());
+      mc.min_instance_scale = std::numeric_limits<double>::infinity();
+      for (uint32_t inst : mc.instances) {
+        const double w = world_area(mesh, scene.instances[inst].object_to_world, all);
+        const double s = std::sqrt(w / mesh_area);
+        if (!(std::isfinite(s) && s > 0))
+          return invalid_argument(strprintf(
+              "instance '%s' of mesh '%s' has a zero or non-finite world area",
+              scene.instances[inst].name.c_str(), mesh.name.c_str()));
+        mc.instance_scale.push_back(s);
+        mc.min_instance_scale = std::min(mc.min_instance_scale, s);
+      }
+    }
+    for (size_t c = 0; c < mc.charts.size(); ++c)
+      if (!(std::isfinite(mc.chart_scale.empty() ? 1.0 : mc.chart_scale[c])))
+        return invalid_argument(strprintf("mesh '%s' has a non-finite world area",
+                                          mesh.name.c_str()));
+  }
+  report.chart_seconds = seconds_since(t_charts);
+
+  // 2. Packing at one density.
+  const Clock::time_point t_pack = Clock::now();
+  PackOptions pack;
+  pack.padding_texels = as.padding_texels;
+  pack.max_resolution = as.max_resolution;
+  double density = as.texel_density;
+  PackAttempt attempt;
+  if (as.resolution > 0) {
+    auto fitted = fit_resolution(meshes, as.resolution, pack, &report.pack_attempts);
+    if (!fitted) return fitted.status();
+    density = fitted.value().first;
+    attempt = std::move(fitted.value().second);
+  } else {
+    ++report.pack_attempts;
+    auto a = pack_at(meshes, density, pack);
+    if (!a) return a.status();
+    attempt = std::move(a.value());
+  }
+  report.pack_seconds = seconds_since(t_pack);
+  report.efficiency = attempt.pack.efficiency;
+
+  // 3. Assembly: new vertices on seams, TEXCOORD_1, placements.
+  out.scene = scene;
+  out.vertex_origin.resize(scene.meshes.size());
+  atlas::Atlas& at = out.atlas;
+  at.mode = atlas::AtlasMode::kGenerated;
+  at.width = attempt.pack.width;
+  at.height = attempt.pack.height;
+  at.texels_per_unit = density;
+  at.placements.resize(scene.instances.size());
+  for (uint32_t i = 0; i < scene.instances.size(); ++i) at.placements[i].instance = i;
+  const double aw = at.width, ah = at.height;
+
+  // Chart vertex -> mesh vertex, splitting a vertex already given a UV.
+  auto assemble_mesh = [&](uint32_t m, auto&& chart_uv) {
+    const scene::Mesh& in = scene.meshes[m];
+    scene::Mesh& mesh = out.scene.meshes[m];
+    std::vector<uint32_t>& origin = out.vertex_origin[m];
+    origin.resize(in.positions.size());
+    for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
+    std::vector<bool> assigned(in.positions.size(), false);
+    mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
+    mesh.has_lightmap_uvs = true;
+    std::vector<bool> placed(in.triangle_count(), false);
+    const MeshCharts& mc = meshes[m];
+    for (uint32_t c = 0; c < mc.charts.size(); ++c) {
+      const Chart& chart = mc.charts[c];
+      std::vector<uint32_t> target(chart.vertices.size());
+      for (size_t k = 0; k < chart.vertices.size(); ++k) {
+        const uint32_t v = chart.vertices[k];
+        const Vec2 uv = chart_uv(c, chart.uv[k]);
+        if (!assigned[v]) {
+          assigned[v] = true;
+          mesh.uv1[v] = uv;
+          target[k] = v;
+          continue;
+        }
+        target[k] = static_cast<uint32_t>(mesh.positions.size());
+        origin.push_back(v);
+        mesh.positions.push_back(in.positions[v]);
+        mesh.normals.push_back(in.normals[v]);
+        mesh.uv0.push_back(in.uv0[v]);
+        if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
+        mesh.uv1.push_back(uv);
+        ++report.seam_vertices;
+      }
+      for (size_t k = 0; k < chart.triangles.size(); ++k) {
+        const uint32_t t = chart.triangles[k];
+        placed[t] = true;
+        for (int j = 0; j < 3; ++j)
+          mesh.indices[3 * t + static_cast<size_t>(j)] = target[chart.indices[3 * k + static_cast<size_t>(j)]];
+      }
+    }
+    // A triangle in no chart (degenerate) collapses onto one UV point, so it
+    // covers no texel.
+    for (uint32_t t = 0; t < placed.size(); ++t) {
+      if (placed[t]) continue;
+      ++report.unplaced_triangles;
+      for (int j = 0; j < 3; ++j) {
+        const uint32_t v = in.indices[3 * t + static_cast<size_t>(j)];
+        const uint32_t copy = static_cast<uint32_t>(mesh.positions.size());
+        origin.push_back(v);
+        mesh.positions.push_back(in.positions[v]);
+        mesh.normals.push_back(in.normals[v]);
+        mesh.uv0.push_back(in.uv0[v]);
+        if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
+        mesh.uv1.push_back(Vec2{0, 0});
+        mesh.indices[3 * t + static_cast<size_t>(j)] = copy;
+      }
+    }
+    ++report.meshes;
+    report.charts += mc.charts.size();
+    report.triangles += in.triangle_count();
+  };
+
+  // Shape index ranges per mesh in attempt.sources order.
+  std::vector<std::vector<size_t>> shape_of_chart(meshes.size());
+  std::vector<std::vector<size_t>> shape_of_instance(meshes.size());
+  for (size_t s = 0; s < attempt.sources.size(); ++s) {
+    const ShapeSource& src = attempt.sources[s];
+    if (src.instance < 0) {
+      auto& v = shape_of_chart[src.mesh];
+      if (v.size() <= src.chart) v.resize(src.chart + 1);
+      v[src.chart] = s;
+    } else {
+      shape_of_instance[src.mesh].push_back(s);
+    }
+  }
+
+  double min_density = std::numeric_limits<double>::infinity(), max_density = 0;
+  for (uint32_t m = 0; m < meshes.size(); ++m) {
+    const MeshCharts& mc = meshes[m];
+    if (mc.instances.empty() || mc.charts.empty()) continue;
+    if (mc.instances.size() == 1) {
+      // Atlas UVs directly.
+      assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
+        const double k = density * mc.chart_scale[c];
+        const DPoint p = placed_point(uv.x * k, uv.y * k,
+                                     attempt.pack.placements[shape_of_chart[m][c]]);
+        return Vec2{static_cast<float>(p.x / aw), static_cast<float>(p.y / ah)};
+      });
+      atlas::InstancePlacement& p = at.placements[mc.instances[0]];
+      p.rect[2] = at.width;
+      p.rect[3] = at.height;
+      min_density = std::min(min_density, density);
+      max_density = std::max(max_density, density);
+      continue;
+    }
+    const MeshLayout& layout = attempt.layouts[m];
+    const double lw = layout.width, lh = layout.height;
+    assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
+      const DPoint p =
+          placed_point(uv.x * layout.scale, uv.y * layout.scale, layout.placements[c]);
+      return Vec2{static_cast<float>(p.x / lw), static_cast<float>(p.y / lh)};
+    });
+    for (size_t k = 0; k < mc.instances.size(); ++k) {
+      const ShapePlacement& sp = attempt.pack.placements[shape_of_instance[m][k]];
+      const double grow = mc.instance_scale[k] / mc.min_instance_scale;
+      atlas::InstancePlacement& p = at.placements[mc.instances[k]];
+      // atlas texel = layout texel * grow + offset (no turn: allow_rotation
+      // was false), so atlas_uv = uv1 * (l * grow / a) + offset / a.
+      const DPoint origin = placed_point(0, 0, sp);
+      p.scale[0] = static_cast<float>(lw * grow / aw);
+      p.scale[1] = static_cast<float>(lh * grow / ah);
+      p.offset[0] = static_cast<float>(origin.x / aw);
+      p.offset[1] = static_cast<float>(origin.y / ah);
+      p.rect[0] = static_cast<int>(std::floor(origin.x));
+      p.rect[1] = static_cast<int>(std::floor(origin.y));
+      p.rect[2] = std::min(at.width - p.rect[0], static_cast<int>(std::ceil(lw * grow)) + 1);
+      p.rect[3] = std::min(at.height - p.rect[1], static_cast<int>(std::ceil(lh * grow)) + 1);
+      const double d = density * mc.instance_scale[k] / mc.min_instance_scale;
+      min_density = std::min(min_density, d);
+      max_density = std::max(max_density, d);
+    }
+  }
+  if (report.meshes == 0) return invalid_argument("scene has no triangle that can be laid out");
+  report.density_spread = min_density > 0 ? max_density / min_density : 1;
+
+  // Stretch over the laid-out charts (Sander et al. 2001: L2 combines as
+  // the root of the area-weighted mean of squares).
+  double l2_sq = 0, area = 0;
+  for (uint32_t m = 0; m < meshes.size(); ++m) {
+    if (meshes[m].charts.empty()) continue;
+    const Stretch st = mesh_stretch(scene.meshes[m], meshes[m].charts);
+    l2_sq += st.l2 * st.l2 * st.area_3d;
+    area += st.area_3d;
+    report.stretch_linf = std::max(report.stretch_linf, st.linf);
+  }
+  if (area > 0) report.stretch_l2 = std::sqrt(l2_sq / area);
+  report.total_seconds = seconds_since(t0);
+  return out;
+}
+
+}  // namespace luxel::uv

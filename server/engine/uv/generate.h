@@ -1,0 +1,69 @@
+// Generated lightmap UVs for a whole scene: the charts of every baked mesh
+// (charts.h) packed into one atlas at one world-space texel density
+// (bitimage_packer.h, thesis §4.1), then assembled into TEXCOORD_1 with the
+// vertices on chart seams split.
+//
+// Layout rules:
+//   - A mesh used by one instance packs its charts one by one, each free to
+//     turn by quarter turns, scaled by that instance's world size; its new
+//     TEXCOORD_1 are atlas UVs (placement scale 1, offset 0).
+//   - A mesh used by several instances keeps one set of UVs: its charts are
+//     packed once into a layout of its own (at the smallest instance's
+//     scale, so the padding holds for every instance), and that layout is
+//     placed per instance, scaled to the instance's world size, by scale and
+//     offset (atlas_uv = uv1 * scale + offset, as AtlasMode::kPacked).
+//   - With AtlasSettings::resolution the density is the largest (within 3 %)
+//     whose packing fits; with texel_density the atlas is the smallest square
+//     that holds the charts.
+// Deterministic: the same scene and settings give the same bits.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "atlas/atlas.h"
+#include "common/status.h"
+#include "scene/scene.h"
+#include "uv/charts.h"
+
+namespace luxel::uv {
+
+struct GenerateOptions {
+  atlas::AtlasSettings atlas;  // resolution or texel_density, padding, max_resolution
+  ChartOptions charts;
+};
+
+// What `luxel inspect --uv` and the manifest report about a generated layout.
+struct UvReport {
+  size_t meshes = 0;              // meshes given new UVs
+  size_t charts = 0;              // charts over those meshes
+  size_t triangles = 0;           // triangles laid out
+  size_t unplaced_triangles = 0;  // degenerate triangles left out of every chart
+  size_t seam_vertices = 0;       // vertices added by splitting on chart seams
+  // Stretch (Sander et al. 2001) of the map from 3D to UV, after the charts'
+  // area normalisation: area-weighted L2 over all triangles (1 = none) and
+  // the largest L-infinity of any triangle.
+  double stretch_l2 = 1, stretch_linf = 1;
+  double efficiency = 0;      // covered texels / atlas texels (packer's masks)
+  double density_spread = 1;  // largest / smallest texels per world unit over instances
+  int pack_attempts = 0;      // packings tried while searching the density
+  double chart_seconds = 0, pack_seconds = 0, total_seconds = 0;
+};
+
+struct GeneratedUvs {
+  scene::Scene scene;  // the input with split vertices and generated uv1 on laid-out meshes
+  atlas::Atlas atlas;  // mode kGenerated
+  // Per mesh: the input vertex each vertex was copied from (empty for a mesh
+  // that was not laid out). The first copy of input vertex v is vertex v, so a
+  // writer can keep the file's vertex data and append the seam copies.
+  std::vector<std::vector<uint32_t>> vertex_origin;
+  UvReport report;
+};
+
+// Errors: INVALID_ARGUMENT for bad settings or a scene without instances or
+// without any triangle that can be laid out; RESOURCE_EXHAUSTED naming
+// max_resolution when the density needs a larger atlas.
+Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
+                                           const GenerateOptions& options);
+
+}  // namespace luxel::uv
