@@ -13,6 +13,7 @@
 #include "scene/lights.h"
 #include "scene/materials.h"
 #include "scene/mesh_build.h"
+#include "scene/scene_stats.h"
 
 namespace luxel::scene {
 namespace {
@@ -309,6 +310,16 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
                                             " is used by the file and not supported (ignored)");
   LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
   LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));
+  // Overlapping lightmap UVs make two surfaces share texels; named here so
+  // that a caller can regenerate the UVs of those meshes (find_uv_overlaps).
+  constexpr int kOverlapResolution = 512;
+  for (const UvOverlap& o : find_uv_overlaps(scene, kOverlapResolution)) {
+    const Mesh& m = scene.meshes[static_cast<size_t>(o.mesh)];
+    scene.import_stats.warnings.push_back(
+        strprintf("%s: TEXCOORD_1 (lightmap UVs) overlaps itself at %zu of %d^2 texel centres; two "
+                  "surfaces would share lightmap texels",
+                  detail::mesh_label(model, m.gltf_index).c_str(), o.texels, kOverlapResolution));
+  }
   if (scene.materials.empty()) {
     Material m;
     m.name = "default";

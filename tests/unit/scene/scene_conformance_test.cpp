@@ -3,10 +3,13 @@
 // Each case is a small document built in memory.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
+#include <random>
 
 #include "gltf_builder.h"
 #include "scene/gltf_import.h"
+#include "scene/scene_stats.h"
 
 namespace luxel::scene {
 namespace {
@@ -281,6 +284,139 @@ TEST(SceneConformance, ParserMessagesNameFileAndObject) {
   const std::string msg = r.status().message();
   EXPECT_EQ(msg.find("conf.gltf"), 1u) << msg;
   EXPECT_GT(msg.size(), std::strlen("'conf.gltf': ") + 10) << msg;
+}
+
+// Brute force: every texel centre tested against every triangle with the
+// top-left rule (the rasterizer's definition), counting centres covered by
+// one mesh at least once and at least twice.
+void brute_force(const Mesh& m, int res, size_t* covered, size_t* twice) {
+  std::vector<int> count(static_cast<size_t>(res * res), 0);
+  for (size_t t = 0; t < m.triangle_count(); ++t) {
+    double p[3][2];
+    for (int k = 0; k < 3; ++k) {
+      const Vec2 uv = m.uv1[m.indices[3 * t + static_cast<size_t>(k)]];
+      p[k][0] = static_cast<double>(uv.x) * res;
+      p[k][1] = static_cast<double>(uv.y) * res;
+    }
+    const double area =
+        (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]);
+    if (area == 0) continue;
+    if (area < 0) std::swap(p[1], p[2]);
+    for (int y = 0; y < res; ++y) {
+      for (int x = 0; x < res; ++x) {
+        bool in = true;
+        for (int k = 0; k < 3; ++k) {
+          const double* a = p[k];
+          const double* b = p[(k + 1) % 3];
+          const double dx = b[0] - a[0], dy = b[1] - a[1];
+          const double w = dx * (y + 0.5 - a[1]) - dy * (x + 0.5 - a[0]);
+          const bool inclusive = dy < 0 || (dy == 0 && dx < 0);
+          in = in && !(w < 0 || (w == 0 && !inclusive));
+        }
+        count[static_cast<size_t>(y * res + x)] += in;
+      }
+    }
+  }
+  *covered = *twice = 0;
+  for (int c : count) {
+    *covered += c > 0;
+    *twice += c > 1;
+  }
+}
+
+Scene uv_scene(std::vector<Vec2> uv) {
+  Scene s;
+  Mesh m;
+  m.name = "uv";
+  for (size_t i = 0; i < uv.size(); ++i) {
+    m.positions.push_back({static_cast<float>(i), static_cast<float>(i * i % 7), 0});
+    m.indices.push_back(static_cast<uint32_t>(i));
+  }
+  m.uv1 = std::move(uv);
+  m.triangle_material.assign(m.indices.size() / 3, 0);
+  s.meshes.push_back(std::move(m));
+  return s;
+}
+
+TEST(SceneConformance, UvCoverageMatchesBruteForce) {
+  constexpr int kRes = 24;
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> lattice(-2, 2 * kRes + 2);
+  std::uniform_real_distribution<float> any(-0.1f, 1.1f);
+  for (int round = 0; round < 20; ++round) {
+    std::vector<Vec2> uv;
+    for (int t = 0; t < 3 * 12; ++t) {
+      // Half the vertices on the half-texel lattice, so that many centres
+      // lie exactly on edges (shared and not).
+      if (round % 2 == 0) {
+        uv.push_back({lattice(rng) * 0.5f / kRes, lattice(rng) * 0.5f / kRes});
+      } else {
+        uv.push_back({any(rng), any(rng)});
+      }
+    }
+    // A quad split along its diagonal: the shared edge runs through centres.
+    for (Vec2 v : {Vec2{0.5f / kRes, 0.5f / kRes}, Vec2{8.5f / kRes, 0.5f / kRes},
+                   Vec2{8.5f / kRes, 8.5f / kRes}, Vec2{0.5f / kRes, 0.5f / kRes},
+                   Vec2{8.5f / kRes, 8.5f / kRes}, Vec2{0.5f / kRes, 8.5f / kRes}})
+      uv.push_back(v);
+    const Scene s = uv_scene(uv);
+    size_t covered = 0, twice = 0;
+    brute_force(s.meshes[0], kRes, &covered, &twice);
+    const SceneStats st = compute_stats(s, kRes);
+    EXPECT_EQ(st.lightmap_overlap_texels, twice) << "round " << round;
+    EXPECT_NEAR(st.lightmap_coverage * kRes * kRes, static_cast<double>(covered), 1e-9)
+        << "round " << round;
+    const auto overlaps = find_uv_overlaps(s, kRes);
+    EXPECT_EQ(overlaps.empty() ? 0u : overlaps[0].texels, twice) << "round " << round;
+  }
+  // The split quad alone: its diagonal is shared, nothing overlaps.
+  const Scene quad = uv_scene(
+      {{0.1f, 0.1f}, {0.6f, 0.1f}, {0.6f, 0.6f}, {0.1f, 0.1f}, {0.6f, 0.6f}, {0.1f, 0.6f}});
+  EXPECT_TRUE(find_uv_overlaps(quad, 64).empty());
+}
+
+TEST(SceneConformance, UvCoverageOfRandomUvTrianglesIsLinear) {
+  // 200k here to keep the test short; 1M take about 2.5 s (5 s on a loaded
+  // 2-core machine).
+  constexpr size_t kTriangles = 200'000;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<Vec2> uv(3 * kTriangles);
+  for (Vec2& v : uv) v = {u(rng), u(rng)};
+  const Scene s = uv_scene(std::move(uv));
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto overlaps = find_uv_overlaps(s);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_EQ(overlaps.size(), 1u);
+  EXPECT_GT(overlaps[0].texels, 512u * 512u / 2);
+  // Texel-by-texel rasterization took about 40 s for these (200 s for 1M).
+  EXPECT_LT(seconds, 4.0);
+  std::printf("find_uv_overlaps: %zu random UV triangles in %.2f s\n", kTriangles, seconds);
+}
+
+TEST(SceneConformance, OverlappingLightmapUvsAreAnImportWarning) {
+  GltfBuilder b;
+  // Two meshes: "clean" with a quad, "folded" whose two triangles share UVs.
+  const int clean = b.add_mesh("clean", {b.triangles(kQuadPositions, kQuadIndices)});
+  json folded = b.triangles(kQuadPositions, kQuadIndices);
+  folded["attributes"]["TEXCOORD_1"] =
+      b.add_floats({0.1f, 0.1f, 0.9f, 0.1f, 0.9f, 0.9f, 0.9f, 0.1f}, "VEC2");
+  // (vertex 3's UV is vertex 1's: triangle 0 2 3 lies over triangle 0 1 2)
+  const int bad = b.add_mesh("folded", {folded});
+  b.add_node({{"mesh", clean}});
+  b.add_node({{"mesh", bad}});
+  b.add_node({{"mesh", bad}});
+  auto r = load(b.gltf_embedded());
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  const auto overlaps = find_uv_overlaps(*r);
+  ASSERT_EQ(overlaps.size(), 1u);
+  EXPECT_EQ(r->meshes[static_cast<size_t>(overlaps[0].mesh)].name, "folded");
+  EXPECT_GT(overlaps[0].texels, 1000u);
+  size_t n = 0;
+  for (const auto& w : r->import_stats.warnings) n += w.find("TEXCOORD_1") != std::string::npos;
+  EXPECT_EQ(n, 1u);
+  EXPECT_TRUE(has_warning(*r, "mesh 'folded' (mesh[1]): TEXCOORD_1 (lightmap UVs) overlaps"));
 }
 
 }  // namespace
