@@ -376,8 +376,7 @@ TEST(SceneConformance, UvCoverageMatchesBruteForce) {
 }
 
 TEST(SceneConformance, UvCoverageOfRandomUvTrianglesIsLinear) {
-  // 200k here to keep the test short; 1M take about 2.5 s (5 s on a loaded
-  // 2-core machine).
+  // 200k here to keep the test short (1M took 4.7 s on 2 loaded cores).
   constexpr size_t kTriangles = 200'000;
   std::mt19937 rng(1);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
