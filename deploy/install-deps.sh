@@ -12,8 +12,6 @@ PACKAGES=(
   # geometry and images
   libembree-dev libopenimageio-dev openimageio-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
-  # KHR_draco_mesh_compression decoding (scene/)
-  libdraco-dev
   # lightmap UV generation: sparse least squares for LSCM (uv/)
   libeigen3-dev
   # service: gRPC + protobuf (C++ and Python), OpenSSL for SHA-256 and TLS

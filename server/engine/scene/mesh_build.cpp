@@ -103,6 +103,12 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   const std::string ctx =
       strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
 
+  if (prim.extensions.count("KHR_draco_mesh_compression")) {
+    // Its accessors have no bufferView and would read as zeros.
+    return invalid_argument(ctx +
+                            ": KHR_draco_mesh_compression is not supported; export the scene "
+                            "without Draco compression");
+  }
   std::vector<float> pos, nrm, tan, uv0, uv1;
   // Component types of glTF 2.0 §3.7.2.1 widened by KHR_mesh_quantization
   // (its "Extending Mesh Attributes" table).

@@ -199,6 +199,26 @@ TEST(SceneConformance, GpuInstancingMakesOneInstancePerElement) {
                {"node 'grid' (node[0])", "EXT_mesh_gpu_instancing", "SCALE"});
 }
 
+TEST(SceneConformance, DracoIsRefusedByName) {
+  GltfBuilder b;
+  // As exporters write it: accessors without bufferView, data in the extension.
+  json prim = {{"attributes",
+                {{"POSITION", b.add_accessor(-1, test::kFloat, 4, "VEC3")},
+                 {"TEXCOORD_1", b.add_accessor(-1, test::kFloat, 4, "VEC2")}}},
+               {"indices", b.add_accessor(-1, test::kUShort, 6, "SCALAR")},
+               {"extensions",
+                {{"KHR_draco_mesh_compression",
+                  {{"bufferView", b.add_view(kQuadIndices.data(), 24)},
+                   {"attributes", {{"POSITION", 0}, {"TEXCOORD_1", 1}}}}}}}};
+  b.add_node({{"mesh", b.add_mesh("d", {prim})}});
+  b.doc["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"conf.gltf", "mesh 'd' (mesh[0]) primitive 0", "KHR_draco_mesh_compression"});
+  b.doc["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"KHR_draco_mesh_compression", "required"});
+}
+
 TEST(SceneConformance, AccessorsWithoutBufferView) {
   GltfBuilder b;
   json prim = b.triangles(kQuadPositions, kQuadIndices);
