@@ -108,6 +108,12 @@ int run_inspect(const std::vector<std::string>& argv) {
   std::printf("scene      %s (imported in %.0f ms)\n", args.scene.c_str(), import_ms);
   std::printf("%s", scene::format_stats(stats).c_str());
   for (const auto& w : scene->import_stats.warnings) std::printf("warning    %s\n", w.c_str());
+  if (stats.world_triangles == 0) {
+    // Nothing to bake (no meshes, or only points and lines); tracing an empty
+    // scene would measure nothing either.
+    std::fprintf(stderr, "luxel inspect: '%s' has no triangles to bake\n", args.scene.c_str());
+    return 1;
+  }
 
   auto ctx = device::Context::create(args.device);
   if (!ctx) return fail(ctx.status());

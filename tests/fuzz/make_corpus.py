@@ -136,6 +136,47 @@ def main():
 
     files["empty.gltf"] = b'{"asset":{"version":"2.0"}}'
 
+    # Triangle fan (the strip is in hierarchy_instancing.gltf) and points.
+    d = Doc()
+    d.node({"mesh": d.mesh([dict(d.quad(0), mode=6), dict(d.quad(5121), mode=6), dict(d.quad(0), mode=0)])})
+    files["fan_points.gltf"] = d.gltf()
+
+    # KHR_mesh_quantization: short positions, byte normals, ubyte lightmap UVs.
+    d = Doc()
+    d.j["extensionsUsed"] = d.j["extensionsRequired"] = ["KHR_mesh_quantization"]
+    prim = {"attributes": {
+        "POSITION": d.acc(struct.pack("<16h", 0, 0, 0, 0, 9, 0, 0, 0, 9, 9, 0, 0, 0, 9, 0, 0), 5122, 4, "VEC3"),
+        "NORMAL": d.acc(struct.pack("<16b", *([0, 0, 127, 0] * 4)), 5120, 4, "VEC3", True),
+        "TEXCOORD_1": d.acc(struct.pack("<8B", 0, 0, 1, 0, 1, 1, 0, 1), 5121, 4, "VEC2")},
+        "indices": d.acc(struct.pack("<6B", 0, 1, 2, 0, 2, 3), 5121, 6, "SCALAR")}
+    d.j["bufferViews"][d.j["accessors"][prim["attributes"]["POSITION"]]["bufferView"]]["byteStride"] = 8
+    d.j["bufferViews"][d.j["accessors"][prim["attributes"]["NORMAL"]]["bufferView"]]["byteStride"] = 4
+    d.node({"mesh": d.mesh([prim])})
+    files["quantized.glb"] = d.glb()
+
+    # EXT_mesh_gpu_instancing: 3 instances with translation, rotation, scale.
+    d = Doc()
+    d.j["extensionsUsed"] = ["EXT_mesh_gpu_instancing"]
+    t = d.acc(struct.pack("<9f", 0, 0, 0, 2, 0, 0, 4, 0, 0), 5126, 3, "VEC3")
+    r = d.acc(struct.pack("<12h", 0, 0, 0, 32767, 0, 0, 23170, 23170, 0, 0, 0, 32767), 5122, 3, "VEC4", True)
+    sc = d.acc(struct.pack("<9f", 1, 1, 1, 2, 2, 2, 1, 1, 1), 5126, 3, "VEC3")
+    d.node({"mesh": d.mesh([d.quad(5123)]), "translation": [0, 1, 0], "extensions": {
+        "EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": t, "ROTATION": r, "SCALE": sc}}}})
+    files["gpu_instancing.gltf"] = d.gltf()
+
+    # Sparse-only accessors: indices and TEXCOORD_0 without a bufferView.
+    d = Doc()
+    p = d.quad(0)
+    idx = {"componentType": 5123, "count": 6, "type": "SCALAR", "sparse": {
+        "count": 5, "indices": {"bufferView": d.view(struct.pack("<5B", 1, 2, 3, 4, 5)), "componentType": 5121},
+        "values": {"bufferView": d.view(struct.pack("<5H", 1, 2, 0, 2, 3))}}}
+    d.j["accessors"].append(idx)
+    p["indices"] = len(d.j["accessors"]) - 1
+    d.j["accessors"].append({"componentType": 5126, "count": 4, "type": "VEC2"})
+    p["attributes"]["TEXCOORD_0"] = len(d.j["accessors"]) - 1
+    d.node({"mesh": d.mesh([p])})
+    files["sparse_only.glb"] = d.glb()
+
     for name, data in files.items():
         with open(os.path.join(OUT, name), "wb") as f:
             f.write(data)

@@ -176,8 +176,8 @@ Status locate(const tinygltf::Model& model, int view, uint64_t byte_offset, uint
 // Validates and reads the raw components of an accessor (with sparse
 // substitution) as doubles; the caller interprets them.
 Status read_components(const tinygltf::Model& model, int index, const char* semantic, int type,
-                       unsigned allowed, const std::string& ctx, uint64_t* budget,
-                       std::vector<double>* out) {
+                       unsigned allowed, unsigned unnormalized, const std::string& ctx,
+                       uint64_t* budget, std::vector<double>* out) {
   const std::string who = strprintf("%s: accessor %d (%s)", ctx.c_str(), index, semantic);
   if (index < 0 || static_cast<size_t>(index) >= model.accessors.size()) {
     return invalid_argument(strprintf("%s: accessor %d (%s) does not exist (%zu accessors)",
@@ -185,7 +185,8 @@ Status read_components(const tinygltf::Model& model, int index, const char* sema
   }
   const auto& acc = model.accessors[static_cast<size_t>(index)];
   const unsigned bit = component_bit(acc.componentType);
-  if ((bit & allowed) == 0) {
+  const bool is_int = bit != kCompF32;
+  if ((bit & (allowed | unnormalized)) == 0) {
     return invalid_argument(strprintf("%s: componentType %d (%s) is not allowed for %s",
                                       who.c_str(), acc.componentType,
                                       component_type_name(acc.componentType), semantic));
@@ -194,10 +195,14 @@ Status read_components(const tinygltf::Model& model, int index, const char* sema
     return invalid_argument(
         strprintf("%s: type %s, expected %s", who.c_str(), type_name(acc.type), type_name(type)));
   }
-  const bool is_int = bit != kCompF32;
-  if (is_int && type != TINYGLTF_TYPE_SCALAR && !acc.normalized) {
+  if (is_int && type != TINYGLTF_TYPE_SCALAR && !acc.normalized && (bit & unnormalized) == 0) {
     return invalid_argument(strprintf("%s: integer componentType %s must be normalized",
                                       who.c_str(), component_type_name(acc.componentType)));
+  }
+  if (is_int && acc.normalized && (bit & allowed) == 0) {
+    return invalid_argument(strprintf("%s: componentType %s must not be normalized for %s",
+                                      who.c_str(), component_type_name(acc.componentType),
+                                      semantic));
   }
   const uint64_t count = acc.count;
   if (count > *budget) {
@@ -300,8 +305,15 @@ Result<std::string_view> buffer_view_bytes(const tinygltf::Model& model, int vie
     return invalid_argument(strprintf("%s: bufferView %d refers to buffer %d, which does not exist",
                                       ctx.c_str(), view, bv.buffer));
   }
-  const auto& data = model.buffers[static_cast<size_t>(bv.buffer)].data;
+  const auto& buffer = model.buffers[static_cast<size_t>(bv.buffer)];
+  const auto& data = buffer.data;
   const uint64_t size = data.size();
+  if (data.empty() && buffer.uri.empty() && bv.byteLength > 0) {
+    return invalid_argument(
+        strprintf("%s: bufferView %d refers to buffer %d, which has no data (no uri; only the "
+                  "first buffer of a .glb may omit it)",
+                  ctx.c_str(), view, bv.buffer));
+  }
   if (bv.byteOffset > size || bv.byteLength > size - bv.byteOffset) {
     return data_loss(strprintf(
         "%s: bufferView %d (byteOffset %zu, byteLength %zu) overruns buffer %d (%llu bytes)",
@@ -313,11 +325,11 @@ Result<std::string_view> buffer_view_bytes(const tinygltf::Model& model, int vie
 }
 
 Status read_floats(const tinygltf::Model& model, int index, const char* semantic, int type,
-                   unsigned allowed, const std::string& ctx, uint64_t* budget,
-                   std::vector<float>* out) {
+                   unsigned normalized, unsigned unnormalized, const std::string& ctx,
+                   uint64_t* budget, std::vector<float>* out) {
   std::vector<double> values;
-  LUXEL_RETURN_IF_ERROR(
-      read_components(model, index, semantic, type, allowed, ctx, budget, &values));
+  LUXEL_RETURN_IF_ERROR(read_components(model, index, semantic, type, normalized, unnormalized, ctx,
+                                        budget, &values));
   const auto comps = static_cast<size_t>(type_components(type));
   out->resize(values.size());
   for (size_t i = 0; i < values.size(); ++i) {
@@ -338,7 +350,7 @@ Status read_indices(const tinygltf::Model& model, int index, const std::string& 
                     uint64_t* budget, std::vector<uint32_t>* out) {
   std::vector<double> values;
   LUXEL_RETURN_IF_ERROR(read_components(model, index, "indices", TINYGLTF_TYPE_SCALAR,
-                                        kCompU8 | kCompU16 | kCompU32, ctx, budget, &values));
+                                        kCompU8 | kCompU16 | kCompU32, 0, ctx, budget, &values));
   out->resize(values.size());
   for (size_t i = 0; i < values.size(); ++i) (*out)[i] = static_cast<uint32_t>(values[i]);
   return Status::ok();

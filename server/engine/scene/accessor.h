@@ -29,12 +29,14 @@ enum ComponentBits : unsigned {
 
 // Reads accessor `index` (tinygltf type `type`, e.g. TINYGLTF_TYPE_VEC3) as
 // floats, `components` per element, appended to `out` after clearing it.
-// Integer component types must be normalized and are mapped to [0,1] or
-// [-1,1] (KHR_mesh_quantization). Non-finite values are errors. `budget` is
-// the number of elements still allowed for this import (decremented).
+// `normalized` lists the component types accepted with normalized: true
+// (mapped to [0,1] or [-1,1]) and FLOAT; `unnormalized` the integer types
+// accepted as plain integer values (KHR_mesh_quantization). Non-finite values
+// are errors. `budget` is the number of elements still allowed for this
+// import (decremented).
 Status read_floats(const tinygltf::Model& model, int index, const char* semantic, int type,
-                   unsigned allowed, const std::string& ctx, uint64_t* budget,
-                   std::vector<float>* out);
+                   unsigned normalized, unsigned unnormalized, const std::string& ctx,
+                   uint64_t* budget, std::vector<float>* out);
 
 // Reads an index accessor (SCALAR, u8/u16/u32).
 Status read_indices(const tinygltf::Model& model, int index, const std::string& ctx,

@@ -8,15 +8,24 @@
 #include <new>
 #include <sstream>
 
+#include "scene/accessor.h"
 #include "scene/gltf_load.h"
 #include "scene/lights.h"
 #include "scene/materials.h"
 #include "scene/mesh_build.h"
+#include "scene/scene_stats.h"
 
 namespace luxel::scene {
 namespace {
 
 using detail::build_mesh;
+
+// Material-level extensions are listed in materials.cpp; these are read by
+// mesh_build.cpp and instantiate() below.
+bool supported_extension(const std::string& name) {
+  return detail::is_supported_extension(name) || name == "KHR_mesh_quantization" ||
+         name == "EXT_mesh_gpu_instancing";
+}
 
 std::string node_label(const tinygltf::Model& model, int i) {
   const std::string& name = model.nodes[static_cast<size_t>(i)].name;
@@ -62,6 +71,74 @@ Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
     for (size_t k = 0; k < 4; ++k) q[k] = n.rotation[k] / len;
   }
   return mat4_from_trs(t, q, s);
+}
+
+// EXT_mesh_gpu_instancing: the per-instance transforms of a node, T * R * S
+// from its TRANSLATION / ROTATION / SCALE accessors (each optional, all of
+// one count), to be applied before the node's own world transform. Empty
+// when the node does not use the extension.
+Status instance_transforms(const tinygltf::Model& model, int node_index, uint64_t* budget,
+                           std::vector<Mat4>* out) {
+  out->clear();
+  const auto& node = model.nodes[static_cast<size_t>(node_index)];
+  auto ext = node.extensions.find("EXT_mesh_gpu_instancing");
+  if (ext == node.extensions.end()) return Status::ok();
+  const std::string ctx = node_label(model, node_index) + " EXT_mesh_gpu_instancing";
+  const tinygltf::Value& attributes = ext->second.Get("attributes");
+  if (!attributes.IsObject())
+    return invalid_argument(ctx + ": attributes is missing or not an object");
+  // Component types of the extension's attribute table (with
+  // KHR_mesh_quantization's integer forms for TRANSLATION and SCALE).
+  using namespace detail;
+  constexpr unsigned kInts = kCompI8 | kCompU8 | kCompI16 | kCompU16;
+  struct Attr {
+    const char* name;
+    int type;
+    unsigned normalized, unnormalized;
+    std::vector<float> values;
+    bool present = false;
+  } attrs[] = {{"TRANSLATION", TINYGLTF_TYPE_VEC3, kCompF32 | kInts, kInts, {}},
+               {"ROTATION", TINYGLTF_TYPE_VEC4, kCompF32 | kCompI8 | kCompI16, 0, {}},
+               {"SCALE", TINYGLTF_TYPE_VEC3, kCompF32 | kInts, kInts, {}}};
+  size_t count = 0;
+  bool any = false;
+  for (auto& a : attrs) {
+    const tinygltf::Value& v = attributes.Get(a.name);
+    if (!v.IsNumber() && !v.IsInt()) continue;
+    LUXEL_RETURN_IF_ERROR(read_floats(model, v.GetNumberAsInt(), a.name, a.type, a.normalized,
+                                      a.unnormalized, ctx, budget, &a.values));
+    const size_t n = a.values.size() / (a.type == TINYGLTF_TYPE_VEC4 ? 4 : 3);
+    if (any && n != count) {
+      return invalid_argument(strprintf("%s: %s has %zu elements, the other attributes %zu",
+                                        ctx.c_str(), a.name, n, count));
+    }
+    count = n;
+    any = a.present = true;
+  }
+  if (!any) return invalid_argument(ctx + ": none of TRANSLATION, ROTATION, SCALE is given");
+  out->reserve(count);
+  for (size_t i = 0; i < count; ++i) {
+    double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
+    for (size_t k = 0; k < 3; ++k) {
+      if (attrs[0].present) t[k] = attrs[0].values[3 * i + k];
+      if (attrs[2].present) sc[k] = attrs[2].values[3 * i + k];
+    }
+    if (attrs[1].present) {
+      double len = 0;
+      for (size_t k = 0; k < 4; ++k) {
+        q[k] = attrs[1].values[4 * i + k];
+        len += q[k] * q[k];
+      }
+      len = std::sqrt(len);
+      if (!(len > 0)) {
+        return invalid_argument(
+            strprintf("%s: ROTATION of instance %zu has zero length", ctx.c_str(), i));
+      }
+      for (double& c : q) c /= len;  // quantized rotations are only nearly unit
+    }
+    out->push_back(mat4_from_trs(t, q, sc));
+  }
+  return Status::ok();
 }
 
 // Builds parent links and rejects nodes with several parents and cycles
@@ -177,6 +254,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
     Mat4 parent_world;
   };
   std::vector<Item> stack;
+  std::vector<Mat4> per_instance;
   for (auto it = roots->rbegin(); it != roots->rend(); ++it) stack.push_back({*it, Mat4{}});
   while (!stack.empty()) {
     const Item item = stack.back();
@@ -209,7 +287,25 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.mesh = slot;
       inst.object_to_world = world;
       LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, &inst));
-      scene->instances.push_back(std::move(inst));
+      LUXEL_RETURN_IF_ERROR(instance_transforms(model, item.node, &budget, &per_instance));
+      if (per_instance.empty()) {
+        scene->instances.push_back(std::move(inst));
+      } else {
+        // EXT_mesh_gpu_instancing: each instance's TRS is expressed in the
+        // node's space, so the node's world transform applies after it.
+        for (size_t k = 0; k < per_instance.size(); ++k) {
+          Instance copy = inst;
+          copy.name = strprintf("node '%s' instance %zu", inst.name.c_str(), k);
+          copy.object_to_world = world * per_instance[k];
+          for (double v : copy.object_to_world.m) {
+            if (!std::isfinite(v)) {
+              return invalid_argument(strprintf("%s: the world transform of instance %zu overflows",
+                                                node_label(model, item.node).c_str(), k));
+            }
+          }
+          scene->instances.push_back(std::move(copy));
+        }
+      }
     }
     LUXEL_RETURN_IF_ERROR(
         detail::convert_node_light(model, item.node, node_label(model, item.node), world, scene));
@@ -225,14 +321,30 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &model));
   Scene scene;
   scene.source_name = name;
+  // glTF 2.0 §3.12: a file that requires an extension the loader does not
+  // implement must not be loaded.
+  for (const std::string& ext : model.extensionsRequired)
+    if (!supported_extension(ext))
+      return invalid_argument("extension " + ext +
+                              " is required by the file (extensionsRequired) and not supported");
   // Extensions the file uses that the importer does not read, by name
   // (materials and textures name where each one appears).
   for (const std::string& ext : model.extensionsUsed)
-    if (!detail::is_supported_extension(ext))
+    if (!supported_extension(ext))
       scene.import_stats.warnings.push_back("extension " + ext +
                                             " is used by the file and not supported (ignored)");
   LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
   LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));
+  // Overlapping lightmap UVs make two surfaces share texels; named here so
+  // that a caller can regenerate the UVs of those meshes (find_uv_overlaps).
+  constexpr int kOverlapResolution = 512;
+  for (const UvOverlap& o : find_uv_overlaps(scene, kOverlapResolution)) {
+    const Mesh& m = scene.meshes[static_cast<size_t>(o.mesh)];
+    scene.import_stats.warnings.push_back(
+        strprintf("%s: TEXCOORD_1 (lightmap UVs) overlaps itself at %zu of %d^2 texel centres; two "
+                  "surfaces would share lightmap texels",
+                  detail::mesh_label(model, m.gltf_index).c_str(), o.texels, kOverlapResolution));
+  }
   if (scene.materials.empty()) {
     Material m;
     m.name = "default";

@@ -2,11 +2,13 @@
 // references tinygltf would follow unchecked -> external files -> tinygltf.
 #include "scene/gltf_load.h"
 
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <tuple>
 
 #include "common/uri.h"
 
@@ -48,6 +50,11 @@ Status parse_container(std::string_view bytes, const std::string& name, Containe
   const uint32_t version = read_u32(bytes.data() + 4);
   const uint64_t length = read_u32(bytes.data() + 8);
   const uint64_t json_length = read_u32(bytes.data() + 12);
+  if (version == 1) {
+    return invalid_argument(
+        strprintf("'%s': .glb version 1: glTF 1.0 is not supported; convert the file to glTF 2.0",
+                  name.c_str()));
+  }
   if (version != 2) {
     return invalid_argument(
         strprintf("'%s': .glb version %u, only 2 is supported", name.c_str(), version));
@@ -137,14 +144,52 @@ bool is_data_uri(const std::string& uri) {
   return uri.rfind("data:", 0) == 0;
 }
 
-// Bytes a base64 data URI decodes to (tinygltf accepts only base64 payloads).
-uint64_t data_uri_size(const std::string& uri) {
+bool is_base64_char(char ch) {
+  return (ch >= 'A' && ch <= 'Z') || (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') ||
+         ch == '+' || ch == '/';
+}
+
+// Checks a data URI (RFC 2397, base64 payload as glTF 2.0 §3.6.1.1 requires)
+// and returns the number of bytes it decodes to. The media types are the ones
+// tinygltf decodes; any other data URI would be taken for a file name by
+// tinygltf and reported as a missing file.
+Result<uint64_t> check_data_uri(const std::string& uri, bool image, const std::string& what) {
+  auto bad = [&](const std::string& why) {
+    return invalid_argument(strprintf("%s: malformed data URI (%s)", what.c_str(), why.c_str()));
+  };
   const size_t comma = uri.find(',');
-  if (comma == std::string::npos) return 0;
-  uint64_t n = uri.size() - comma - 1;
+  if (comma == std::string::npos) return bad("no ',' between the header and the data");
+  const std::string header = uri.substr(5, comma - 5);  // after "data:"
+  const std::string suffix = ";base64";
+  if (header.size() < suffix.size() ||
+      header.compare(header.size() - suffix.size(), suffix.size(), suffix) != 0) {
+    return bad("'data:" + header + ",' is not base64; glTF data URIs must be base64");
+  }
+  const std::string media = header.substr(0, header.size() - suffix.size());
+  static const char* const kBufferTypes[] = {"application/octet-stream", "application/gltf-buffer"};
+  static const char* const kImageTypes[] = {"image/png", "image/jpeg", "image/bmp", "image/gif"};
+  bool known = false;
+  for (const char* t : kBufferTypes) known = known || (!image && media == t);
+  for (const char* t : kImageTypes) known = known || (image && media == t);
+  if (!known) {
+    return invalid_argument(strprintf(
+        "%s: data URI media type '%s' is not supported (%s)", what.c_str(), media.c_str(),
+        image ? "image/png or image/jpeg" : "application/octet-stream or application/gltf-buffer"));
+  }
+  const size_t begin = comma + 1;
+  size_t end = uri.size();
   uint64_t pad = 0;
-  for (size_t i = uri.size(); i > comma + 1 && uri[i - 1] == '=' && pad < 2; --i) ++pad;
-  return n / 4 * 3 - std::min<uint64_t>(pad, n / 4 * 3);
+  while (end > begin && uri[end - 1] == '=' && pad < 2) {
+    --end;
+    ++pad;
+  }
+  for (size_t i = begin; i < end; ++i) {
+    if (!is_base64_char(uri[i]))
+      return bad(strprintf("character %zu of the data is not base64", i - begin));
+  }
+  const uint64_t n = end - begin;
+  if (n % 4 == 1 || (pad > 0 && (n + pad) % 4 != 0)) return bad("truncated base64 data");
+  return n / 4 * 3 + (n % 4 == 0 ? 0 : n % 4 - 1);
 }
 
 // Resolves an external URI for `what` ("buffer 0", "image 3 'wood'").
@@ -182,7 +227,7 @@ std::string describe(const char* kind, size_t i, const json& o) {
 }
 
 Status check_buffers(const json& doc, const Container& c, const std::string& base_dir,
-                     std::vector<uint64_t>* sizes) {
+                     std::vector<uint64_t>* sizes, std::vector<size_t>* uriless) {
   auto it = doc.find("buffers");
   if (it == doc.end() || !it->is_array()) return Status::ok();  // tinygltf reports a wrong type
   for (size_t i = 0; i < it->size(); ++i) {
@@ -196,14 +241,21 @@ Status check_buffers(const json& doc, const Container& c, const std::string& bas
     const std::string uri = get_string(b, "uri");
     uint64_t available = 0;
     if (uri.empty()) {
-      if (c.glb.empty()) return invalid_argument(what + ": no uri (only a .glb may omit it)");
+      // A .gltf buffer without data is valid as long as nothing reads it
+      // (glTF 2.0 §5.10: uri is optional); a read reports it (accessor.cpp).
+      if (c.glb.empty()) {
+        uriless->push_back(i);
+        continue;
+      }
       if (i != 0)
         return invalid_argument(what +
                                 ": no uri (only buffer 0 of a .glb may refer to the BIN chunk)");
       if (!c.has_bin) return data_loss(what + ": refers to the BIN chunk, but the .glb has none");
       available = c.bin_size;
     } else if (is_data_uri(uri)) {
-      available = data_uri_size(uri);
+      auto size = check_data_uri(uri, false, what);
+      if (!size) return size.status();
+      available = *size;
     } else {
       auto path = resolve_external(uri, base_dir, what);
       if (!path) return path.status();
@@ -234,7 +286,10 @@ Status check_images(const json& doc, const std::string& base_dir,
     if (!img.is_object()) return invalid_argument(strprintf("image %zu is not a JSON object", i));
     const std::string what = describe("image", i, img);
     const std::string uri = get_string(img, "uri");
-    if (!uri.empty() && !is_data_uri(uri)) {
+    if (is_data_uri(uri)) {
+      auto size = check_data_uri(uri, true, what);
+      if (!size) return size.status();
+    } else if (!uri.empty()) {
       auto path = resolve_external(uri, base_dir, what);
       if (!path) return path.status();
     }
@@ -263,6 +318,150 @@ Status check_images(const json& doc, const std::string& base_dir,
     }
   }
   return Status::ok();
+}
+
+// glTF 2.0 §3.2 (asset): a file whose minVersion is newer than 2.0, or whose
+// major version is not 2, must not be loaded. glTF 1.0 files parse as JSON and
+// tinygltf would read them as an empty 2.0 scene, so they are named.
+Status check_asset(const json& doc) {
+  auto it = doc.find("asset");
+  if (it == doc.end() || !it->is_object())
+    return invalid_argument("asset is missing (every glTF file has asset.version)");
+  auto parse = [](const std::string& v, int* major, int* minor) {
+    return std::sscanf(v.c_str(), "%d.%d", major, minor) == 2 && *major >= 0 && *minor >= 0;
+  };
+  const std::string version = get_string(*it, "version");
+  int major = 0, minor = 0;
+  if (!parse(version, &major, &minor))
+    return invalid_argument("asset.version '" + version + "' is not of the form major.minor");
+  if (major == 1) {
+    return invalid_argument("asset.version is " + version +
+                            ": glTF 1.0 is not supported; convert the file to glTF 2.0");
+  }
+  if (major != 2) {
+    return invalid_argument("asset.version is " + version + ": only glTF 2.x is supported");
+  }
+  if (it->contains("minVersion")) {
+    const std::string min_version = get_string(*it, "minVersion");
+    if (!parse(min_version, &major, &minor))
+      return invalid_argument("asset.minVersion '" + min_version +
+                              "' is not of the form major.minor");
+    if (major != 2 || minor > 0) {
+      return invalid_argument("asset.minVersion is " + min_version +
+                              ": the file needs a newer glTF than 2.0, which is what Luxel reads");
+    }
+  }
+  return Status::ok();
+}
+
+// What tinygltf would refuse with a message that names no object: accessor
+// componentType and type (glTF 2.0 §5.1).
+Status check_accessors(const json& doc) {
+  auto it = doc.find("accessors");
+  if (it == doc.end() || !it->is_array()) return Status::ok();
+  for (size_t i = 0; i < it->size(); ++i) {
+    const json& a = (*it)[i];
+    if (!a.is_object()) return invalid_argument(strprintf("accessor %zu is not a JSON object", i));
+    const std::string what = describe("accessor", i, a);
+    const auto ct = get_uint(a, "componentType");
+    if (!ct ||
+        !(*ct == 5120 || *ct == 5121 || *ct == 5122 || *ct == 5123 || *ct == 5125 || *ct == 5126)) {
+      auto v = a.find("componentType");
+      return invalid_argument(
+          strprintf("%s: componentType %s is not a glTF component type (5120-5123, 5125, 5126)",
+                    what.c_str(), v == a.end() ? "(missing)" : v->dump().c_str()));
+    }
+    const std::string type = get_string(a, "type");
+    static const char* const kTypes[] = {"SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4"};
+    bool known = false;
+    for (const char* t : kTypes) known = known || type == t;
+    if (!known) {
+      return invalid_argument(
+          strprintf("%s: type '%s' is not a glTF accessor type", what.c_str(), type.c_str()));
+    }
+    if (!get_uint(a, "count"))
+      return invalid_argument(what + ": count is missing or not a non-negative integer");
+  }
+  return Status::ok();
+}
+
+// Valid documents tinygltf 2.7 refuses, rewritten before it parses them and
+// restored afterwards (see load_model):
+//  - an index accessor without a bufferView (all zeros or sparse, glTF 2.0
+//    §3.6.2; also KHR_draco_mesh_compression primitives): tinygltf insists
+//    on a bufferView, so the primitive's `indices` is hidden from it;
+//  - a .gltf buffer without uri (glTF 2.0 §5.10: uri is optional): tinygltf
+//    reads a file named "", so the buffer is given a stand-in data URI
+//    and its data is removed again after parsing.
+struct Rewrites {
+  std::vector<std::tuple<size_t, size_t, int>> hidden_indices;  // mesh, primitive, accessor
+  std::vector<size_t> uriless_buffers;
+  bool any() const { return !hidden_indices.empty() || !uriless_buffers.empty(); }
+};
+
+void hide_unviewed_indices(json* doc, Rewrites* rw) {
+  auto accessors = doc->find("accessors");
+  auto meshes = doc->find("meshes");
+  if (accessors == doc->end() || !accessors->is_array() || meshes == doc->end() ||
+      !meshes->is_array())
+    return;
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    json& mesh = (*meshes)[m];
+    if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+      continue;
+    json& prims = mesh["primitives"];
+    for (size_t p = 0; p < prims.size(); ++p) {
+      json& prim = prims[p];
+      if (!prim.is_object()) continue;
+      const auto idx = get_uint(prim, "indices");
+      if (!idx || *idx >= accessors->size() || !(*accessors)[*idx].is_object() ||
+          (*accessors)[*idx].contains("bufferView"))
+        continue;
+      rw->hidden_indices.emplace_back(m, p, static_cast<int>(*idx));
+      prim.erase("indices");
+    }
+  }
+}
+
+void give_uriless_buffers_empty_data(json* doc, Rewrites* rw) {
+  for (size_t i : rw->uriless_buffers) {
+    json& b = (*doc)["buffers"][i];
+    b["uri"] = "data:application/octet-stream;base64,AA==";  // tinygltf refuses empty data
+    b["byteLength"] = 1;
+  }
+}
+
+void put_u32(std::string* out, uint32_t v) {
+  char b[4];
+  std::memcpy(b, &v, 4);
+  out->append(b, 4);
+}
+
+// A .glb with a new JSON chunk and the original BIN chunk.
+std::string rebuild_glb(const Container& c, const std::string& json_text) {
+  std::string chunk = json_text;
+  while (chunk.size() % 4 != 0) chunk.push_back(' ');
+  const size_t bin_at = 20 + c.json.size();
+  const std::string_view rest = c.glb.substr(bin_at);  // BIN chunk with its header, if any
+  std::string out;
+  put_u32(&out, kGlbMagic);
+  put_u32(&out, 2);
+  put_u32(&out, static_cast<uint32_t>(12 + 8 + chunk.size() + rest.size()));
+  put_u32(&out, static_cast<uint32_t>(chunk.size()));
+  put_u32(&out, kChunkJson);
+  out += chunk;
+  out.append(rest.data(), rest.size());
+  return out;
+}
+
+// A .glb whose magic is wrong is read as JSON; say what it is not.
+bool looks_like_json(std::string_view bytes) {
+  if (bytes.substr(0, 3) == "\xEF\xBB\xBF") bytes.remove_prefix(3);  // UTF-8 BOM
+  for (char ch : bytes) {
+    if (ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r') continue;
+    return ch == '{' || ch == '[';  // '[': parse_json names what is wrong
+  }
+  return false;
 }
 
 // tinygltf callbacks. Encoded image bytes are kept as they are (decoded later
@@ -324,11 +523,32 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
   }
   Container c;
   LUXEL_RETURN_IF_ERROR(parse_container(bytes, name, &c));
+  if (c.glb.empty() && !looks_like_json(c.json)) {
+    const std::string_view m = bytes.substr(0, 4);
+    std::string shown;
+    for (char ch : m)
+      shown += ch >= 0x20 && ch < 0x7f ? std::string(1, ch)
+                                       : strprintf("\\x%02x", static_cast<unsigned char>(ch));
+    return invalid_argument(
+        strprintf("'%s': not a glTF file: not a GLB (bad magic '%s', a .glb starts with 'glTF') "
+                  "and not glTF JSON (which starts with '{')",
+                  name.c_str(), shown.c_str()));
+  }
   auto doc = parse_json(c.json, name);
   if (!doc) return doc.status();
+  LUXEL_RETURN_IF_ERROR(check_asset(*doc));
+  LUXEL_RETURN_IF_ERROR(check_accessors(*doc));
   std::vector<uint64_t> buffer_sizes;
-  LUXEL_RETURN_IF_ERROR(check_buffers(*doc, c, base_dir, &buffer_sizes));
+  Rewrites rw;
+  LUXEL_RETURN_IF_ERROR(check_buffers(*doc, c, base_dir, &buffer_sizes, &rw.uriless_buffers));
   LUXEL_RETURN_IF_ERROR(check_images(*doc, base_dir, buffer_sizes));
+  hide_unviewed_indices(&*doc, &rw);
+  give_uriless_buffers_empty_data(&*doc, &rw);
+  std::string rewritten;
+  if (rw.any()) {
+    rewritten = doc->dump();
+    if (!c.glb.empty()) rewritten = rebuild_glb(c, rewritten);
+  }
 
   FsContext fsc{!base_dir.empty()};
   tinygltf::TinyGLTF loader;
@@ -337,19 +557,37 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
   std::string err, warn;
   bool ok = false;
   try {
+    const std::string_view json_text = rw.any() && c.glb.empty() ? rewritten : c.json;
+    const std::string_view glb = rw.any() ? std::string_view(rewritten) : c.glb;
     if (c.glb.empty()) {
-      ok = loader.LoadASCIIFromString(model, &err, &warn, c.json.data(),
-                                      static_cast<unsigned>(c.json.size()), base_dir,
+      ok = loader.LoadASCIIFromString(model, &err, &warn, json_text.data(),
+                                      static_cast<unsigned>(json_text.size()), base_dir,
                                       tinygltf::NO_REQUIRE);
     } else {
       ok = loader.LoadBinaryFromMemory(
-          model, &err, &warn, reinterpret_cast<const unsigned char*>(c.glb.data()),
-          static_cast<unsigned>(c.glb.size()), base_dir, tinygltf::NO_REQUIRE);
+          model, &err, &warn, reinterpret_cast<const unsigned char*>(glb.data()),
+          static_cast<unsigned>(glb.size()), base_dir, tinygltf::NO_REQUIRE);
     }
   } catch (const std::exception& e) {
     return invalid_argument(strprintf("'%s': malformed glTF: %s", name.c_str(), e.what()));
   }
-  if (!ok) return invalid_argument(strprintf("'%s': %s", name.c_str(), trim(err).c_str()));
+  if (!ok) {
+    err = trim(err);
+    if (err.empty()) {
+      // tinygltf returns false without a message when a property has the
+      // wrong JSON type in some places.
+      err =
+          "malformed glTF: a property has the wrong type or a required one is missing "
+          "(tinygltf gave no detail)";
+    }
+    return invalid_argument(strprintf("'%s': %s", name.c_str(), err.c_str()));
+  }
+  for (const auto& [m, p, accessor] : rw.hidden_indices)
+    model->meshes[m].primitives[p].indices = accessor;
+  for (size_t b : rw.uriless_buffers) {
+    model->buffers[b].uri.clear();
+    model->buffers[b].data.clear();
+  }
   return Status::ok();
 }
 

@@ -41,11 +41,19 @@ class TextureTable {
           strprintf("%s: texCoord %d is not supported (0 or 1)", what.c_str(), texcoord));
     }
     const int image = model_.textures[static_cast<size_t>(texture_index)].source;
-    if (image < 0 || static_cast<size_t>(image) >= model_.images.size()) {
+    if (image < 0) {
+      // glTF 2.0 §5.29: source is optional (an extension may supply the
+      // image); without one the material uses its factors alone.
+      warnings().push_back(
+          strprintf("%s: texture %d has no source image; the texture is left "
+                    "out (factors only)",
+                    what.c_str(), texture_index));
+      return ref;
+    }
+    if (static_cast<size_t>(image) >= model_.images.size()) {
       return invalid_argument(
-          strprintf("%s: texture %d has no valid image source (source %d; textures given only "
-                    "through extensions such as KHR_texture_basisu are not supported)",
-                    what.c_str(), texture_index, image));
+          strprintf("%s: texture %d: source image %d does not exist (%zu images)", what.c_str(),
+                    texture_index, image, model_.images.size()));
     }
     ref.texcoord = texcoord;
     warn_ignored(texture_index, texcoord, ext, what);

@@ -37,10 +37,30 @@ const char* mode_name(int mode) {
 struct Attribute {
   const char* semantic;
   int type;
-  unsigned allowed;
+  unsigned normalized;    // FLOAT and the integer types accepted normalized
+  unsigned unnormalized;  // integer types accepted as plain values
   std::vector<float>* out;
   bool present = false;
 };
+
+// Triangle lists from the three triangle topologies (glTF 2.0 §3.7.2.1):
+// strip triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), which keeps every
+// triangle's winding that of the first; fan triangle i is (v_{i+1}, v_{i+2},
+// v_0).
+std::vector<uint32_t> to_triangle_list(int mode, const std::vector<uint32_t>& v) {
+  if (mode == TINYGLTF_MODE_TRIANGLES) return v;
+  std::vector<uint32_t> out;
+  if (v.size() < 3) return out;
+  out.reserve(3 * (v.size() - 2));
+  for (size_t i = 0; i + 2 < v.size(); ++i) {
+    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+      out.insert(out.end(), {v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]});
+    } else {
+      out.insert(out.end(), {v[i + 1], v[i + 2], v[0]});
+    }
+  }
+  return out;
+}
 
 // q - p in double (exact for float inputs of similar magnitude).
 void diff(const Vec3& q, const Vec3& p, double out[3]) {
@@ -75,7 +95,7 @@ int default_material(const tinygltf::Model& model, Scene* scene) {
   return static_cast<int>(index);
 }
 
-Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index,
+Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, int mode,
                         const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh,
                         bool* all_tangents) {
   const auto& prim =
@@ -83,20 +103,30 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   const std::string ctx =
       strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
 
+  if (prim.extensions.count("KHR_draco_mesh_compression")) {
+    // Its accessors have no bufferView and would read as zeros.
+    return invalid_argument(ctx +
+                            ": KHR_draco_mesh_compression is not supported; export the scene "
+                            "without Draco compression");
+  }
   std::vector<float> pos, nrm, tan, uv0, uv1;
+  // Component types of glTF 2.0 §3.7.2.1 widened by KHR_mesh_quantization
+  // (its "Extending Mesh Attributes" table).
+  constexpr unsigned kInts = kCompI8 | kCompU8 | kCompI16 | kCompU16;
+  constexpr unsigned kSigned = kCompF32 | kCompI8 | kCompI16;
   Attribute attrs[] = {
-      {"POSITION", TINYGLTF_TYPE_VEC3, kCompF32, &pos},
-      {"NORMAL", TINYGLTF_TYPE_VEC3, kCompF32, &nrm},
-      {"TANGENT", TINYGLTF_TYPE_VEC4, kCompF32, &tan},
-      {"TEXCOORD_0", TINYGLTF_TYPE_VEC2, kCompF32 | kCompU8 | kCompU16, &uv0},
-      {"TEXCOORD_1", TINYGLTF_TYPE_VEC2, kCompF32 | kCompU8 | kCompU16, &uv1},
+      {"POSITION", TINYGLTF_TYPE_VEC3, kCompF32 | kInts, kInts, &pos},
+      {"NORMAL", TINYGLTF_TYPE_VEC3, kSigned, 0, &nrm},
+      {"TANGENT", TINYGLTF_TYPE_VEC4, kSigned, 0, &tan},
+      {"TEXCOORD_0", TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &uv0},
+      {"TEXCOORD_1", TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &uv1},
   };
   size_t vertex_count = 0;
   for (auto& a : attrs) {
     auto it = prim.attributes.find(a.semantic);
     if (it == prim.attributes.end()) continue;
-    LUXEL_RETURN_IF_ERROR(
-        read_floats(model, it->second, a.semantic, a.type, a.allowed, ctx, budget, a.out));
+    LUXEL_RETURN_IF_ERROR(read_floats(model, it->second, a.semantic, a.type, a.normalized,
+                                      a.unnormalized, ctx, budget, a.out));
     a.present = true;
     const size_t comps = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 2;
     const size_t count = a.out->size() / comps;
@@ -136,11 +166,12 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     indices.resize(vertex_count);
     for (size_t i = 0; i < vertex_count; ++i) indices[i] = static_cast<uint32_t>(i);
   }
-  if (indices.size() % 3 != 0) {
+  if (mode == TINYGLTF_MODE_TRIANGLES && indices.size() % 3 != 0) {
     return invalid_argument(strprintf("%s: %zu %s is not a multiple of 3 (mode TRIANGLES)",
                                       ctx.c_str(), indices.size(),
                                       prim.indices >= 0 ? "indices" : "vertices"));
   }
+  indices = to_triangle_list(mode, indices);
 
   int material = prim.material;
   if (material < 0) {
@@ -224,16 +255,20 @@ Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const Impo
   mesh.gltf_index = mesh_index;
   bool all_tangents = true;
   for (size_t p = 0; p < gm.primitives.size(); ++p) {
-    const int mode = gm.primitives[p].mode;
-    if (mode != TINYGLTF_MODE_TRIANGLES && mode != -1) {
+    int mode = gm.primitives[p].mode;
+    if (mode == -1) mode = TINYGLTF_MODE_TRIANGLES;  // the default (glTF 2.0 §5.24)
+    if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+      // Points and lines have no area to bake; they are left out before any
+      // attribute (TEXCOORD_1 included) is required of them.
       ++scene->import_stats.skipped_primitives;
       scene->import_stats.warnings.push_back(
-          strprintf("%s primitive %zu: mode %d (%s) is not TRIANGLES; skipped",
+          strprintf("%s primitive %zu: mode %d (%s) has no triangles; skipped",
                     mesh_label(model, mesh_index).c_str(), p, mode, mode_name(mode)));
       continue;
     }
-    LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), options, budget,
-                                           scene, &mesh, &all_tangents));
+    LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), mode, options,
+                                           budget, scene, &mesh, &all_tangents));
   }
   if (!all_tangents) mesh.tangents.clear();
   return mesh;

@@ -133,8 +133,8 @@ struct Light {
 // What the importer dropped, skipped or generated; reported, never fatal.
 struct ImportStats {
   size_t degenerate_triangles_dropped = 0;  // repeated index or zero-area
-  size_t skipped_primitives = 0;      // non-triangle modes (points, lines, strips kept? see note)
-  std::vector<std::string> warnings;  // human-readable, name the node/mesh/primitive
+  size_t skipped_primitives = 0;            // points and lines (strips and fans become triangles)
+  std::vector<std::string> warnings;        // human-readable, name the node/mesh/primitive
 };
 
 struct Scene {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "scene/scene.h"
 
@@ -40,6 +41,21 @@ struct SceneStats {
 };
 
 SceneStats compute_stats(const Scene& scene, int coverage_resolution = 512);
+
+// A mesh whose lightmap UVs (TEXCOORD_1) overlap themselves: `texels` texel
+// centres of a resolution^2 grid over the unit square lie inside two or more
+// of its UV triangles. Every instance of the mesh then has two surfaces
+// sharing lightmap texels (instances get their own atlas rectangles, so
+// overlap between meshes or instances is not counted). A centre on an edge
+// shared by two triangles counts once.
+struct UvOverlap {
+  int mesh = -1;  // index into Scene::meshes
+  size_t texels = 0;
+};
+
+// The meshes with overlapping TEXCOORD_1, in mesh order; linear in the
+// triangle count (each triangle costs the rows it spans).
+std::vector<UvOverlap> find_uv_overlaps(const Scene& scene, int resolution = 512);
 
 // Multi-line human-readable report.
 std::string format_stats(const SceneStats& stats);
