@@ -11,16 +11,24 @@ std::string missing_lightmap_uvs(const scene::Scene& scene) {
   for (const auto& inst : scene.instances)
     if (inst.mesh >= 0 && static_cast<size_t>(inst.mesh) < scene.meshes.size())
       used[static_cast<size_t>(inst.mesh)] = true;
-  size_t missing = 0;
-  std::string first;
+  size_t missing = 0, overlapping = 0;
+  std::string first_missing, first_overlapping;
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
-    if (!used[m] || scene.meshes[m].has_lightmap_uvs) continue;
-    if (missing++ == 0) first = scene.meshes[m].name;
+    if (!used[m]) continue;
+    if (!scene.meshes[m].has_lightmap_uvs && missing++ == 0) first_missing = scene.meshes[m].name;
+    if (scene.meshes[m].lightmap_uv_overlap_texels > 0 && overlapping++ == 0)
+      first_overlapping = scene.meshes[m].name;
   }
-  if (missing == 0) return "";
-  return missing == 1 ? strprintf("mesh '%s' has no TEXCOORD_1", first.c_str())
-                      : strprintf("%zu meshes have no TEXCOORD_1 (first: '%s')", missing,
-                                  first.c_str());
+  if (missing == 1) return strprintf("mesh '%s' has no TEXCOORD_1", first_missing.c_str());
+  if (missing > 1)
+    return strprintf("%zu meshes have no TEXCOORD_1 (first: '%s')", missing,
+                     first_missing.c_str());
+  if (overlapping == 1)
+    return strprintf("the TEXCOORD_1 of mesh '%s' overlaps itself", first_overlapping.c_str());
+  if (overlapping > 1)
+    return strprintf("the TEXCOORD_1 of %zu meshes overlaps itself (first: '%s')", overlapping,
+                     first_overlapping.c_str());
+  return "";
 }
 
 Result<LightmapLayout> generate(const scene::Scene& scene, const BakeSettings& settings,
@@ -70,8 +78,17 @@ Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSet
       return atlas.status();
     reason = atlas.status().message();
   } else if (settings.uv == UvMode::kExisting) {
-    return invalid_argument(reason + " (lightmap UVs); bake with --uv auto or generate to have "
-                                     "them generated");
+    // Overlapping UVs are baked as they are (the import warning names them);
+    // missing ones cannot be.
+    if (reason.find("no TEXCOORD_1") != std::string::npos)
+      return invalid_argument(reason + " (lightmap UVs); bake with --uv auto or generate to "
+                                       "have them generated");
+    auto atlas = atlas::build_atlas(scene, settings.atlas);
+    if (!atlas) return atlas.status();
+    LightmapLayout layout;
+    layout.scene = &scene;
+    layout.atlas = std::move(atlas.value());
+    return layout;
   }
   return generate(scene, settings, reason);
 }

@@ -339,7 +339,8 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   // that a caller can regenerate the UVs of those meshes (find_uv_overlaps).
   constexpr int kOverlapResolution = 512;
   for (const UvOverlap& o : find_uv_overlaps(scene, kOverlapResolution)) {
-    const Mesh& m = scene.meshes[static_cast<size_t>(o.mesh)];
+    Mesh& m = scene.meshes[static_cast<size_t>(o.mesh)];
+    m.lightmap_uv_overlap_texels = o.texels;
     scene.import_stats.warnings.push_back(
         strprintf("%s: TEXCOORD_1 (lightmap UVs) overlaps itself at %zu of %d^2 texel centres; two "
                   "surfaces would share lightmap texels",

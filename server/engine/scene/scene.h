@@ -43,6 +43,10 @@ struct Mesh {
   // Every primitive had TEXCOORD_1 (otherwise the bake generates lightmap
   // UVs, or refuses with --uv existing; pipeline/lightmap_layout.h).
   bool has_lightmap_uvs = true;
+  // Texel centres of a 512^2 grid where TEXCOORD_1 overlaps itself (set by
+  // the importer, scene_stats.h find_uv_overlaps); --uv auto regenerates such
+  // a mesh's UVs.
+  size_t lightmap_uv_overlap_texels = 0;
 
   size_t triangle_count() const { return indices.size() / 3; }
 };
