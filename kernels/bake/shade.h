@@ -99,7 +99,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   /* Shading normal facing away from the viewer (bent normals): clamp so the
    * BSDF stays defined. */
   if (wo_local.z <= 1e-4f) wo_local = normalize((float3)(wo_local.x, wo_local.y, 1e-4f));
-  const LuxBsdf bsdf = lux_make_bsdf(base, metallic, roughness, m.specular.x, wo_local.z);
+  const LuxBsdf bsdf =
+      lux_make_bsdf(base, metallic, roughness, m.specular.xyz, m.specular.w, wo_local.z);
 
   const uint dim = LUX_DIM_VERTEX(path.depth);
   LuxRay shadow;

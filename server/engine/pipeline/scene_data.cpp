@@ -20,7 +20,9 @@ float int_bits(int32_t i) {
 // and grows with the ior, so another ior keeps its GGX layer.
 bool is_rough_dielectric(const scene::Material& m) {
   return m.metallic_factor <= 0.0f && m.roughness_factor >= 1.0f &&
-         m.metallic_roughness_texture.texture < 0 && m.ior == 1.5f;
+         m.metallic_roughness_texture.texture < 0 && m.ior == 1.5f && m.specular_factor == 1.0f &&
+         m.specular_color_factor.x == 1.0f && m.specular_color_factor.y == 1.0f &&
+         m.specular_color_factor.z == 1.0f;
 }
 
 int wrap_code(scene::WrapMode w) {

@@ -217,6 +217,38 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
     m.ior = static_cast<float>(ior);
   }
 
+  // KHR_materials_specular: specularFactor in [0, 1], specularColorFactor
+  // >= 0 (values above 1 are allowed: F0(ior) times them is clamped to 1).
+  ext = gm.extensions.find("KHR_materials_specular");
+  if (ext != gm.extensions.end() && ext->second.IsObject()) {
+    const auto& v = ext->second;
+    if (v.Has("specularFactor")) {
+      const auto& f = v.Get("specularFactor");
+      if (!f.IsNumber()) return invalid_argument(label + ": specularFactor is not a number");
+      LUXEL_RETURN_IF_ERROR(check_factor(label, "specularFactor", f.GetNumberAsDouble(), 0, 1));
+      m.specular_factor = static_cast<float>(f.GetNumberAsDouble());
+    }
+    if (v.Has("specularColorFactor")) {
+      const auto& c = v.Get("specularColorFactor");
+      if (!c.IsArray() || c.ArrayLen() != 3)
+        return invalid_argument(label + ": specularColorFactor must be 3 numbers");
+      float rgb[3];
+      for (int i = 0; i < 3; ++i) {
+        if (!c.Get(i).IsNumber())
+          return invalid_argument(label + ": specularColorFactor must be 3 numbers");
+        const double x = c.Get(i).GetNumberAsDouble();
+        LUXEL_RETURN_IF_ERROR(check_factor(label, "specularColorFactor", x, 0, 3.0e38));
+        rgb[i] = static_cast<float>(x);
+      }
+      m.specular_color_factor = {rgb[0], rgb[1], rgb[2]};
+    }
+    // The textures would need two more slots per material; named instead.
+    for (const char* tex : {"specularTexture", "specularColorTexture"})
+      if (v.Has(tex))
+        table->warnings().push_back(label + ": KHR_materials_specular " + tex +
+                                    " is not supported (the factor alone is used)");
+  }
+
   m.double_sided = gm.doubleSided;
   if (gm.alphaMode == "OPAQUE" || gm.alphaMode.empty()) {
     m.alpha_mode = AlphaMode::kOpaque;
@@ -259,7 +291,8 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
 
 bool is_supported_extension(const std::string& name) {
   return name == "KHR_lights_punctual" || name == "KHR_materials_emissive_strength" ||
-         name == "KHR_materials_ior" || name == "KHR_texture_transform";
+         name == "KHR_materials_ior" || name == "KHR_texture_transform" ||
+         name == "KHR_materials_specular";
 }
 
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {

@@ -270,6 +270,10 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
        {"extensions",
         {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}},
          {"KHR_materials_ior", {{"ior", 1.7}}},
+         {"KHR_materials_specular",
+          {{"specularFactor", 0.5},
+           {"specularColorFactor", {20, 1, 0.5}},
+           {"specularTexture", {{"index", 0}}}}},
          {"KHR_materials_emissive_strength", {{"emissiveStrength", 2}}}}}});
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   prim["material"] = mat;
@@ -304,7 +308,17 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
   EXPECT_FALSE(has({"texCoord"}));
   EXPECT_TRUE(has({"material 'painted'", "normalTexture"}));
   EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_clearcoat"}));
-  EXPECT_EQ(w.size(), 3u) << "one line per input";
+  // KHR_materials_specular: F0 = min(F0(ior) color, 1) specular, F90 = specular;
+  // its texture is named.
+  const double f0 = (0.7 / 2.7) * (0.7 / 2.7);
+  const Vec3 sf0 = pm.dielectric_specular_f0();
+  EXPECT_NEAR(sf0.x, 0.5, 1e-7) << "20 f0 = 1.34 clamps to 1";
+  EXPECT_NEAR(sf0.y, f0 * 0.5, 1e-7);
+  EXPECT_NEAR(sf0.z, f0 * 0.25, 1e-7);
+  EXPECT_FLOAT_EQ(pm.dielectric_specular_f90(), 0.5f);
+  EXPECT_TRUE(has({"material 'painted'", "KHR_materials_specular specularTexture"}));
+  EXPECT_FALSE(has({"material extension KHR_materials_specular"}));
+  EXPECT_EQ(w.size(), 4u) << "one line per input";
 
   // The plain quad of the other tests: nothing to report, the default ior.
   auto plain = load(quad_scene().gltf_embedded());
