@@ -56,17 +56,6 @@ inline LuxRay lux_make_ray(float3 org, float3 dir, float tmax) {
   return r;
 }
 
-#if LUX_EMISSIVE_TEXTURE
-/* Emitted radiance of a material at a surface UV (factor x texture). */
-inline float3 lux_emission_at(const __global LuxMaterial* materials, int material, float2 uv,
-                              const __global LuxTexture* textures, const __global uint* texels) {
-  const LuxMaterial m = materials[material];
-  float3 e = m.emission.xyz;
-  if (m.emissive_tex >= 0) e *= lux_texture_sample(texels, textures[m.emissive_tex], uv).xyz;
-  return e;
-}
-#endif
-
 /* Next-event estimation from surface s. `sensor`: vertex 0 (f = 1, cosine
  * pdf). Otherwise the material's BSDF in the local frame (t, b, n), wo local.
  * Writes the shadow ray and its unoccluded contribution (throughput applied). */
@@ -88,10 +77,13 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   float3 radiance = ls.radiance;
 #if LUX_EMISSIVE_TEXTURE
   if (ls.triangle >= 0) {
-    const LuxSurface e = lux_surface_at(tris, ls.triangle, ls.bary.x, ls.bary.y);
+    LuxSurface e = lux_surface_at(tris, ls.triangle, ls.bary.x, ls.bary.y);
+#if LUX_TEXCOORD1
+    e.uv1 = lux_surface_uv1(material_uv1, ls.triangle, ls.bary.x, ls.bary.y);
+#endif
     const LuxMaterial em = materials[e.material];
-    if (em.emissive_tex >= 0)
-      radiance *= lux_texture_sample(texels, textures[em.emissive_tex], e.uv).xyz;
+    if (em.emissive_tex.texture >= 0)
+      radiance *= lux_texture_slot_sample(texels, textures, em.emissive_tex, e.uv, e.uv1).xyz;
   }
 #endif
   const float3 wi_local = lux_to_local(ls.wi, t, b, n);

@@ -43,7 +43,10 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     return;
   }
 
-  const LuxSurface s = lux_surface_at(tris, hit.prim, hit.u, hit.v);
+  LuxSurface s = lux_surface_at(tris, hit.prim, hit.u, hit.v);
+#if LUX_TEXCOORD1
+  s.uv1 = lux_surface_uv1(material_uv1, hit.prim, hit.u, hit.v);
+#endif
   const LuxMaterial m = materials[s.material];
   const float3 wo = -normalize(dir);
 
@@ -52,7 +55,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
       (dot(wo, s.ng_winding) > 0.0f || (m.flags & LUX_MATERIAL_DOUBLE_SIDED))) {
     float3 le = m.emission.xyz;
 #if LUX_EMISSIVE_TEXTURE
-    if (m.emissive_tex >= 0) le *= lux_texture_sample(texels, textures[m.emissive_tex], s.uv).xyz;
+    if (m.emissive_tex.texture >= 0)
+      le *= lux_texture_slot_sample(texels, textures, m.emissive_tex, s.uv, s.uv1).xyz;
 #endif
     float w = 1.0f;
     if (prev_pdf > 0.0f && s.light >= 0)
@@ -75,10 +79,11 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   float3 base = m.base_color.xyz;
   float metallic = m.metallic, roughness = m.roughness;
 #if LUX_TEXTURES
-  if (m.base_color_tex >= 0)
-    base *= lux_texture_sample(texels, textures[m.base_color_tex], s.uv).xyz;
-  if (m.metallic_roughness_tex >= 0) {
-    const float4 mr = lux_texture_sample(texels, textures[m.metallic_roughness_tex], s.uv);
+  if (m.base_color_tex.texture >= 0)
+    base *= lux_texture_slot_sample(texels, textures, m.base_color_tex, s.uv, s.uv1).xyz;
+  if (m.metallic_roughness_tex.texture >= 0) {
+    const float4 mr =
+        lux_texture_slot_sample(texels, textures, m.metallic_roughness_tex, s.uv, s.uv1);
     roughness *= mr.y;
     metallic *= mr.z;
   }
@@ -94,7 +99,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   /* Shading normal facing away from the viewer (bent normals): clamp so the
    * BSDF stays defined. */
   if (wo_local.z <= 1e-4f) wo_local = normalize((float3)(wo_local.x, wo_local.y, 1e-4f));
-  const LuxBsdf bsdf = lux_make_bsdf(base, metallic, roughness, m.dielectric_f0, wo_local.z);
+  const LuxBsdf bsdf =
+      lux_make_bsdf(base, metallic, roughness, m.specular.xyz, m.specular.w, wo_local.z);
 
   const uint dim = LUX_DIM_VERTEX(path.depth);
   LuxRay shadow;

@@ -4,6 +4,7 @@
 #define LUXEL_BAKE_SURFACE_H
 
 #include "shared/bake.h"
+#include "shared/geometry.h"
 #include "shared/ray_offset.h"
 
 typedef struct LuxSurface {
@@ -11,7 +12,8 @@ typedef struct LuxSurface {
   float3 ng;         /* unit geometric normal, on the shading normal's side */
   float3 ng_winding; /* unit geometric normal from the winding (emitter front side) */
   float3 ns;         /* unit shading normal, on the same side as ng */
-  float2 uv;         /* material UV (TEXCOORD_0) */
+  float2 uv;         /* material UV set 0 (TEXCOORD_0) */
+  float2 uv1;        /* material UV set 1 (TEXCOORD_1) with LUX_TEXCOORD1, else uv */
   int material;
   int light; /* emissive light index or -1 */
 } LuxSurface;
@@ -36,9 +38,19 @@ inline LuxSurface lux_surface_at(const __global LuxSurfaceTri* tris, int tri, fl
   s.ns = ns;
   s.uv = b0 * (float2)(t.uv0.x, t.uv0.y) + b1 * (float2)(t.uv1.x, t.uv1.y) +
          b2 * (float2)(t.uv2.x, t.uv2.y);
+  s.uv1 = s.uv;
   s.material = as_int(t.p0.w);
   s.light = as_int(t.p1.w);
   return s;
+}
+
+/* Material UV set 1 of triangle tri at (b1, b2), from the per-triangle
+ * buffer that exists only when a material reads TEXCOORD_1 (LUX_TEXCOORD1). */
+inline float2 lux_surface_uv1(const __global LuxTriangleUV* uvs, int tri, float b1, float b2) {
+  const LuxTriangleUV t = uvs[tri];
+  const float b0 = 1.0f - b1 - b2;
+  return b0 * (float2)(t.uv0.x, t.uv0.y) + b1 * (float2)(t.uv1.x, t.uv1.y) +
+         b2 * (float2)(t.uv2.x, t.uv2.y);
 }
 
 /* The robust offset of kernels/shared/ray_offset.h (Wächter & Binder) with

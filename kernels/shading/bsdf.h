@@ -50,6 +50,16 @@
  * and the compensation lobe's own tabulated distribution
  * (lux_ggx_ms_sample), and its pdf is that mixture.
  *
+ * KHR_materials_specular: the dielectric's Fresnel becomes
+ *   F_d(wo.h) = f0_d + (f90_d - f0_d) (1 - wo.h)^5,
+ *   f0_d = min(F0(ior) specularColor, 1) specular, f90_d = specular
+ * (LuxMaterial.specular; f0_d = F0(ior) and f90_d = 1 without the
+ * extension), a colour. The specular layer's Fresnel is mix(F_d, Schlick
+ * metal, metallic), which is again Schlick's form with f0 = mix(f0_d,
+ * base_color, metallic) and f90 = mix(f90_d, 1, metallic); the diffuse is
+ * weighted by 1 - F_d per channel; F_avg = f0 + (f90 - f0) / 21 in the
+ * compensation.
+ *
  * Deviations from Appendix B, measured in docs/accuracy.md: the added
  * compensation lobe (Appendix B is single-scattering); Appendix B's own
  * dielectric is not energy conserving (its diffuse (1 - F(wo.h)) does not
@@ -99,14 +109,16 @@
 #define LUX_BSDF_DIELECTRIC_F0 0.04f
 
 typedef struct {
-  float3 diffuse;      /* Lambert albedo, base_color (1 - metallic) */
-  float3 f0;           /* Fresnel reflectance at normal incidence */
-  float f0_dielectric; /* f0 of the dielectric layer (weights the diffuse) */
-  float3 ms;           /* F_ms (1 - E(wo.z)) / (pi (1 - E_avg)): f_ms = ms (1 - E(wi.z)) */
-  float alpha;         /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
-  float roughness;     /* saturated roughness, the table coordinate */
-  float p_specular;    /* probability of sampling the specular layer */
-  float p_cosine;      /* within layer 0: probability of cosine (vs compensation) sampling */
+  float3 diffuse;       /* Lambert albedo, base_color (1 - metallic) */
+  float3 f0;            /* Fresnel reflectance at normal incidence */
+  float f90;            /* ... and at grazing incidence */
+  float3 f0_dielectric; /* f0 of the dielectric layer (weights the diffuse) */
+  float f90_dielectric; /* f90 of the dielectric layer */
+  float3 ms;            /* F_ms (1 - E(wo.z)) / (pi (1 - E_avg)): f_ms = ms (1 - E(wi.z)) */
+  float alpha;          /* GGX alpha = roughness^2 (>= LUX_BSDF_MIN_ALPHA) */
+  float roughness;      /* saturated roughness, the table coordinate */
+  float p_specular;     /* probability of sampling the specular layer */
+  float p_cosine;       /* within layer 0: probability of cosine (vs compensation) sampling */
 } LuxBsdf;
 
 /* Rec. 709 luminance of linear RGB. */
@@ -148,9 +160,9 @@ inline float lux_ggx_albedo_avg(float roughness) {
 
 /* Kulla-Conty 2017 ("Fresnel"): the colour of the multiply scattered light,
  * F_avg^2 E_avg / (1 - F_avg (1 - E_avg)), with Schlick's
- * F_avg = 2 int F mu dmu = f0 + (1 - f0) / 21. */
-inline float3 lux_kulla_conty_fms(float3 f0, float e_avg) {
-  const float3 f_avg = f0 + (1.0f - f0) * (1.0f / 21.0f);
+ * F_avg = 2 int F mu dmu = f0 + (f90 - f0) / 21. */
+inline float3 lux_kulla_conty_fms(float3 f0, float f90, float e_avg) {
+  const float3 f_avg = f0 + (f90 - f0) * (1.0f / 21.0f);
   return f_avg * f_avg * e_avg / (1.0f - f_avg * (1.0f - e_avg));
 }
 
@@ -206,15 +218,18 @@ inline float3 lux_ggx_ms_sample(float roughness, float u_row, float2 u) {
 /* wo_z: cos theta of the direction the BSDF will be used with (the
  * compensation and p_specular depend on it); callers clamp it above 0. */
 inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
-                             float dielectric_f0, float wo_z) {
+                             float3 dielectric_f0, float dielectric_f90, float wo_z) {
   LuxBsdf m;
   base_color = fmax(base_color, (float3)(0.0f));
   metallic = lux_saturate(metallic);
   roughness = lux_saturate(roughness);
   m.diffuse = base_color * (1.0f - metallic);
-  dielectric_f0 = lux_saturate(dielectric_f0);
+  dielectric_f0 = fmin(fmax(dielectric_f0, (float3)(0.0f)), (float3)(1.0f));
+  dielectric_f90 = lux_saturate(dielectric_f90);
   m.f0_dielectric = dielectric_f0;
-  m.f0 = mix((float3)(dielectric_f0), base_color, metallic);
+  m.f90_dielectric = dielectric_f90;
+  m.f0 = mix(dielectric_f0, base_color, metallic);
+  m.f90 = mix(dielectric_f90, 1.0f, metallic);
   m.alpha = fmax(roughness * roughness, LUX_BSDF_MIN_ALPHA);
   m.roughness = roughness;
   m.ms = (float3)(0.0f);
@@ -226,8 +241,9 @@ inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
   /* Keeps 1 / (1 - E_avg) finite; the smoothest row (roughness 0, alpha
    * 1e-3) still loses ~1e-5 on average, at grazing angles. */
   if (1.0f - e_avg > 1e-7f) {
-    const float3 fms = (1.0f - metallic) * lux_kulla_conty_fms((float3)(dielectric_f0), e_avg) +
-                       metallic * lux_kulla_conty_fms(base_color, e_avg);
+    const float3 fms =
+        (1.0f - metallic) * lux_kulla_conty_fms(dielectric_f0, dielectric_f90, e_avg) +
+        metallic * lux_kulla_conty_fms(base_color, 1.0f, e_avg);
     ms_albedo = fms * fmax(1.0f - e_o, 0.0f);
     m.ms = ms_albedo * (LUX_INV_PI / (1.0f - e_avg));
   }
@@ -250,11 +266,11 @@ inline LuxBsdf lux_make_bsdf(float3 base_color, float metallic, float roughness,
 
 #if LUX_SPECULAR
 
-/* Schlick's Fresnel approximation. */
-inline float3 lux_fresnel_schlick(float3 f0, float cos_theta) {
+/* Schlick's Fresnel approximation, f0 + (f90 - f0) (1 - cos)^5. */
+inline float3 lux_fresnel_schlick(float3 f0, float f90, float cos_theta) {
   const float c = 1.0f - lux_saturate(cos_theta);
   const float c2 = c * c;
-  return f0 + (1.0f - f0) * (c2 * c2 * c);
+  return f0 + (f90 - f0) * (c2 * c2 * c);
 }
 
 /* GGX (Trowbridge-Reitz) normal distribution for a unit half vector h with
@@ -314,7 +330,8 @@ inline float3 lux_bsdf_eval_layer(const LuxBsdf* m, int layer, float3 wo, float3
     /* Appendix B fresnel_mix: the dielectric's F(wo.h), f0 from its ior. */
     const float3 h = normalize(wo + wi);
     const float c = 1.0f - lux_saturate(dot(wo, h));
-    const float f = m->f0_dielectric + (1.0f - m->f0_dielectric) * (c * c * c * c * c);
+    const float3 f =
+        m->f0_dielectric + (m->f90_dielectric - m->f0_dielectric) * (c * c * c * c * c);
     return m->diffuse * (LUX_INV_PI * (1.0f - f)) +
            m->ms * fmax(1.0f - lux_ggx_albedo(wi.z, m->roughness), 0.0f);
 #else
@@ -326,7 +343,7 @@ inline float3 lux_bsdf_eval_layer(const LuxBsdf* m, int layer, float3 wo, float3
     const float3 h = normalize(wo + wi);
     const float d = lux_ggx_d(h, m->alpha);
     const float g = lux_ggx_g2(wo, wi, m->alpha);
-    return lux_fresnel_schlick(m->f0, dot(wo, h)) * (d * g / (4.0f * wo.z * wi.z));
+    return lux_fresnel_schlick(m->f0, m->f90, dot(wo, h)) * (d * g / (4.0f * wo.z * wi.z));
   }
 #endif
   return (float3)(0.0f);
@@ -372,7 +389,7 @@ inline int lux_bsdf_sample(const LuxBsdf* m, float3 wo, float u_layer, float2 u,
     if (!(*pdf > 0.0f)) return -1;
     /* f cos / (p pdf) with D and the 4 wo.z wi.z cancelled: F G2 / (G1(wo) p). */
     const float3 hr = normalize(wo + *wi);
-    *weight = lux_fresnel_schlick(m->f0, dot(wo, hr)) *
+    *weight = lux_fresnel_schlick(m->f0, m->f90, dot(wo, hr)) *
               (lux_ggx_g2(wo, *wi, m->alpha) / (lux_ggx_g1(wo, m->alpha) * m->p_specular));
     return LUX_BSDF_LAYER_SPECULAR;
   }

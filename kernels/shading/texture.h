@@ -1,8 +1,10 @@
 /* Material texture fetches (device side). See shared/texture.h for the
- * layout. Filtering is bilinear with repeat wrapping (the glTF default
- * sampler); glTF UV (0,0) is the top-left corner of row 0. sRGB texels are
- * decoded to linear BEFORE filtering, so the filter averages light, not
- * encoded values. */
+ * layout. Filtering is bilinear; wrapping follows the texture's sampler
+ * (glTF 2.0 §5.26: REPEAT, CLAMP_TO_EDGE, MIRRORED_REPEAT, applied to the
+ * integer texel indices as OpenGL 4.6 §8.14.2 Table 8.20 defines them); glTF
+ * UV (0,0) is the top-left corner of row 0. sRGB texels are decoded to
+ * linear BEFORE filtering, so the filter averages light, not encoded
+ * values. */
 #ifndef LUXEL_SHADING_TEXTURE_H
 #define LUXEL_SHADING_TEXTURE_H
 
@@ -67,6 +69,8 @@ __constant float lux_srgb_to_linear_table[256] = {
 
 /* One texel as linear RGBA, integer coordinates already wrapped. */
 inline float4 lux_texture_texel(const __global uint* texels, LuxTexture t, int x, int y) {
+  if (t.flags & LUX_TEXTURE_FLAG_HALF)
+    return vload_half4((size_t)(y * t.width + x), (const __global half*)(texels + t.offset));
   const uint w = texels[t.offset + y * t.width + x];
   const uint r = w & 0xffu, g = (w >> 8) & 0xffu, b = (w >> 16) & 0xffu, a = w >> 24;
   if (t.flags & LUX_TEXTURE_FLAG_SRGB) {
@@ -82,26 +86,67 @@ inline int lux_texture_wrap(int i, int n) {
   return m < 0 ? m + n : m;
 }
 
-/* Bilinear sample at uv with repeat wrapping; linear RGBA. Texel (x, y)
- * covers uv [x/w, (x+1)/w) x [y/h, (y+1)/h), its centre at (x+0.5)/w. */
-inline float4 lux_texture_sample(const __global uint* texels, LuxTexture t, float2 uv) {
-  /* Wrap uv first so large coordinates keep their sub-texel precision and
-   * the int conversion below cannot overflow. */
-  float2 f = uv - floor(uv);
-  if (!(f.x >= 0.0f && f.x <= 1.0f)) f.x = 0.0f; /* NaN / infinite uv */
-  if (!(f.y >= 0.0f && f.y <= 1.0f)) f.y = 0.0f;
-  const float x = f.x * (float)t.width - 0.5f;
-  const float y = f.y * (float)t.height - 0.5f;
+/* An integer texel coordinate under wrap `mode` (Table 8.20): clamp; repeat
+ * mod n; mirrored repeat: i mod 2n, reflected in its second half. */
+inline int lux_texture_wrap_mode(int i, int n, int mode) {
+  if (mode == LUX_WRAP_CLAMP) return clamp(i, 0, n - 1);
+  if (mode == LUX_WRAP_MIRROR) {
+    const int m = lux_texture_wrap(i, 2 * n);
+    return m < n ? m : 2 * n - 1 - m;
+  }
+  return lux_texture_wrap(i, n);
+}
+
+/* A texture coordinate reduced to one period of its wrap before scaling, so
+ * large coordinates keep their sub-texel precision and the int conversion
+ * cannot overflow: [0, 1) for repeat, [0, 2) for mirrored repeat (its
+ * period), [0, 1] for clamp (every coordinate past an edge reads the edge
+ * texel, so clamping first changes nothing). NaN and infinities read 0. */
+inline float lux_texture_reduce(float u, int mode) {
+  if (mode == LUX_WRAP_CLAMP) return (u >= 0.0f) ? fmin(u, 1.0f) : 0.0f;
+  const float f = mode == LUX_WRAP_MIRROR ? u - 2.0f * floor(0.5f * u) : u - floor(u);
+  return (f >= 0.0f && f <= 2.0f) ? f : 0.0f;
+}
+
+/* Bilinear sample at uv with wrap modes (wrap_s, wrap_t); linear RGBA.
+ * Texel (x, y) covers uv [x/w, (x+1)/w) x [y/h, (y+1)/h), its centre at
+ * (x+0.5)/w. */
+inline float4 lux_texture_sample_wrap(const __global uint* texels, LuxTexture t, float2 uv,
+                                      int wrap_s, int wrap_t) {
+  const float x = lux_texture_reduce(uv.x, wrap_s) * (float)t.width - 0.5f;
+  const float y = lux_texture_reduce(uv.y, wrap_t) * (float)t.height - 0.5f;
   const float x0f = floor(x), y0f = floor(y);
   const float fx = x - x0f, fy = y - y0f;
-  const int x0 = lux_texture_wrap((int)x0f, t.width), x1 = lux_texture_wrap((int)x0f + 1, t.width);
-  const int y0 = lux_texture_wrap((int)y0f, t.height),
-            y1 = lux_texture_wrap((int)y0f + 1, t.height);
+  const int x0 = lux_texture_wrap_mode((int)x0f, t.width, wrap_s),
+            x1 = lux_texture_wrap_mode((int)x0f + 1, t.width, wrap_s);
+  const int y0 = lux_texture_wrap_mode((int)y0f, t.height, wrap_t),
+            y1 = lux_texture_wrap_mode((int)y0f + 1, t.height, wrap_t);
   const float4 top =
       mix(lux_texture_texel(texels, t, x0, y0), lux_texture_texel(texels, t, x1, y0), fx);
   const float4 bottom =
       mix(lux_texture_texel(texels, t, x0, y1), lux_texture_texel(texels, t, x1, y1), fx);
   return mix(top, bottom, fy);
+}
+
+/* Bilinear sample with repeat wrapping (the glTF default sampler). */
+inline float4 lux_texture_sample(const __global uint* texels, LuxTexture t, float2 uv) {
+  return lux_texture_sample_wrap(texels, t, uv, LUX_WRAP_REPEAT, LUX_WRAP_REPEAT);
+}
+
+/* The UV a material slot reads: its UV set, then KHR_texture_transform's
+ * uv' = T * R * S * (u, v, 1) (the matrix built on the host). */
+inline float2 lux_texture_slot_uv(LuxTextureSlot s, float2 uv0, float2 uv1) {
+  const float2 uv = (s.flags & LUX_SLOT_TEXCOORD1) ? uv1 : uv0;
+  if (!(s.flags & LUX_SLOT_TRANSFORM)) return uv;
+  return (float2)(s.m00 * uv.x + s.m01 * uv.y + s.m02, s.m10 * uv.x + s.m11 * uv.y + s.m12);
+}
+
+/* Texture of material slot s at a surface point with UV sets uv0, uv1. */
+inline float4 lux_texture_slot_sample(const __global uint* texels,
+                                      const __global LuxTexture* textures, LuxTextureSlot s,
+                                      float2 uv0, float2 uv1) {
+  return lux_texture_sample_wrap(texels, textures[s.texture], lux_texture_slot_uv(s, uv0, uv1),
+                                 LUX_SLOT_WRAP_S(s.flags), LUX_SLOT_WRAP_T(s.flags));
 }
 
 #endif /* LUXEL_SHADING_TEXTURE_H */

@@ -3,17 +3,36 @@
  *
  * Shared by the OpenCL traversal and by Embree's filter callback on the host,
  * so the two tracers agree bit for bit on which points are cut out. Texels are
- * 8-bit, sampled nearest with repeat wrapping (the texture's own sampler is
- * not honoured for the cut-out decision; nearest keeps the test exact and
- * cheap). */
+ * 8-bit, sampled nearest (the cut-out decision ignores the sampler's
+ * filters: nearest keeps the test exact and
+ * cheap) with the texture sampler's wrap modes (glTF 2.0 §5.26). */
 #ifndef LUXEL_SHARED_ALPHA_MASK_H
 #define LUXEL_SHARED_ALPHA_MASK_H
 
 #include "shared/geometry.h"
+#include "shared/texture.h"
 
 #ifndef LUX_DEVICE
 namespace luxel::cl {
 #endif
+
+/* Nearest texel index of coordinate s on an n-texel axis under wrap `mode`
+ * (OpenGL 4.6 Table 8.20 applied to floor(s n)). The coordinate is reduced
+ * to one period first (floor keeps negative coordinates exact). */
+LUX_INLINE int lux_alpha_texel_index(float s, int n, int mode) {
+  int i;
+  if (mode == LUX_WRAP_CLAMP) {
+    i = (int)((s >= 0.0f ? (s < 1.0f ? s : 1.0f) : 0.0f) * (float)n);
+  } else if (mode == LUX_WRAP_MIRROR) {
+    const float f = s - 2.0f * floor(0.5f * s);
+    i = (int)(f * (float)n);
+    i = i < 0 ? 0 : (i >= 2 * n ? 2 * n - 1 : i);
+    if (i >= n) i = 2 * n - 1 - i;
+  } else {
+    i = (int)((s - floor(s)) * (float)n);
+  }
+  return i < 0 ? 0 : (i >= n ? n - 1 : i);
+}
 
 /* True when the point with barycentrics (u, v) of triangle uvs is opaque. */
 LUX_INLINE int lux_alpha_opaque(LUX_GLOBAL const LuxTriangleUV* uvs,
@@ -22,13 +41,8 @@ LUX_INLINE int lux_alpha_opaque(LUX_GLOBAL const LuxTriangleUV* uvs,
   const float w = 1.0f - u - v;
   const float s = w * uvs->uv0.x + u * uvs->uv1.x + v * uvs->uv2.x;
   const float t = w * uvs->uv0.y + u * uvs->uv1.y + v * uvs->uv2.y;
-  /* Wrap into [0, 1): floor keeps negative coordinates repeating correctly. */
-  const float fs = s - floor(s);
-  const float ft = t - floor(t);
-  int x = (int)(fs * (float)mask->width);
-  int y = (int)(ft * (float)mask->height);
-  x = x < 0 ? 0 : (x >= mask->width ? mask->width - 1 : x);
-  y = y < 0 ? 0 : (y >= mask->height ? mask->height - 1 : y);
+  const int x = lux_alpha_texel_index(s, mask->width, LUX_SLOT_WRAP_S(mask->wrap));
+  const int y = lux_alpha_texel_index(t, mask->height, LUX_SLOT_WRAP_T(mask->wrap));
   const float a = (float)texels[mask->offset + y * mask->width + x] * (1.0f / 255.0f);
   return a >= mask->cutoff;
 }

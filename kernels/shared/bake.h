@@ -12,6 +12,7 @@
 #define LUXEL_SHARED_BAKE_H
 
 #include "shared/compat.h"
+#include "shared/texture.h"
 
 #ifndef LUX_DEVICE
 namespace luxel::cl {
@@ -34,21 +35,24 @@ typedef struct LuxSurfaceTri {
   float2 pad;
 } LuxSurfaceTri;
 
-/* Device material, 64 bytes. Texture indices are -1 when absent.
+/* Device material, 160 bytes. A slot's texture is -1 when absent.
  *   flags bit 0: double-sided; bit 1: emits light.
- *   dielectric_f0: Schlick f0 of the dielectric layer, ((ior - 1) / (ior +
- *   1))^2 (KHR_materials_ior; 0.04 at the glTF default ior 1.5). */
+ *   specular: rgb = F0 of the dielectric layer, w = its F90. Without
+ *     KHR_materials_specular, rgb = ((ior - 1) / (ior + 1))^2
+ *     (KHR_materials_ior; 0.04 at the glTF default ior 1.5) and w = 1; with
+ *     it, rgb = min(F0(ior) * specularColorFactor, 1) * specularFactor and
+ *     w = specularFactor (the extension's dielectric_f0 / dielectric_f90). */
 typedef struct LuxMaterial {
   float4 base_color; /* linear rgb, a = alpha factor */
   float4 emission;   /* rgb = emissiveFactor * strength (radiance), w unused */
+  float4 specular;   /* rgb = dielectric F0, w = dielectric F90 */
   float metallic;
   float roughness;
-  int base_color_tex;
-  int metallic_roughness_tex;
-  int emissive_tex;
   int flags;
   float alpha_cutoff;
-  float dielectric_f0;
+  LuxTextureSlot base_color_tex;
+  LuxTextureSlot metallic_roughness_tex;
+  LuxTextureSlot emissive_tex;
 } LuxMaterial;
 
 #define LUX_MATERIAL_DOUBLE_SIDED 1

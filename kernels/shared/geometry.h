@@ -95,10 +95,15 @@ typedef struct LuxAlphaMask {
   int width;
   int height;
   float cutoff; /* alphaCutoff / baseColorFactor.a, in [0, 1] texel units */
+  int wrap;     /* the base colour sampler's wraps, LUX_SLOT_MAKE_WRAP(s, t) */
+  int pad[3];
 } LuxAlphaMask;
 
 /* Per-triangle material UVs for alpha-tested triangles (indexed like
- * LuxTriangle, present only when the scene has alpha-masked geometry). */
+ * LuxTriangle, present only when the scene has alpha-masked geometry): the
+ * base colour texture's UV set with its KHR_texture_transform applied per
+ * vertex (the transform is affine, so it commutes with barycentric
+ * interpolation). */
 typedef struct LuxTriangleUV {
   float2 uv0;
   float2 uv1;

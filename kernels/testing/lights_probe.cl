@@ -66,13 +66,13 @@ __kernel void probe_sample_cdf(__global const float* cdf, const uint n, __global
   pmf[i] = p;
 }
 
-/* lux_texture_sample of textures[texture] at uv[i]. */
+/* lux_texture_slot_sample of material slot `slot` at UV sets (uv0[i], uv1[i]). */
 __kernel void probe_texture(__global const uint* texels, __global const LuxTexture* textures,
-                            const int texture, __global const float2* uv, const int count,
-                            __global float4* out) {
+                            const LuxTextureSlot slot, __global const float2* uv0,
+                            __global const float2* uv1, const int count, __global float4* out) {
   const int i = (int)get_global_id(0);
   if (i >= count) return;
-  out[i] = lux_texture_sample(texels, textures[texture], uv[i]);
+  out[i] = lux_texture_slot_sample(texels, textures, slot, uv0[i], uv1[i]);
 }
 
 /* lux_sample_alias over an n-entry table for u[i]. */

@@ -86,8 +86,8 @@ __kernel void probe_make_bsdf(__global const float4* material, __global const fl
   const uint i = get_global_id(0);
   if (i >= count) return;
   const LuxBsdf m = lux_make_bsdf(material[i].xyz, material[i].w, rough[i].x,
-                                  rough[i].z > 0.0f ? rough[i].z : LUX_BSDF_DIELECTRIC_F0,
-                                  rough[i].y > 0.0f ? rough[i].y : 1.0f);
+                                  (float3)(rough[i].z > 0.0f ? rough[i].z : LUX_BSDF_DIELECTRIC_F0),
+                                  1.0f, rough[i].y > 0.0f ? rough[i].y : 1.0f);
   out[3 * i + 0] = (float4)(m.diffuse, m.alpha);
   out[3 * i + 1] = (float4)(m.f0, m.p_specular);
   out[3 * i + 2] = (float4)(m.ms, m.p_cosine);
@@ -95,17 +95,21 @@ __kernel void probe_make_bsdf(__global const float4* material, __global const fl
 
 /* lux_bsdf_sample for one material and wo; u[i] = (u.x, u.y, u_layer, -).
  * A u_layer_override >= 0 replaces every u_layer (0 forces the specular
- * layer when p_specular > 0). wo4.w: the dielectric f0 (0 means 0.04).
+ * layer when p_specular > 0). wo4.w: the dielectric f0 (0 means 0.04);
+ * spec: (dielectric f0 rgb, f90) replacing it when spec.w > 0
+ * (KHR_materials_specular).
  *   sample[i] = (wi, layer)            weight[i] = (weight, pdf)
  *   check[i]  = (f_layer(wi) cos / pdf, lux_bsdf_pdf_layer(layer, wi))   (0 for -1) */
 __kernel void probe_bsdf_sample(const float4 material, const float roughness, const float4 wo4,
-                                const float u_layer_override, __global const float4* u,
-                                const uint count, __global float4* sample, __global float4* weight,
-                                __global float4* check) {
+                                const float4 spec, const float u_layer_override,
+                                __global const float4* u, const uint count, __global float4* sample,
+                                __global float4* weight, __global float4* check) {
   const uint i = get_global_id(0);
   if (i >= count) return;
-  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness,
-                                  wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0, wo4.z);
+  const float f0 = wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0;
+  const LuxBsdf m =
+      lux_make_bsdf(material.xyz, material.w, roughness, spec.w > 0.0f ? spec.xyz : (float3)(f0),
+                    spec.w > 0.0f ? spec.w : 1.0f, wo4.z);
   const float3 wo = wo4.xyz;
   const float4 ui = u[i];
   float3 wi = (float3)(0.0f), w;
@@ -125,11 +129,14 @@ __kernel void probe_bsdf_sample(const float4 material, const float roughness, co
 /* Both layers at given directions: out[2i] = (f_diffuse, pdf_diffuse),
  * out[2i+1] = (f_specular, pdf_specular). */
 __kernel void probe_bsdf_eval(const float4 material, const float roughness, const float4 wo4,
-                              __global const float4* dirs, const uint count, __global float4* out) {
+                              const float4 spec, __global const float4* dirs, const uint count,
+                              __global float4* out) {
   const uint i = get_global_id(0);
   if (i >= count) return;
-  const LuxBsdf m = lux_make_bsdf(material.xyz, material.w, roughness,
-                                  wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0, wo4.z);
+  const float f0 = wo4.w > 0.0f ? wo4.w : LUX_BSDF_DIELECTRIC_F0;
+  const LuxBsdf m =
+      lux_make_bsdf(material.xyz, material.w, roughness, spec.w > 0.0f ? spec.xyz : (float3)(f0),
+                    spec.w > 0.0f ? spec.w : 1.0f, wo4.z);
   const float3 wo = wo4.xyz, wi = dirs[i].xyz;
   for (int layer = 0; layer < 2; ++layer)
     out[2 * i + layer] =

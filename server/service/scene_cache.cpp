@@ -20,7 +20,8 @@ uint64_t scene_bytes(const scene::Scene& scene) {
     n += sizeof m + vector_bytes(m.positions) + vector_bytes(m.normals) + vector_bytes(m.tangents) +
          vector_bytes(m.uv0) + vector_bytes(m.uv1) + vector_bytes(m.indices) +
          vector_bytes(m.triangle_material);
-  for (const auto& t : scene.textures) n += sizeof t + vector_bytes(t.rgba);
+  for (const auto& t : scene.textures)
+    n += sizeof t + vector_bytes(t.rgba8) + vector_bytes(t.rgba16f);
   n += vector_bytes(scene.instances) + vector_bytes(scene.materials) + vector_bytes(scene.lights);
   return n;
 }

@@ -18,7 +18,7 @@ static_assert(offsetof(LuxBvh4Node, child) == 96 && offsetof(LuxBvh4Node, count)
 static_assert(sizeof(LuxTriangle) == 48 && alignof(LuxTriangle) == 16);
 static_assert(sizeof(LuxRay) == 32 && alignof(LuxRay) == 16);
 static_assert(sizeof(LuxHit) == 16 && offsetof(LuxHit, prim) == 12);
-static_assert(sizeof(LuxAlphaMask) == 16);
+static_assert(sizeof(LuxAlphaMask) == 32 && offsetof(LuxAlphaMask, wrap) == 16);
 static_assert(sizeof(LuxTriangleUV) == 32 && alignof(LuxTriangleUV) == 8);
 
 }  // namespace luxel::cl

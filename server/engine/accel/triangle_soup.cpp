@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "shared/texture.h"
+
 namespace luxel::accel {
 namespace {
 
@@ -19,14 +21,24 @@ cl::LuxAlphaMask make_mask(const scene::Scene& scene, const scene::Material& m,
   mask.cutoff = factor_a > 0 ? m.alpha_cutoff / factor_a : INFINITY;
   const int t = m.base_color_texture.texture;
   if (t >= 0 && t < static_cast<int>(scene.textures.size()) &&
-      !scene.textures[static_cast<size_t>(t)].rgba.empty()) {
+      scene.textures[static_cast<size_t>(t)].has_pixels()) {
     const scene::Texture& tex = scene.textures[static_cast<size_t>(t)];
     mask.width = tex.width;
     mask.height = tex.height;
-    const size_t n = static_cast<size_t>(tex.width) * static_cast<size_t>(tex.height);
+    auto code = [](scene::WrapMode w) {
+      return w == scene::WrapMode::kClampToEdge      ? LUX_WRAP_CLAMP
+             : w == scene::WrapMode::kMirroredRepeat ? LUX_WRAP_MIRROR
+                                                     : LUX_WRAP_REPEAT;
+    };
+    mask.wrap =
+        LUX_SLOT_MAKE_WRAP(code(m.base_color_texture.wrap_s), code(m.base_color_texture.wrap_t));
+    const size_t n = tex.texel_count();
     for (size_t i = 0; i < n; ++i) {
-      const float a = std::clamp(tex.rgba[i * 4 + 3], 0.0f, 1.0f);
-      texels.push_back(static_cast<uint8_t>(std::lround(a * 255.0f)));
+      // 8-bit alpha is the file's code itself; a half is rounded to 8 bits.
+      const float a = tex.format == scene::TexelFormat::kRGBA8
+                          ? float(tex.rgba8[i * 4 + 3]) / 255.0f
+                          : std::clamp(tex.linear(i).w, 0.0f, 1.0f);
+      texels.push_back(static_cast<uint8_t>(std::lround((a == a ? a : 0.0f) * 255.0f)));
     }
   } else {
     mask.width = mask.height = 1;
@@ -95,11 +107,12 @@ Result<TriangleSoup> build_triangle_soup(const scene::Scene& scene) {
       for (size_t t = 0; t < mesh.triangle_count(); ++t, ++tri) {
         if (soup.alpha_mask[tri] < 0) continue;
         const auto& material = scene.materials[static_cast<size_t>(mesh.triangle_material[t])];
-        const auto& uv = material.base_color_texture.texcoord == 1 ? mesh.uv1 : mesh.uv0;
+        const scene::TextureRef& ref = material.base_color_texture;
+        const auto& uv = mesh.material_uvs(ref.texcoord);
         if (uv.empty()) continue;
-        const Vec2 a = uv[mesh.indices[t * 3 + 0]];
-        const Vec2 b = uv[mesh.indices[t * 3 + 1]];
-        const Vec2 c = uv[mesh.indices[t * 3 + 2]];
+        const Vec2 a = ref.transform(uv[mesh.indices[t * 3 + 0]]);
+        const Vec2 b = ref.transform(uv[mesh.indices[t * 3 + 1]]);
+        const Vec2 c = ref.transform(uv[mesh.indices[t * 3 + 2]]);
         soup.uvs[tri] = {{a.x, a.y}, {b.x, b.y}, {c.x, c.y}, {0, 0}};
       }
     }

@@ -82,12 +82,14 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   TextureArgs& t = args.textures;
   if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE")) {
     LUXEL_RETURN_IF_ERROR(a.upload(t.textures, std::vector<cl::LuxTexture>{}, "textures", false));
-    return a.upload(t.texels, std::vector<uint32_t>{}, "texels", false);
+    LUXEL_RETURN_IF_ERROR(a.upload(t.texels, std::vector<uint32_t>{}, "texels", false));
+    return a.upload(t.material_uv1, std::vector<cl::LuxTriangleUV>{}, "material uv1", false);
   }
   auto pack = pack_textures(scene);
   if (!pack) return pack.status();
   LUXEL_RETURN_IF_ERROR(a.upload(t.textures, pack.value().textures, "textures"));
-  return a.upload(t.texels, pack.value().texels, "texture texels");
+  LUXEL_RETURN_IF_ERROR(a.upload(t.texels, pack.value().texels, "texture texels"));
+  return a.upload(t.material_uv1, s.data.material_uv1, "material uv1", s.features.has("TEXCOORD1"));
 }
 
 // slots: covered texels (the offset buffer is indexed by covered slot).

@@ -20,7 +20,40 @@ float int_bits(int32_t i) {
 // and grows with the ior, so another ior keeps its GGX layer.
 bool is_rough_dielectric(const scene::Material& m) {
   return m.metallic_factor <= 0.0f && m.roughness_factor >= 1.0f &&
-         m.metallic_roughness_texture.texture < 0 && m.ior == 1.5f;
+         m.metallic_roughness_texture.texture < 0 && m.ior == 1.5f && m.specular_factor == 1.0f &&
+         m.specular_color_factor.x == 1.0f && m.specular_color_factor.y == 1.0f &&
+         m.specular_color_factor.z == 1.0f;
+}
+
+int wrap_code(scene::WrapMode w) {
+  switch (w) {
+    case scene::WrapMode::kClampToEdge:
+      return LUX_WRAP_CLAMP;
+    case scene::WrapMode::kMirroredRepeat:
+      return LUX_WRAP_MIRROR;
+    case scene::WrapMode::kRepeat:
+      break;
+  }
+  return LUX_WRAP_REPEAT;
+}
+
+cl::LuxTextureSlot to_slot(const scene::TextureRef& r) {
+  cl::LuxTextureSlot s{};
+  s.texture = r.texture;
+  s.m00 = s.m11 = 1.0f;
+  s.flags = (r.texcoord == 1 ? LUX_SLOT_TEXCOORD1 : 0) |
+            LUX_SLOT_MAKE_WRAP(wrap_code(r.wrap_s), wrap_code(r.wrap_t));
+  if (r.has_transform) {
+    const auto m = r.uv_matrix();
+    s.m00 = static_cast<float>(m[0]);
+    s.m01 = static_cast<float>(m[1]);
+    s.m02 = static_cast<float>(m[2]);
+    s.m10 = static_cast<float>(m[3]);
+    s.m11 = static_cast<float>(m[4]);
+    s.m12 = static_cast<float>(m[5]);
+    s.flags |= LUX_SLOT_TRANSFORM;
+  }
+  return s;
 }
 
 cl::LuxMaterial to_device(const scene::Material& m) {
@@ -29,18 +62,16 @@ cl::LuxMaterial to_device(const scene::Material& m) {
                   m.base_color_factor.w};
   const float s = m.emissive_strength;
   d.emission = {m.emissive_factor.x * s, m.emissive_factor.y * s, m.emissive_factor.z * s, 0};
+  const Vec3 f0 = m.dielectric_specular_f0();
+  d.specular = {f0.x, f0.y, f0.z, m.dielectric_specular_f90()};
   d.metallic = m.metallic_factor;
   d.roughness = m.roughness_factor;
-  // Only TEXCOORD_0 is carried per triangle; a texture on another set is
-  // left out (named in the import warnings).
-  d.base_color_tex = m.base_color_texture.texcoord == 0 ? m.base_color_texture.texture : -1;
-  d.metallic_roughness_tex =
-      m.metallic_roughness_texture.texcoord == 0 ? m.metallic_roughness_texture.texture : -1;
-  d.emissive_tex = m.emissive_texture.texcoord == 0 ? m.emissive_texture.texture : -1;
+  d.base_color_tex = to_slot(m.base_color_texture);
+  d.metallic_roughness_tex = to_slot(m.metallic_roughness_texture);
+  d.emissive_tex = to_slot(m.emissive_texture);
   d.flags = (m.double_sided ? LUX_MATERIAL_DOUBLE_SIDED : 0) |
             (m.is_emissive() ? LUX_MATERIAL_EMISSIVE : 0);
   d.alpha_cutoff = m.alpha_cutoff;
-  d.dielectric_f0 = m.dielectric_f0();
   return d;
 }
 
@@ -67,6 +98,14 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
   if (first != n)
     return internal_error(strprintf("triangle soup has %zu triangles, instances %u", n, first));
 
+  // Material UV set 1 per triangle only when some material reads it: the
+  // surface records stay 128 bytes and scenes on TEXCOORD_0 pay nothing.
+  for (const auto& m : scene.materials)
+    for (const scene::TextureRef* r :
+         {&m.base_color_texture, &m.metallic_roughness_texture, &m.emissive_texture})
+      if (r->texture >= 0 && r->texcoord == 1) out.uses_texcoord1 = true;
+  if (out.uses_texcoord1) out.material_uv1.assign(n, cl::LuxTriangleUV{});
+
   std::vector<bool> material_used(scene.materials.size(), false);
   out.surface.resize(n);
   out.atlas_uvs.resize(n);
@@ -91,6 +130,10 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
       *normals[k] = f4(nw);
       const Vec2 uv = mesh.uv0.empty() ? Vec2{0, 0} : mesh.uv0[vi];
       *uvs[k] = {uv.x, uv.y};
+      if (!out.material_uv1.empty()) {
+        const Vec2 u1 = mesh.material_uvs(1).empty() ? Vec2{0, 0} : mesh.material_uvs(1)[vi];
+        (&out.material_uv1[t].uv0)[k] = {u1.x, u1.y};
+      }
       const Vec2 a = atlas.to_atlas(inst, mesh.uv1[vi]);
       *atlas_uv[k] = {a.x, a.y};
     }
@@ -101,8 +144,9 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
     if (!material_used[m]) continue;
     const auto& mat = scene.materials[m];
     const auto& d = out.materials[m];
-    if (d.base_color_tex >= 0 || d.metallic_roughness_tex >= 0) out.uses_textures = true;
-    if (mat.is_emissive() && d.emissive_tex >= 0) out.uses_emissive_texture = true;
+    if (d.base_color_tex.texture >= 0 || d.metallic_roughness_tex.texture >= 0)
+      out.uses_textures = true;
+    if (mat.is_emissive() && d.emissive_tex.texture >= 0) out.uses_emissive_texture = true;
     if (!is_rough_dielectric(mat)) out.needs_specular = true;
   }
   return out;

@@ -24,9 +24,13 @@ struct SceneData {
   std::vector<cl::LuxSurfaceTri> surface;    // per world triangle
   std::vector<cl::LuxTriangleUV> atlas_uvs;  // per world triangle, atlas UV in [0,1]
   std::vector<cl::LuxMaterial> materials;
+  // Per world triangle, material UV set 1 (TEXCOORD_1 as in the file); empty
+  // unless uses_texcoord1.
+  std::vector<cl::LuxTriangleUV> material_uv1;
   std::vector<uint32_t> instance_first;  // per instance
   bool uses_textures = false;            // a base colour or metallic-roughness texture is used
   bool uses_emissive_texture = false;
+  bool uses_texcoord1 = false;  // some material texture reads TEXCOORD_1
   bool needs_specular = false;  // some used material is not a rough dielectric
 };
 

@@ -56,7 +56,11 @@ class TextureTable {
                     texture_index, image, model_.images.size()));
     }
     ref.texcoord = texcoord;
-    warn_ignored(texture_index, texcoord, ext, what);
+    LUXEL_RETURN_IF_ERROR(read_sampler(texture_index, what, &ref));
+    LUXEL_RETURN_IF_ERROR(read_transform(ext, what, &ref));
+    for (const auto& [name, value] : ext)
+      if (name != "KHR_texture_transform")
+        warnings().push_back(what + ": texture extension " + name + " is not supported (ignored)");
     const auto key = std::make_pair(image, space);
     auto it = decoded_.find(key);
     if (it == decoded_.end()) {
@@ -70,32 +74,79 @@ class TextureTable {
   }
 
  private:
-  // What the bake does not apply yet is named, never silently dropped:
-  // texture transforms, non-repeat samplers (the kernels wrap by repeat),
-  // textures on TEXCOORD_1 (the device carries material UVs of set 0).
-  void warn_ignored(int texture_index, int texcoord, const tinygltf::ExtensionMap& ext,
-                    const std::string& what) {
-    if (ext.count("KHR_texture_transform"))
-      warnings().push_back(what +
-                           ": KHR_texture_transform is not supported; the texture is "
-                           "sampled untransformed");
-    for (const auto& [name, value] : ext)
-      if (name != "KHR_texture_transform")
-        warnings().push_back(what + ": texture extension " + name + " is not supported (ignored)");
-    if (texcoord == 1)
-      warnings().push_back(what +
-                           ": texCoord 1 is not supported by the bake; the texture is "
-                           "left out (factors only)");
+  // glTF 2.0 §5.26: wrapS / wrapT are 33071 (CLAMP_TO_EDGE), 33648
+  // (MIRRORED_REPEAT) or 10497 (REPEAT, the default). Filters are not read:
+  // the bake filters bilinearly (magnification LINEAR) without mipmaps.
+  Status read_sampler(int texture_index, const std::string& what, TextureRef* ref) {
     const int sampler = model_.textures[static_cast<size_t>(texture_index)].sampler;
-    if (sampler >= 0 && static_cast<size_t>(sampler) < model_.samplers.size()) {
-      const auto& sm = model_.samplers[static_cast<size_t>(sampler)];
-      constexpr int kRepeat = 10497;  // glTF 2.0 §5.26, sampler.wrapS / wrapT
-      if (sm.wrapS != kRepeat || sm.wrapT != kRepeat)
-        warnings().push_back(strprintf(
-            "%s: sampler %d wraps (S %d, T %d); only REPEAT (10497) is supported, the texture "
-            "repeats",
-            what.c_str(), sampler, sm.wrapS, sm.wrapT));
+    if (sampler < 0) return Status::ok();
+    if (static_cast<size_t>(sampler) >= model_.samplers.size())
+      return invalid_argument(strprintf("%s: texture %d names sampler %d (%zu samplers)",
+                                        what.c_str(), texture_index, sampler,
+                                        model_.samplers.size()));
+    const auto& sm = model_.samplers[static_cast<size_t>(sampler)];
+    auto mode = [&](int v, const char* field, WrapMode* out) -> Status {
+      switch (v) {
+        case 10497:
+          *out = WrapMode::kRepeat;
+          return Status::ok();
+        case 33071:
+          *out = WrapMode::kClampToEdge;
+          return Status::ok();
+        case 33648:
+          *out = WrapMode::kMirroredRepeat;
+          return Status::ok();
+        default:
+          return invalid_argument(
+              strprintf("%s: sampler %d %s %d is not REPEAT (10497), CLAMP_TO_EDGE (33071) or "
+                        "MIRRORED_REPEAT (33648)",
+                        what.c_str(), sampler, field, v));
+      }
+    };
+    LUXEL_RETURN_IF_ERROR(mode(sm.wrapS, "wrapS", &ref->wrap_s));
+    return mode(sm.wrapT, "wrapT", &ref->wrap_t);
+  }
+
+  // KHR_texture_transform: offset [0, 0], rotation 0, scale [1, 1], and a
+  // texCoord that overrides the textureInfo's.
+  Status read_transform(const tinygltf::ExtensionMap& ext, const std::string& what,
+                        TextureRef* ref) {
+    auto it = ext.find("KHR_texture_transform");
+    if (it == ext.end()) return Status::ok();
+    const tinygltf::Value& v = it->second;
+    if (!v.IsObject()) return invalid_argument(what + ": KHR_texture_transform is not an object");
+    auto vec2 = [&](const char* key, Vec2* out) -> Status {
+      if (!v.Has(key)) return Status::ok();
+      const auto& a = v.Get(key);
+      if (!a.IsArray() || a.ArrayLen() != 2 || !a.Get(0).IsNumber() || !a.Get(1).IsNumber())
+        return invalid_argument(
+            strprintf("%s: KHR_texture_transform %s must be 2 numbers", what.c_str(), key));
+      const double x = a.Get(0).GetNumberAsDouble(), y = a.Get(1).GetNumberAsDouble();
+      if (!std::isfinite(x) || !std::isfinite(y) || std::fabs(x) > 3e38 || std::fabs(y) > 3e38)
+        return invalid_argument(
+            strprintf("%s: KHR_texture_transform %s is not finite", what.c_str(), key));
+      *out = {static_cast<float>(x), static_cast<float>(y)};
+      return Status::ok();
+    };
+    LUXEL_RETURN_IF_ERROR(vec2("offset", &ref->offset));
+    LUXEL_RETURN_IF_ERROR(vec2("scale", &ref->scale));
+    if (v.Has("rotation")) {
+      const auto& r = v.Get("rotation");
+      if (!r.IsNumber() || !std::isfinite(r.GetNumberAsDouble()) ||
+          std::fabs(r.GetNumberAsDouble()) > 1e6)
+        return invalid_argument(what + ": KHR_texture_transform rotation is not a finite number");
+      ref->rotation = static_cast<float>(r.GetNumberAsDouble());
     }
+    if (v.Has("texCoord")) {
+      const auto& t = v.Get("texCoord");
+      if (!t.IsInt() || (t.Get<int>() != 0 && t.Get<int>() != 1))
+        return invalid_argument(what +
+                                ": KHR_texture_transform texCoord is not 0 or 1 (the UV sets "
+                                "the bake reads)");
+      ref->texcoord = t.Get<int>();
+    }
+    ref->has_transform = true;
+    return Status::ok();
   }
 
   const tinygltf::Model& model_;
@@ -174,6 +225,38 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
     m.ior = static_cast<float>(ior);
   }
 
+  // KHR_materials_specular: specularFactor in [0, 1], specularColorFactor
+  // >= 0 (values above 1 are allowed: F0(ior) times them is clamped to 1).
+  ext = gm.extensions.find("KHR_materials_specular");
+  if (ext != gm.extensions.end() && ext->second.IsObject()) {
+    const auto& v = ext->second;
+    if (v.Has("specularFactor")) {
+      const auto& f = v.Get("specularFactor");
+      if (!f.IsNumber()) return invalid_argument(label + ": specularFactor is not a number");
+      LUXEL_RETURN_IF_ERROR(check_factor(label, "specularFactor", f.GetNumberAsDouble(), 0, 1));
+      m.specular_factor = static_cast<float>(f.GetNumberAsDouble());
+    }
+    if (v.Has("specularColorFactor")) {
+      const auto& c = v.Get("specularColorFactor");
+      if (!c.IsArray() || c.ArrayLen() != 3)
+        return invalid_argument(label + ": specularColorFactor must be 3 numbers");
+      float rgb[3];
+      for (int i = 0; i < 3; ++i) {
+        if (!c.Get(i).IsNumber())
+          return invalid_argument(label + ": specularColorFactor must be 3 numbers");
+        const double x = c.Get(i).GetNumberAsDouble();
+        LUXEL_RETURN_IF_ERROR(check_factor(label, "specularColorFactor", x, 0, 3.0e38));
+        rgb[i] = static_cast<float>(x);
+      }
+      m.specular_color_factor = {rgb[0], rgb[1], rgb[2]};
+    }
+    // The textures would need two more slots per material; named instead.
+    for (const char* tex : {"specularTexture", "specularColorTexture"})
+      if (v.Has(tex))
+        table->warnings().push_back(label + ": KHR_materials_specular " + tex +
+                                    " is not supported (the factor alone is used)");
+  }
+
   m.double_sided = gm.doubleSided;
   if (gm.alphaMode == "OPAQUE" || gm.alphaMode.empty()) {
     m.alpha_mode = AlphaMode::kOpaque;
@@ -216,7 +299,8 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
 
 bool is_supported_extension(const std::string& name) {
   return name == "KHR_lights_punctual" || name == "KHR_materials_emissive_strength" ||
-         name == "KHR_materials_ior";
+         name == "KHR_materials_ior" || name == "KHR_texture_transform" ||
+         name == "KHR_materials_specular";
 }
 
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {

@@ -16,7 +16,9 @@ namespace luxel::scene::detail {
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene);
 
 // Whether the importer reads glTF extension `name` (KHR_lights_punctual,
-// KHR_materials_emissive_strength, KHR_materials_ior); the others are named
+// KHR_materials_emissive_strength, KHR_materials_ior, KHR_texture_transform,
+// KHR_materials_specular);
+// the others are named
 // in the import warnings.
 bool is_supported_extension(const std::string& name);
 

@@ -2,9 +2,13 @@
 //
 // Meshes are stored once in object space; instances reference a mesh with a
 // world transform (a glTF mesh referenced by several nodes is one Mesh and
-// several Instances). Textures are decoded to linear float RGBA on the host.
+// several Instances). Textures keep the file's 8-bit codes (RGBA8) or, for
+// 16-bit images, linear half floats: 4 or 8 bytes per texel.
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -49,6 +53,15 @@ struct Mesh {
   size_t lightmap_uv_overlap_texels = 0;
 
   size_t triangle_count() const { return indices.size() / 3; }
+  // TEXCOORD_1 as in the file when generated lightmap UVs replaced uv1
+  // (uv/generate.h keeps it, seam copies included); empty otherwise.
+  std::vector<Vec2> file_uv1;
+  // The UV set a material texture with texCoord `set` reads: TEXCOORD_0 or
+  // TEXCOORD_1 exactly as in the file (never generated lightmap UVs).
+  const std::vector<Vec2>& material_uvs(int set) const {
+    if (set != 1) return uv0;
+    return file_uv1.empty() ? uv1 : file_uv1;
+  }
 };
 
 struct Instance {
@@ -66,10 +79,37 @@ struct Instance {
 
 enum class AlphaMode { kOpaque, kMask, kBlend };
 
-// Reference to a texture used by a material. texture < 0: none.
+// Sampler wrap mode (glTF 2.0 §5.26 sampler.wrapS / wrapT).
+enum class WrapMode { kRepeat, kClampToEdge, kMirroredRepeat };
+
+// Reference to a texture used by a material (a glTF textureInfo with its
+// texture's sampler and KHR_texture_transform). texture < 0: none.
 struct TextureRef {
   int texture = -1;  // index into Scene::textures
-  int texcoord = 0;  // which UV set (0 or 1)
+  int texcoord =
+      0;  // UV set read (0 or 1); KHR_texture_transform's texCoord overrides the textureInfo's
+  WrapMode wrap_s = WrapMode::kRepeat;
+  WrapMode wrap_t = WrapMode::kRepeat;
+  // KHR_texture_transform (absent: identity).
+  bool has_transform = false;
+  Vec2 offset{0, 0};
+  float rotation = 0;  // radians, counter-clockwise in UV space
+  Vec2 scale{1, 1};
+
+  // The extension's matrix T * R * S as rows (m00 m01 m02; m10 m11 m12):
+  // uv' = (m00 u + m01 v + m02, m10 u + m11 v + m12), with
+  // T = [1 0 ox; 0 1 oy], R = [cos sin; -sin cos], S = diag(sx, sy).
+  std::array<double, 6> uv_matrix() const {
+    const double c = std::cos(double(rotation)), s = std::sin(double(rotation));
+    const double sx = scale.x, sy = scale.y;
+    return {c * sx, s * sy, double(offset.x), -s * sx, c * sy, double(offset.y)};
+  }
+  Vec2 transform(Vec2 uv) const {
+    if (!has_transform) return uv;
+    const auto m = uv_matrix();
+    return {static_cast<float>(m[0] * uv.x + m[1] * uv.y + m[2]),
+            static_cast<float>(m[3] * uv.x + m[4] * uv.y + m[5])};
+  }
 };
 
 // glTF pbrMetallicRoughness plus emission; factors multiply textures.
@@ -89,6 +129,10 @@ struct Material {
   // KHR_materials_ior: index of refraction of the dielectric (the glTF
   // default 1.5 gives f0 = 0.04); 0 is allowed and means f0 = 1.
   float ior = 1.5f;
+  // KHR_materials_specular: strength and colour of the dielectric's specular
+  // reflection (defaults: no change).
+  float specular_factor = 1.0f;
+  Vec3 specular_color_factor{1, 1, 1};
 
   // Schlick f0 of the dielectric layer, ((ior - 1) / (ior + 1))^2, in
   // double and rounded once (ior 1.5 gives 0.04f exactly, as Appendix B).
@@ -98,6 +142,20 @@ struct Material {
     return static_cast<float>(r * r);
   }
 
+  // The dielectric's specular F0 and F90 after KHR_materials_specular:
+  // F0 = min(F0(ior) * specularColorFactor, 1) * specularFactor and
+  // F90 = specularFactor (the extension's dielectric_f0 / dielectric_f90).
+  // Without the extension: F0(ior) in every channel, F90 = 1.
+  Vec3 dielectric_specular_f0() const {
+    const float f = dielectric_f0();
+    if (specular_factor == 1.0f && specular_color_factor.x == 1.0f &&
+        specular_color_factor.y == 1.0f && specular_color_factor.z == 1.0f)
+      return {f, f, f};
+    auto c = [&](float k) { return std::min(f * k, 1.0f) * specular_factor; };
+    return {c(specular_color_factor.x), c(specular_color_factor.y), c(specular_color_factor.z)};
+  }
+  float dielectric_specular_f90() const { return specular_factor; }
+
   bool is_emissive() const {
     return emissive_strength > 0 &&
            (emissive_factor.x > 0 || emissive_factor.y > 0 || emissive_factor.z > 0);
@@ -106,15 +164,38 @@ struct Material {
 
 enum class ColorSpace { kLinear, kSRGB };
 
-// A decoded texture: linear float RGBA, row 0 at the top of the image (glTF
-// UV (0,0) is the top-left corner). One glTF image used both as sRGB colour and
-// as linear data becomes two Textures.
+// How a decoded Texture stores its texels.
+enum class TexelFormat {
+  kRGBA8,    // the file's 8-bit codes: rgb sRGB-encoded when source_space is kSRGB
+  kRGBA16F,  // IEEE binary16, already linear (16-bit images, decoded through the EOTF)
+};
+
+// A decoded texture, row 0 at the top of the image (glTF UV (0,0) is the
+// top-left corner). One glTF image used both as sRGB colour and as linear
+// data becomes two Textures. Alpha is always linear. 8-bit images keep their
+// codes so host and device hold 4 bytes per texel (decoded to linear where
+// read: Texture::linear here, kernels/shading/texture.h on the device).
 struct Texture {
   std::string name;  // image name or uri, or "image[<index>]"
   int gltf_image = -1;
   ColorSpace source_space = ColorSpace::kLinear;  // how the file's values were encoded
   int width = 0, height = 0;
-  std::vector<float> rgba;  // width * height * 4, linear
+  TexelFormat format = TexelFormat::kRGBA8;
+  std::vector<uint8_t> rgba8;     // kRGBA8: width * height * 4 codes
+  std::vector<uint16_t> rgba16f;  // kRGBA16F: width * height * 4 halves, linear
+
+  size_t texel_count() const {
+    return size_t(width > 0 ? width : 0) * size_t(height > 0 ? height : 0);
+  }
+  // Whether the pixels were decoded and match the size (import without
+  // decoding keeps only the size).
+  bool has_pixels() const {
+    const size_t n = texel_count() * 4;
+    return n > 0 && (format == TexelFormat::kRGBA8 ? rgba8.size() : rgba16f.size()) == n;
+  }
+  // Linear RGBA of texel i (row-major); requires has_pixels().
+  Vec4 linear(size_t i) const;
+  size_t pixel_bytes() const { return rgba8.size() + rgba16f.size() * sizeof(uint16_t); }
 };
 
 enum class LightType { kPoint, kSpot, kDirectional };

@@ -14,12 +14,13 @@ constexpr double kPi = 3.14159265358979323846;
 
 // Mean linear RGB of a texture (1 when it was not decoded: the factor alone).
 double texture_mean(const Texture& t) {
-  if (t.rgba.empty()) return 1.0;
+  if (!t.has_pixels()) return 1.0;
   double sum = 0;
-  for (size_t i = 0; i < t.rgba.size(); i += 4)
-    sum += static_cast<double>(t.rgba[i]) + static_cast<double>(t.rgba[i + 1]) +
-           static_cast<double>(t.rgba[i + 2]);
-  return sum / (3.0 * static_cast<double>(t.rgba.size() / 4));
+  for (size_t i = 0; i < t.texel_count(); ++i) {
+    const Vec4 l = t.linear(i);
+    sum += static_cast<double>(l.x) + static_cast<double>(l.y) + static_cast<double>(l.z);
+  }
+  return sum / (3.0 * static_cast<double>(t.texel_count()));
 }
 
 // Radiant-exitance-like scale of a material: mean over RGB of emissive factor
@@ -189,7 +190,7 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
   s.instances = scene.instances.size();
   s.materials = scene.materials.size();
   s.textures = scene.textures.size();
-  for (const auto& t : scene.textures) s.texture_bytes += t.rgba.size() * sizeof(float);
+  for (const auto& t : scene.textures) s.texture_bytes += t.pixel_bytes();
   for (const auto& l : scene.lights) {
     if (l.type == LightType::kPoint) ++s.point_lights;
     if (l.type == LightType::kSpot) ++s.spot_lights;

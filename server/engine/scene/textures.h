@@ -1,5 +1,6 @@
-// Image decoding: encoded PNG/JPEG (8 or 16 bit, 1-4 channels) -> linear
-// float RGBA. Sizes are checked (stbi_info) before any pixel is allocated.
+// Image decoding: encoded PNG/JPEG (8 or 16 bit, 1-4 channels) -> RGBA8
+// codes (8-bit images) or linear RGBA halves (16-bit images). Sizes are checked (stbi_info) before
+// any pixel is allocated.
 #pragma once
 
 #include <cstdint>
@@ -13,12 +14,15 @@ namespace luxel::scene::detail {
 
 // The exact sRGB EOTF (IEC 61966-2-1), value in [0,1].
 float srgb_to_linear(float encoded);
+// srgb_to_linear(code / 255), tabulated.
+float srgb8_to_linear(uint8_t code);
 
 // "image 3 'bricks'" / "image 3" for messages.
 std::string image_label(const tinygltf::Model& model, int image);
 
-// Decodes glTF image `image`. Colour channels are linearized when `space` is
-// kSRGB; alpha is always linear. With options.decode_textures false only the
+// Decodes glTF image `image`. 8-bit images keep their codes; 16-bit images
+// are linearized (colour channels through the sRGB EOTF when `space` is
+// kSRGB; alpha is always linear) and stored as halves. With options.decode_textures false only the
 // size is read. `pixel_budget` is decremented by the decoded pixel count.
 Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpace space,
                                const ImportOptions& options, uint64_t* pixel_budget);

@@ -321,6 +321,8 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     origin.resize(in.positions.size());
     for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
     std::vector<bool> assigned(in.positions.size(), false);
+    // Material textures on texCoord 1 keep reading the file's TEXCOORD_1.
+    if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
     mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
     mesh.has_lightmap_uvs = true;
     std::vector<bool> placed(in.triangle_count(), false);
@@ -343,6 +345,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         mesh.normals.push_back(in.normals[v]);
         mesh.uv0.push_back(in.uv0[v]);
         if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
+        if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
         mesh.uv1.push_back(uv);
         ++report.seam_vertices;
       }
@@ -366,6 +369,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         mesh.normals.push_back(in.normals[v]);
         mesh.uv0.push_back(in.uv0[v]);
         if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
+        if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
         mesh.uv1.push_back(Vec2{0, 0});
         mesh.indices[3 * t + static_cast<size_t>(j)] = copy;
       }

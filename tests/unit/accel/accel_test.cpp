@@ -265,7 +265,7 @@ TEST_P(AccelTest, AlphaMaskCutsOutAndMatchesEmbree) {
   scene::Texture tex;
   tex.width = 4;
   tex.height = 1;
-  tex.rgba = {1, 1, 1, 0, 1, 1, 1, 0.2f, 1, 1, 1, 1, 1, 1, 1, 0.9f};
+  tex.rgba8 = {255, 255, 255, 0, 255, 255, 255, 51, 255, 255, 255, 255, 255, 255, 255, 230};
   b.s.textures.push_back(tex);
   scene::Material m;
   m.alpha_mode = scene::AlphaMode::kMask;

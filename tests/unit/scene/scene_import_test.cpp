@@ -222,22 +222,27 @@ TEST(SceneImport, MaterialsAllFieldsAndTextures) {
   const Texture& lin = r->textures[static_cast<size_t>(m.metallic_roughness_texture.texture)];
   EXPECT_EQ(srgb.source_space, ColorSpace::kSRGB);
   EXPECT_EQ(lin.source_space, ColorSpace::kLinear);
-  ASSERT_EQ(srgb.rgba.size(), 8u);
+  // 8-bit images keep the file's codes (4 bytes per texel); linear() decodes.
+  ASSERT_EQ(srgb.format, TexelFormat::kRGBA8);
+  ASSERT_EQ(srgb.rgba8.size(), 8u);
+  EXPECT_EQ(srgb.rgba8[0], 128);
+  EXPECT_EQ(srgb.pixel_bytes(), 8u);
   const double c = 128.0 / 255.0;
-  EXPECT_NEAR(srgb.rgba[0], std::pow((c + 0.055) / 1.055, 2.4), 1e-6);  // 0.2158605
-  EXPECT_NEAR(srgb.rgba[1], std::pow((64.0 / 255 + 0.055) / 1.055, 2.4), 1e-6);
-  EXPECT_NEAR(srgb.rgba[2], 1.0, 1e-6);
-  EXPECT_NEAR(srgb.rgba[3], c, 1e-6);  // alpha stays linear
-  EXPECT_NEAR(lin.rgba[0], c, 1e-6);
-  EXPECT_NEAR(srgb.rgba[4], 0.0, 1e-7);
-  EXPECT_NEAR(srgb.rgba[7], 1.0, 1e-7);
+  EXPECT_NEAR(srgb.linear(0).x, std::pow((c + 0.055) / 1.055, 2.4), 1e-6);  // 0.2158605
+  EXPECT_NEAR(srgb.linear(0).y, std::pow((64.0 / 255 + 0.055) / 1.055, 2.4), 1e-6);
+  EXPECT_NEAR(srgb.linear(0).z, 1.0, 1e-6);
+  EXPECT_NEAR(srgb.linear(0).w, c, 1e-6);  // alpha stays linear
+  EXPECT_NEAR(lin.linear(0).x, c, 1e-6);
+  EXPECT_NEAR(srgb.linear(1).x, 0.0, 1e-7);
+  EXPECT_NEAR(srgb.linear(1).w, 1.0, 1e-7);
 
   const SceneStats s = compute_stats(*r, 64);
   EXPECT_EQ(s.alpha_masked_triangles, 2u);
   EXPECT_EQ(s.emissive_triangles, 2u);
   // area 1 x pi x mean(1, 0.5, 0) x 17 x mean of the sRGB texture's RGB
   double tex_mean = 0;
-  for (int i : {0, 1, 2, 4, 5, 6}) tex_mean += srgb.rgba[static_cast<size_t>(i)];
+  for (size_t i : {0u, 1u})
+    tex_mean += double(srgb.linear(i).x) + srgb.linear(i).y + srgb.linear(i).z;
   tex_mean /= 6;
   EXPECT_NEAR(s.emissive_power, M_PI * 0.5 * 17 * tex_mean, 1e-4);
   EXPECT_NE(format_stats(s).find("emissive"), std::string::npos);
@@ -265,6 +270,10 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
        {"extensions",
         {{"KHR_materials_clearcoat", {{"clearcoatFactor", 1}}},
          {"KHR_materials_ior", {{"ior", 1.7}}},
+         {"KHR_materials_specular",
+          {{"specularFactor", 0.5},
+           {"specularColorFactor", {20, 1, 0.5}},
+           {"specularTexture", {{"index", 0}}}}},
          {"KHR_materials_emissive_strength", {{"emissiveStrength", 2}}}}}});
   json prim = b.triangles(kQuadPositions, kQuadIndices);
   prim["material"] = mat;
@@ -280,19 +289,36 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
     }
     return false;
   };
-  EXPECT_TRUE(has({"extension KHR_texture_transform", "not supported"}));
+  EXPECT_FALSE(has({"KHR_texture_transform"})) << "it is supported";
   EXPECT_TRUE(has({"extension KHR_materials_clearcoat", "not supported"}));
   EXPECT_FALSE(has({"KHR_materials_emissive_strength"})) << "it is supported";
   EXPECT_FALSE(has({"KHR_materials_ior"})) << "it is supported";
   // ior 1.7: f0 = (0.7 / 2.7)^2.
   EXPECT_FLOAT_EQ(r->materials[0].ior, 1.7f);
   EXPECT_NEAR(r->materials[0].dielectric_f0(), (0.7 / 2.7) * (0.7 / 2.7), 1e-7);
-  EXPECT_TRUE(has({"material 'painted'", "baseColorTexture", "KHR_texture_transform"}));
-  EXPECT_TRUE(has({"material 'painted'", "metallicRoughnessTexture", "sampler 0", "33071"}));
-  EXPECT_TRUE(has({"material 'painted'", "emissiveTexture", "texCoord 1"}));
+  // Texture transforms, wrap modes and texCoord 1 are applied, not warned about.
+  const Material& pm = r->materials[0];
+  EXPECT_TRUE(pm.base_color_texture.has_transform);
+  EXPECT_FLOAT_EQ(pm.base_color_texture.scale.x, 2.0f);
+  EXPECT_FALSE(pm.metallic_roughness_texture.has_transform);
+  EXPECT_EQ(pm.metallic_roughness_texture.wrap_s, WrapMode::kClampToEdge);
+  EXPECT_EQ(pm.metallic_roughness_texture.wrap_t, WrapMode::kRepeat);
+  EXPECT_EQ(pm.emissive_texture.texcoord, 1);
+  EXPECT_FALSE(has({"sampler"}));
+  EXPECT_FALSE(has({"texCoord"}));
   EXPECT_TRUE(has({"material 'painted'", "normalTexture"}));
   EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_clearcoat"}));
-  EXPECT_EQ(w.size(), 7u) << "one line per input";
+  // KHR_materials_specular: F0 = min(F0(ior) color, 1) specular, F90 = specular;
+  // its texture is named.
+  const double f0 = (0.7 / 2.7) * (0.7 / 2.7);
+  const Vec3 sf0 = pm.dielectric_specular_f0();
+  EXPECT_NEAR(sf0.x, 0.5, 1e-7) << "20 f0 = 1.34 clamps to 1";
+  EXPECT_NEAR(sf0.y, f0 * 0.5, 1e-7);
+  EXPECT_NEAR(sf0.z, f0 * 0.25, 1e-7);
+  EXPECT_FLOAT_EQ(pm.dielectric_specular_f90(), 0.5f);
+  EXPECT_TRUE(has({"material 'painted'", "KHR_materials_specular specularTexture"}));
+  EXPECT_FALSE(has({"material extension KHR_materials_specular"}));
+  EXPECT_EQ(w.size(), 4u) << "one line per input";
 
   // The plain quad of the other tests: nothing to report, the default ior.
   auto plain = load(quad_scene().gltf_embedded());
@@ -343,19 +369,26 @@ TEST(SceneImport, SixteenBitGreyImageExpandsToRgba) {
   const Texture& lin = r->textures[1];
   ASSERT_EQ(srgb.width, 2);
   const double v = 32768.0 / 65535.0;
+  // 16-bit images are linear halves: within the half unit roundoff (2^-11 relative).
+  ASSERT_EQ(srgb.format, TexelFormat::kRGBA16F);
+  EXPECT_EQ(srgb.pixel_bytes(), 2u * 4 * 2);
+  const double e = std::pow((v + 0.055) / 1.055, 2.4);
+  const float s0[3] = {srgb.linear(0).x, srgb.linear(0).y, srgb.linear(0).z};
+  const float l0[3] = {lin.linear(0).x, lin.linear(0).y, lin.linear(0).z};
   for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(srgb.rgba[static_cast<size_t>(c)], std::pow((v + 0.055) / 1.055, 2.4), 1e-6);
-    EXPECT_NEAR(lin.rgba[static_cast<size_t>(c)], v, 1e-6);
+    EXPECT_NEAR(s0[c], e, e * 0x1p-11);
+    EXPECT_NEAR(l0[c], v, v * 0x1p-11);
   }
-  EXPECT_FLOAT_EQ(srgb.rgba[3], 1.0f);  // grey has no alpha: opaque
-  EXPECT_FLOAT_EQ(srgb.rgba[4], 1.0f);
+  EXPECT_NE(double(l0[0]), v) << "v is not a half: the test would not see the conversion";
+  EXPECT_FLOAT_EQ(srgb.linear(0).w, 1.0f);  // grey has no alpha: opaque
+  EXPECT_FLOAT_EQ(srgb.linear(1).x, 1.0f);
 
   ImportOptions no_decode;
   no_decode.decode_textures = false;
   auto n = load(b.glb(), no_decode);
   ASSERT_TRUE(n.is_ok());
   EXPECT_EQ(n->textures[0].width, 2);
-  EXPECT_TRUE(n->textures[0].rgba.empty());
+  EXPECT_FALSE(n->textures[0].has_pixels());
 }
 
 TEST(SceneImport, PunctualLights) {

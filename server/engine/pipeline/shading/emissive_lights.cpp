@@ -15,11 +15,12 @@ constexpr double kPi = 3.14159265358979323846;
 // emitter's power differs from its constant radiance. An undecoded texture
 // (imported without pixels) counts as 1.
 double mean_luminance(const scene::Texture& t) {
-  const size_t n = t.rgba.size() / 4;
-  if (n == 0) return 1.0;
+  if (!t.has_pixels()) return 1.0;
+  const size_t n = t.texel_count();
   double sum = 0;
   for (size_t i = 0; i < n; ++i) {
-    const Vec3 c{t.rgba[i * 4], t.rgba[i * 4 + 1], t.rgba[i * 4 + 2]};
+    const Vec4 l = t.linear(i);
+    const Vec3 c{l.x, l.y, l.z};
     if (is_finite(c)) sum += std::max(luminance(c), 0.0);
   }
   return sum / static_cast<double>(n);

@@ -16,5 +16,6 @@ static_assert(offsetof(LuxSky, light) == 12 && offsetof(LuxSky, block_height) ==
               offsetof(LuxSky, normal_bins) == 32 && offsetof(LuxSky, radiance) == 48 &&
               offsetof(LuxSky, rotation) == 64);
 static_assert(sizeof(LuxTexture) == 16 && offsetof(LuxTexture, flags) == 12);
+static_assert(sizeof(LuxTextureSlot) == 32 && offsetof(LuxTextureSlot, texture) == 24);
 
 }  // namespace luxel::cl

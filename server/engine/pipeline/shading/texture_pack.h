@@ -1,9 +1,9 @@
-// Material textures packed for the device: RGBA8 in one shared buffer
-// (kernels/shared/texture.h). Colour textures whose file was sRGB are
-// re-encoded as sRGB 8-bit (decoded exactly on fetch by
-// kernels/shading/texture.h), data textures as linear 8-bit: 4 bytes per
-// texel instead of the 16 of the scene's float RGBA, with at most half an
-// 8-bit step of error in the file's own encoding.
+// Material textures packed for the device (kernels/shared/texture.h): one
+// shared uint buffer holding each texture in its host format, copied as is:
+// 8-bit textures as RGBA8 words (colour textures keep the file's sRGB codes,
+// decoded exactly on fetch by kernels/shading/texture.h), 16-bit textures as
+// linear RGBA halves (two words per texel). 4 or 8 bytes per texel, the same
+// as the host copy (scene::Texture).
 #pragma once
 
 #include <cstddef>
@@ -18,11 +18,11 @@ namespace luxel::pipeline {
 
 struct TexturePack {
   std::vector<cl::LuxTexture> textures;  // one per scene::Scene::textures, same index
-  std::vector<uint32_t> texels;          // RGBA8, R in the low byte
+  std::vector<uint32_t> texels;          // RGBA8 (R in the low byte) or 2 words of halves
   size_t bytes() const;
 };
 
-// Packs every scene texture. Values are clamped to [0, 1] (NaN -> 0).
+// Packs every scene texture.
 // Errors: a texture without pixels (imported with decoding off) or whose
 // pixel count does not match its size -> INVALID_ARGUMENT naming it; more
 // than 2^31 texels in all -> RESOURCE_EXHAUSTED.

@@ -32,8 +32,8 @@ struct Albedo {
   double rgb[3] = {0, 0, 0};
 };
 
-double schlick(double f0, double c) {
-  return f0 + (1.0 - f0) * std::pow(1.0 - std::clamp(c, 0.0, 1.0), 5.0);
+double schlick(double f0, double c, double f90 = 1.0) {
+  return f0 + (f90 - f0) * std::pow(1.0 - std::clamp(c, 0.0, 1.0), 5.0);
 }
 
 // Smith Lambda for GGX (Heitz 2014, Eq. 72).
@@ -46,7 +46,8 @@ double lambda(const Vec3& w, double alpha) {
 // half-vector space: dL = 4 V.H dH, and the grid is midpoint in
 // (u, v) with tan^2 theta_h = alpha^2 u / (1 - u), phi = 2 pi v, for which
 // D(h) cos theta_h dH = du dv (the GGX cumulative distribution).
-Albedo specular_albedo(const Vec3& v, double alpha, const double f0[3], int nu, int nv) {
+Albedo specular_albedo(const Vec3& v, double alpha, const double f0[3], int nu, int nv,
+                       const double* f90 = nullptr) {
   Albedo a;
   const double lv = lambda(v, alpha);
   for (int i = 0; i < nu; ++i) {
@@ -62,7 +63,7 @@ Albedo specular_albedo(const Vec3& v, double alpha, const double f0[3], int nu, 
       if (l.z <= 0.0) continue;
       const double g2 = 1.0 / (1.0 + lv + lambda(l, alpha));
       const double w = g2 * vh / (v.z * ch);
-      for (int c = 0; c < 3; ++c) a.rgb[c] += schlick(f0[c], vh) * w;
+      for (int c = 0; c < 3; ++c) a.rgb[c] += schlick(f0[c], vh, f90 ? f90[c] : 1.0) * w;
     }
   }
   for (double& x : a.rgb) x /= double(nu) * nv;
@@ -71,14 +72,14 @@ Albedo specular_albedo(const Vec3& v, double alpha, const double f0[3], int nu, 
 
 // int (1 - Schlick(f0, V.H)) / pi N.L dL, midpoint in the cosine-weighted
 // parametrization N.L = sqrt(u), phi = 2 pi v (N.L / pi dL = du dv).
-double diffuse_transmission(const Vec3& v, double f0, int n) {
+double diffuse_transmission(const Vec3& v, double f0, int n, double f90 = 1.0) {
   double sum = 0.0;
   for (int i = 0; i < n; ++i) {
     const double z = std::sqrt((i + 0.5) / n), r = std::sqrt(1.0 - z * z);
     for (int j = 0; j < n; ++j) {
       const double phi = 2.0 * kPi * (j + 0.5) / n;
       const Vec3 h = normalize(Vec3{v.x + r * std::cos(phi), v.y + r * std::sin(phi), v.z + z});
-      sum += 1.0 - schlick(f0, dot(v, h));
+      sum += 1.0 - schlick(f0, dot(v, h), f90);
     }
   }
   return sum / (double(n) * n);
@@ -98,8 +99,8 @@ double average_albedo(double alpha) {
   return sum / n;
 }
 
-double kulla_conty_fms(double f0, double e_avg) {
-  const double f_avg = f0 + (1.0 - f0) / 21.0;
+double kulla_conty_fms(double f0, double e_avg, double f90 = 1.0) {
+  const double f_avg = f0 + (f90 - f0) / 21.0;
   return f_avg * f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg));
 }
 
@@ -115,17 +116,25 @@ Expected quadrature(const Material& m, double cz, double e_avg) {
   const double metallic = m.base_metallic.w;
   const double alpha = std::max(double(m.roughness) * m.roughness, 1e-3);
   const Vec3 v = spherical_direction(cz, 0.7);
-  double f0[3];
-  const double f0_d = m.dielectric_f0;
-  for (int c = 0; c < 3; ++c) f0[c] = f0_d * (1 - metallic) + base[c] * metallic;
-  const Albedo spec = specular_albedo(v, alpha, f0, 2048, 1024);
-  const double t = diffuse_transmission(v, f0_d, 512);
+  // KHR_materials_specular: the dielectric's f0 per channel and its f90.
+  const bool spec_ext = m.specular.w > 0;
+  const double f0_dc[3] = {spec_ext ? m.specular.x : m.dielectric_f0,
+                           spec_ext ? m.specular.y : m.dielectric_f0,
+                           spec_ext ? m.specular.z : m.dielectric_f0};
+  const double f90_d = spec_ext ? m.specular.w : 1.0;
+  double f0[3], f90[3];
+  for (int c = 0; c < 3; ++c) {
+    f0[c] = f0_dc[c] * (1 - metallic) + base[c] * metallic;
+    f90[c] = f90_d * (1 - metallic) + metallic;
+  }
+  const Albedo spec = specular_albedo(v, alpha, f0, 2048, 1024, f90);
   const double e_o = white_albedo(cz, alpha, 2048, 1024);
   Expected e;
   for (int c = 0; c < 3; ++c) {
+    const double t = diffuse_transmission(v, f0_dc[c], 512, f90_d);
     e.single.rgb[c] = spec.rgb[c] + base[c] * (1 - metallic) * t;
-    const double fms =
-        (1 - metallic) * kulla_conty_fms(f0_d, e_avg) + metallic * kulla_conty_fms(base[c], e_avg);
+    const double fms = (1 - metallic) * kulla_conty_fms(f0_dc[c], e_avg, f90_d) +
+                       metallic * kulla_conty_fms(base[c], e_avg);
     e.total.rgb[c] = e.single.rgb[c] + fms * (1.0 - e_o);
     e.old.rgb[c] = spec.rgb[c] + base[c] * (1 - metallic) * (1.0 - schlick(f0[c], cz));
   }
@@ -136,18 +145,24 @@ using BsdfAlbedoTest = SamplingTest;
 
 TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
   const size_t n = Probe::kMaxSamples;
-  const Material materials[] = {{{0.8f, 0.5f, 0.3f, 0.0f}, 0.2f},
-                                {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f},
-                                {{1.0f, 1.0f, 1.0f, 0.0f}, 0.5f},
-                                {{0.1f, 0.1f, 0.1f, 0.0f}, 0.8f},
-                                {{1.0f, 1.0f, 1.0f, 0.0f}, 1.0f},
-                                {{0.95f, 0.64f, 0.54f, 1.0f}, 0.2f},
-                                {{0.95f, 0.64f, 0.54f, 1.0f}, 0.5f},
-                                {{1.0f, 1.0f, 1.0f, 1.0f}, 1.0f},
-                                {{0.9f, 0.6f, 0.3f, 0.5f}, 0.6f},
-                                // KHR_materials_ior: ior 2.0 (f0 1/9) and 1.33 (f0 0.0201).
-                                {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f, 1.0f / 9.0f},
-                                {{0.3f, 0.6f, 0.9f, 0.0f}, 0.3f, 0.0201f}};
+  const Material materials[] = {
+      {{0.8f, 0.5f, 0.3f, 0.0f}, 0.2f},
+      {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f},
+      {{1.0f, 1.0f, 1.0f, 0.0f}, 0.5f},
+      {{0.1f, 0.1f, 0.1f, 0.0f}, 0.8f},
+      {{1.0f, 1.0f, 1.0f, 0.0f}, 1.0f},
+      {{0.95f, 0.64f, 0.54f, 1.0f}, 0.2f},
+      {{0.95f, 0.64f, 0.54f, 1.0f}, 0.5f},
+      {{1.0f, 1.0f, 1.0f, 1.0f}, 1.0f},
+      {{0.9f, 0.6f, 0.3f, 0.5f}, 0.6f},
+      // KHR_materials_ior: ior 2.0 (f0 1/9) and 1.33 (f0 0.0201).
+      {{0.8f, 0.5f, 0.3f, 0.0f}, 0.5f, 1.0f / 9.0f},
+      {{0.3f, 0.6f, 0.9f, 0.0f}, 0.3f, 0.0201f},
+      // KHR_materials_specular: specular 0.6, specularColor
+      // (2, 0.5, 1) at ior 1.5: f0 = min(0.04 c, 1) 0.6, f90 0.6;
+      // and specular 1 with a colour that saturates f0 (ior 3).
+      {{0.8f, 0.5f, 0.3f, 0.0f}, 0.3f, 0.04f, {0.048f, 0.012f, 0.024f, 0.6f}},
+      {{0.2f, 0.2f, 0.2f, 0.0f}, 0.4f, 0.25f, {1.0f, 0.25f, 0.05f, 1.0f}}};
   double worst_gap = 0.0, worst_uncompensated = 0.0;
   int rejected_old = 0, cases = 0;
   for (const Material& m : materials) {
@@ -160,8 +175,8 @@ TEST_F(BsdfAlbedoTest, SampledAlbedoMatchesIndependentQuadrature) {
       ASSIGN_OR_FAIL(s, probe().bsdf_sample(Build::kSobolSpecular, m,
                                             to_float4(spherical_direction(cz, 0.7)), -1.0f, n));
       const Expected e = quadrature(m, cz, e_avg);
-      // A material with its own ior must not pass as the default one.
-      const bool own_ior = m.dielectric_f0 != 0.04f;
+      // A material with its own ior (or specular) must not pass as the default one.
+      const bool own_ior = m.dielectric_f0 != 0.04f || m.specular.w > 0;
       const Expected e_default_ior =
           own_ior ? quadrature(Material{m.base_metallic, m.roughness}, cz, e_avg) : e;
       bool default_ior_rejected = false;

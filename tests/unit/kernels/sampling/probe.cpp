@@ -156,7 +156,7 @@ Result<BsdfSamples> Probe::bsdf_sample(Build build, const Material& m, float4 wo
   if (!weight) return weight.status();
   if (!check) return check.status();
   wo.w = m.dielectric_f0;
-  LUXEL_RETURN_IF_ERROR(k->set_args(m.base_metallic, m.roughness, wo, u_layer_override,
+  LUXEL_RETURN_IF_ERROR(k->set_args(m.base_metallic, m.roughness, wo, m.specular, u_layer_override,
                                     uniforms_device_, uint32_t(count), sample.value(),
                                     weight.value(), check.value()));
   LUXEL_RETURN_IF_ERROR(ctx_->launch(k.value(), count, 64));
@@ -180,7 +180,7 @@ Result<std::vector<float4>> Probe::bsdf_eval(Build build, const Material& m, flo
   if (!in) return in.status();
   if (!out) return out.status();
   wo.w = m.dielectric_f0;
-  LUXEL_RETURN_IF_ERROR(k->set_args(m.base_metallic, m.roughness, wo, in.value(),
+  LUXEL_RETURN_IF_ERROR(k->set_args(m.base_metallic, m.roughness, wo, m.specular, in.value(),
                                     uint32_t(dirs.size()), out.value()));
   LUXEL_RETURN_IF_ERROR(ctx_->launch(k.value(), dirs.size(), 64));
   return read_back<float4>(out.value(), dirs.size() * 2);

@@ -39,6 +39,8 @@ struct Material {
   float4 base_metallic;  // base colour rgb, metallic
   float roughness;
   float dielectric_f0 = 0.04f;  // ((ior - 1) / (ior + 1))^2; passed in wo.w
+  // KHR_materials_specular: dielectric (f0 rgb, f90); w = 0: f0 above, f90 1.
+  float4 specular = {0, 0, 0, 0};
 };
 
 struct BsdfSamples {

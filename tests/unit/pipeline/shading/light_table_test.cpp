@@ -122,7 +122,7 @@ TEST(LightTable, TexturedEmittersAreFlaggedAndWeighedByTheTextureMean) {
   tex.name = "glow";
   tex.width = 2;
   tex.height = 1;
-  tex.rgba = {1, 1, 1, 1, 0, 0, 0, 1};  // mean luminance 0.5
+  tex.rgba8 = {255, 255, 255, 255, 0, 0, 0, 255};  // mean luminance 0.5
   b.s.textures.push_back(tex);
   const int plain = b.add_emitter({1, 1, 1});
   const int textured = b.add_emitter({1, 1, 1});

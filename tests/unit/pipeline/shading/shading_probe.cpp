@@ -178,20 +178,31 @@ Status probe_sample_alias(const std::vector<cl::LuxAliasEntry>& table, const std
 
 Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,
                                               const std::vector<cl::float2>& uv) {
+  cl::LuxTextureSlot slot{};
+  slot.m00 = slot.m11 = 1.0f;
+  slot.texture = texture;
+  return probe_texture_slot(pack, slot, uv, uv);
+}
+
+Result<std::vector<cl::float4>> probe_texture_slot(const TexturePack& pack,
+                                                   const cl::LuxTextureSlot& slot,
+                                                   const std::vector<cl::float2>& uv0,
+                                                   const std::vector<cl::float2>& uv1) {
+  if (uv0.size() != uv1.size()) return invalid_argument("uv0 and uv1 differ in length");
   auto program = shared_context().programs().get(kProbe, all_light_features());
   if (!program) return program.status();
   auto kernel = program.value()->kernel("probe_texture");
   if (!kernel) return kernel.status();
   auto texels = upload(pack.texels, "texels"), textures = upload(pack.textures, "textures"),
-       uvs = upload(uv, "uv");
-  if (!texels || !textures || !uvs) return internal_error("uploading texture queries");
-  auto out = shared_context().alloc(uv.size() * sizeof(cl::float4), "texture out");
+       a = upload(uv0, "uv0"), b = upload(uv1, "uv1");
+  if (!texels || !textures || !a || !b) return internal_error("uploading texture queries");
+  auto out = shared_context().alloc(uv0.size() * sizeof(cl::float4), "texture out");
   if (!out) return out.status();
-  LUXEL_RETURN_IF_ERROR(kernel->set_args(texels.value(), textures.value(), texture, uvs.value(),
-                                         static_cast<int>(uv.size()), out.value()));
-  LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), uv.size()));
+  LUXEL_RETURN_IF_ERROR(kernel->set_args(texels.value(), textures.value(), slot, a.value(),
+                                         b.value(), static_cast<int>(uv0.size()), out.value()));
+  LUXEL_RETURN_IF_ERROR(shared_context().launch(kernel.value(), uv0.size()));
   std::vector<cl::float4> r;
-  LUXEL_RETURN_IF_ERROR(read_back(out.value(), &r, uv.size()));
+  LUXEL_RETURN_IF_ERROR(read_back(out.value(), &r, uv0.size()));
   return r;
 }
 

@@ -69,8 +69,14 @@ Status probe_sample_cdf(const std::vector<float>& cdf, const std::vector<float>&
 Status probe_sample_alias(const std::vector<cl::LuxAliasEntry>& table, const std::vector<float>& u,
                           std::vector<int>* index, std::vector<float>* pmf);
 
-// lux_texture_sample(pack.textures[texture], uv[i]).
+// lux_texture_sample(pack.textures[texture], uv[i]) (repeat, no transform).
 Result<std::vector<cl::float4>> probe_texture(const TexturePack& pack, int texture,
                                               const std::vector<cl::float2>& uv);
+
+// lux_texture_slot_sample(slot, uv0[i], uv1[i]): UV set, transform, wraps.
+Result<std::vector<cl::float4>> probe_texture_slot(const TexturePack& pack,
+                                                   const cl::LuxTextureSlot& slot,
+                                                   const std::vector<cl::float2>& uv0,
+                                                   const std::vector<cl::float2>& uv1);
 
 }  // namespace luxel::pipeline::test
