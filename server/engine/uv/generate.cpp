@@ -430,10 +430,11 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       p.scale[1] = static_cast<float>(lh * grow / ah);
       p.offset[0] = static_cast<float>(origin.x / aw);
       p.offset[1] = static_cast<float>(origin.y / ah);
-      p.rect[0] = static_cast<int>(std::floor(origin.x));
-      p.rect[1] = static_cast<int>(std::floor(origin.y));
-      p.rect[2] = std::min(at.width - p.rect[0], static_cast<int>(std::ceil(lw * grow)) + 1);
-      p.rect[3] = std::min(at.height - p.rect[1], static_cast<int>(std::ceil(lh * grow)) + 1);
+      // The texels the instance's conservative mask covers.
+      for (int axis = 0; axis < 2; ++axis) {
+        p.rect[axis] = sp.mask_origin[axis];
+        p.rect[2 + axis] = sp.mask_size[axis];
+      }
       const double d = density * mc.instance_scale[k] / mc.min_instance_scale;
       min_density = std::min(min_density, d);
       max_density = std::max(max_density, d);

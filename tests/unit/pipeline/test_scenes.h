@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <string>
-#include <utility>
 
 #include "common/math.h"
 #include "scene/scene.h"
@@ -70,56 +69,6 @@ inline scene::Scene furnace_box(float albedo, float le, float scale = 1.0f) {
     add_quad(s, o, eu, ev, cu + margin, cv + margin, cu + 1.0f / 3.0f - margin, cv + 0.5f - margin,
              0);
   }
-  return s;
-}
-
-// A closed UV sphere of radius `radius` (rings x segments), one mesh whose
-// faces point inwards, albedo a and emitted radiance le, and *without*
-// lightmap UVs (the bake generates them): inside a closed emitter every
-// surface point has E = pi le sum_j a^j, whatever the layout, so a furnace
-// bake checks the generated charts, packing and seams end to end.
-inline scene::Scene furnace_sphere(float albedo, float le, int rings = 12, int segments = 24,
-                                   float radius = 1.0f) {
-  scene::Scene s;
-  s.source_name = "furnace_sphere";
-  s.materials.push_back(diffuse_material(albedo, le));
-  scene::Mesh m;
-  m.name = "sphere";
-  for (int r = 0; r <= rings; ++r) {
-    const float theta = static_cast<float>(M_PI) * static_cast<float>(r) / static_cast<float>(rings);
-    for (int k = 0; k <= segments; ++k) {
-      const float phi = 2.0f * static_cast<float>(M_PI) * static_cast<float>(k) /
-                        static_cast<float>(segments);
-      const Vec3 p{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)};
-      m.positions.push_back(p * radius);
-      m.normals.push_back(p * -1.0f);  // inwards
-      m.uv0.push_back({static_cast<float>(k) / static_cast<float>(segments),
-                       static_cast<float>(r) / static_cast<float>(rings)});
-    }
-  }
-  auto at = [&](int r, int k) { return static_cast<uint32_t>(r * (segments + 1) + k); };
-  for (int r = 0; r < rings; ++r) {
-    for (int k = 0; k < segments; ++k) {
-      const uint32_t a = at(r, k), b = at(r, k + 1), c = at(r + 1, k + 1), d = at(r + 1, k);
-      // Wound so that cross(q - p, w - p) points inwards (to the centre).
-      auto add = [&](uint32_t p, uint32_t q, uint32_t w) {
-        const Vec3 n = cross(m.positions[q] - m.positions[p], m.positions[w] - m.positions[p]);
-        const Vec3 centroid = m.positions[p] + m.positions[q] + m.positions[w];
-        if (dot(n, centroid) > 0) std::swap(q, w);
-        m.indices.insert(m.indices.end(), {p, q, w});
-      };
-      if (r != 0) add(a, b, c);
-      if (r != rings - 1) add(a, c, d);
-    }
-  }
-  m.uv1.assign(m.positions.size(), Vec2{0, 0});
-  m.has_lightmap_uvs = false;
-  m.triangle_material.assign(m.indices.size() / 3, 0);
-  s.meshes.push_back(m);
-  scene::Instance inst;
-  inst.name = "sphere";
-  inst.mesh = 0;
-  s.instances.push_back(inst);
   return s;
 }
 
