@@ -135,8 +135,10 @@ Status check_instances_disjoint(const scene::Scene& scene, const Atlas& atlas) {
     const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(scene.instances[i].mesh)];
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       const TexelTriangle tt = texel_triangle(scene, atlas, i, t);
-      const double x0 = std::min({tt.x[0], tt.x[1], tt.x[2]}), x1 = std::max({tt.x[0], tt.x[1], tt.x[2]});
-      const double y0 = std::min({tt.y[0], tt.y[1], tt.y[2]}), y1 = std::max({tt.y[0], tt.y[1], tt.y[2]});
+      const double x0 = std::min({tt.x[0], tt.x[1], tt.x[2]}),
+                   x1 = std::max({tt.x[0], tt.x[1], tt.x[2]});
+      const double y0 = std::min({tt.y[0], tt.y[1], tt.y[2]}),
+                   y1 = std::max({tt.y[0], tt.y[1], tt.y[2]});
       auto edge = [&](int a, int b, double px, double py) {
         return (tt.x[b] - tt.x[a]) * (py - tt.y[a]) - (tt.y[b] - tt.y[a]) * (px - tt.x[a]);
       };

@@ -120,9 +120,8 @@ Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atl
   for (uint32_t i = 0; i < scene.instances.size(); ++i) {
     const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(scene.instances[i].mesh)];
     if (mesh.uv1.size() != mesh.positions.size())
-      return invalid_argument(
-          strprintf("mesh '%s' has %zu lightmap UVs for %zu vertices", mesh.name.c_str(),
-                    mesh.uv1.size(), mesh.positions.size()));
+      return invalid_argument(strprintf("mesh '%s' has %zu lightmap UVs for %zu vertices",
+                                        mesh.name.c_str(), mesh.uv1.size(), mesh.positions.size()));
     for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
       const TexelTriangle tt = texel_triangle(scene, atlas, i, t);
       if (TriangleCoverage(tt).zero_area()) {

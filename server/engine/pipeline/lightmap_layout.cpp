@@ -21,8 +21,7 @@ std::string missing_lightmap_uvs(const scene::Scene& scene) {
   }
   if (missing == 1) return strprintf("mesh '%s' has no TEXCOORD_1", first_missing.c_str());
   if (missing > 1)
-    return strprintf("%zu meshes have no TEXCOORD_1 (first: '%s')", missing,
-                     first_missing.c_str());
+    return strprintf("%zu meshes have no TEXCOORD_1 (first: '%s')", missing, first_missing.c_str());
   if (overlapping == 1)
     return strprintf("the TEXCOORD_1 of mesh '%s' overlaps itself", first_overlapping.c_str());
   if (overlapping > 1)
@@ -72,8 +71,7 @@ Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSet
     }
     // Only a problem with the UVs themselves falls back to generation; a
     // setting or size problem stays an error.
-    if (settings.uv == UvMode::kExisting ||
-        atlas.status().code() != StatusCode::kInvalidArgument ||
+    if (settings.uv == UvMode::kExisting || atlas.status().code() != StatusCode::kInvalidArgument ||
         scene.instances.empty())
       return atlas.status();
     reason = atlas.status().message();
@@ -81,8 +79,9 @@ Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSet
     // Overlapping UVs are baked as they are (the import warning names them);
     // missing ones cannot be.
     if (reason.find("no TEXCOORD_1") != std::string::npos)
-      return invalid_argument(reason + " (lightmap UVs); bake with --uv auto or generate to "
-                                       "have them generated");
+      return invalid_argument(reason +
+                              " (lightmap UVs); bake with --uv auto or generate to "
+                              "have them generated");
     auto atlas = atlas::build_atlas(scene, settings.atlas);
     if (!atlas) return atlas.status();
     LightmapLayout layout;

@@ -64,7 +64,8 @@ Result<Bytes> decode_base64(std::string_view text) {
 }
 
 // The bytes a buffer or image URI names.
-Result<Bytes> read_uri(const std::string& uri, const std::string& base_dir, const std::string& what) {
+Result<Bytes> read_uri(const std::string& uri, const std::string& base_dir,
+                       const std::string& what) {
   if (uri.rfind("data:", 0) == 0) {
     const size_t comma = uri.find(',');
     if (comma == std::string::npos || uri.find(";base64", 0) > comma)
@@ -73,7 +74,8 @@ Result<Bytes> read_uri(const std::string& uri, const std::string& base_dir, cons
     if (!d) return data_loss(what + ": " + d.status().message());
     return d;
   }
-  if (base_dir.empty()) return invalid_argument(what + ": external file '" + uri + "' not available");
+  if (base_dir.empty())
+    return invalid_argument(what + ": external file '" + uri + "' not available");
   auto name = percent_decode_uri(uri);
   if (!name) return invalid_argument(what + ": " + name.status().message());
   std::ifstream in(std::filesystem::path(base_dir) / name.value(), std::ios::binary);
@@ -122,7 +124,8 @@ Status merge_buffers(json& doc, const Bytes& glb_bin, const std::string& base_di
   if (doc.contains("bufferViews")) {
     for (json& view : doc["bufferViews"]) {
       const size_t b = view.value("buffer", 0);
-      if (b >= base.size()) return invalid_argument("a bufferView names a buffer that does not exist");
+      if (b >= base.size())
+        return invalid_argument("a bufferView names a buffer that does not exist");
       view["buffer"] = 0;
       view["byteOffset"] = view.value("byteOffset", size_t{0}) + base[b];
     }
@@ -174,7 +177,8 @@ int component_bytes(int component_type) {
 // zeros without a bufferView).
 Result<Bytes> read_elements(const json& doc, const Bytes& bin, int index, size_t* element_size) {
   const std::string what = strprintf("accessors[%d]", index);
-  if (index < 0 || !doc.contains("accessors") || static_cast<size_t>(index) >= doc["accessors"].size())
+  if (index < 0 || !doc.contains("accessors") ||
+      static_cast<size_t>(index) >= doc["accessors"].size())
     return invalid_argument(what + " does not exist");
   const json& a = doc["accessors"][static_cast<size_t>(index)];
   const size_t count = a.value("count", size_t{0});
@@ -183,7 +187,8 @@ Result<Bytes> read_elements(const json& doc, const Bytes& bin, int index, size_t
   if (esize == 0) return invalid_argument(what + ": unknown componentType or type");
   *element_size = esize;
   Bytes out(count * esize, 0);
-  auto copy_from_view = [&](int view_index, size_t offset, size_t n, size_t elem, auto&& sink) -> Status {
+  auto copy_from_view = [&](int view_index, size_t offset, size_t n, size_t elem,
+                            auto&& sink) -> Status {
     if (view_index < 0 || static_cast<size_t>(view_index) >= doc["bufferViews"].size())
       return invalid_argument(what + ": bufferView does not exist");
     const json& v = doc["bufferViews"][static_cast<size_t>(view_index)];
@@ -195,10 +200,9 @@ Result<Bytes> read_elements(const json& doc, const Bytes& bin, int index, size_t
     return Status::ok();
   };
   if (a.contains("bufferView")) {
-    LUXEL_RETURN_IF_ERROR(copy_from_view(a["bufferView"].get<int>(), a.value("byteOffset", size_t{0}),
-                                         count, esize, [&](size_t i, const uint8_t* p) {
-                                           std::memcpy(out.data() + i * esize, p, esize);
-                                         }));
+    LUXEL_RETURN_IF_ERROR(copy_from_view(
+        a["bufferView"].get<int>(), a.value("byteOffset", size_t{0}), count, esize,
+        [&](size_t i, const uint8_t* p) { std::memcpy(out.data() + i * esize, p, esize); }));
   }
   if (a.contains("sparse")) {
     const json& sp = a["sparse"];
@@ -207,8 +211,9 @@ Result<Bytes> read_elements(const json& doc, const Bytes& bin, int index, size_t
     const int ictype = ix.value("componentType", 0);
     const size_t isize = static_cast<size_t>(component_bytes(ictype));
     std::vector<size_t> targets(n);
-    LUXEL_RETURN_IF_ERROR(copy_from_view(ix.value("bufferView", -1), ix.value("byteOffset", size_t{0}), n,
-                                         isize, [&](size_t i, const uint8_t* p) {
+    LUXEL_RETURN_IF_ERROR(copy_from_view(ix.value("bufferView", -1),
+                                         ix.value("byteOffset", size_t{0}), n, isize,
+                                         [&](size_t i, const uint8_t* p) {
                                            uint32_t t = 0;
                                            std::memcpy(&t, p, isize);
                                            targets[i] = t;
@@ -216,8 +221,9 @@ Result<Bytes> read_elements(const json& doc, const Bytes& bin, int index, size_t
     for (size_t t : targets)
       if (t >= count) return invalid_argument(what + ": sparse index out of range");
     const json& vals = sp["values"];
-    LUXEL_RETURN_IF_ERROR(copy_from_view(vals.value("bufferView", -1), vals.value("byteOffset", size_t{0}),
-                                         n, esize, [&](size_t i, const uint8_t* p) {
+    LUXEL_RETURN_IF_ERROR(copy_from_view(vals.value("bufferView", -1),
+                                         vals.value("byteOffset", size_t{0}), n, esize,
+                                         [&](size_t i, const uint8_t* p) {
                                            std::memcpy(out.data() + targets[i] * esize, p, esize);
                                          }));
   }
@@ -254,7 +260,8 @@ Result<int> grown_accessor(json& doc, Bytes* bin, int index, const std::vector<u
   const size_t count = d.size() / esize;
   d.reserve(d.size() + origin.size() * esize);
   for (uint32_t o : origin) {
-    if (o >= count) return invalid_argument(strprintf("accessors[%d]: vertex %u out of range", index, o));
+    if (o >= count)
+      return invalid_argument(strprintf("accessors[%d]: vertex %u out of range", index, o));
     d.insert(d.end(), d.begin() + static_cast<long>(o * esize),
              d.begin() + static_cast<long>((o + 1) * esize));
   }
@@ -273,7 +280,8 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
                                           const scene::Scene& scene, const BakeResult& result,
                                           WritebackReport* report) {
   if (!result.uv_layout)
-    return invalid_argument("the bake used the file's TEXCOORD_1; there are no generated UVs to write");
+    return invalid_argument(
+        "the bake used the file's TEXCOORD_1; there are no generated UVs to write");
   const GeneratedUvLayout& layout = *result.uv_layout;
   if (layout.meshes.size() != scene.meshes.size())
     return invalid_argument("the generated UVs belong to another scene");
@@ -298,8 +306,8 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
       const std::string where =
           strprintf("mesh '%s' primitive %d", mesh.name.c_str(), span.primitive);
       const int mode = prim.value("mode", 4);
-      if (mode != 4 ||
-          (prim.contains("extensions") && prim["extensions"].contains("KHR_draco_mesh_compression"))) {
+      if (mode != 4 || (prim.contains("extensions") &&
+                        prim["extensions"].contains("KHR_draco_mesh_compression"))) {
         report->warnings.push_back(where + ": not a plain triangle list (mode " +
                                    std::to_string(mode) +
                                    " or Draco); its TEXCOORD_1 was not written");
@@ -328,7 +336,8 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
         for (uint32_t j = 0; j < 3; ++j) {
           const uint32_t w = uvs.indices[3 * st + j];
           if (w >= local.size() || local[w] == UINT32_MAX)
-            return invalid_argument(where + ": a generated triangle uses another primitive's vertex");
+            return invalid_argument(where +
+                                    ": a generated triangle uses another primitive's vertex");
           idx[3 * src + j] = local[w];
         }
       }
@@ -394,13 +403,14 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
   // Per node: where its instance(s) sit in the atlas.
   std::map<int, std::vector<size_t>> node_instances;
   for (size_t i = 0; i < scene.instances.size(); ++i)
-    if (scene.instances[i].node_index >= 0) node_instances[scene.instances[i].node_index].push_back(i);
+    if (scene.instances[i].node_index >= 0)
+      node_instances[scene.instances[i].node_index].push_back(i);
   for (const auto& [node, list] : node_instances) {
     if (!doc.contains("nodes") || static_cast<size_t>(node) >= doc["nodes"].size()) continue;
     json& n = doc["nodes"][static_cast<size_t>(node)];
     if (n.contains("extras") && !n["extras"].is_object()) {
-      report->warnings.push_back(strprintf(
-          "node %d: extras is not an object; lightmapScaleOffset not written", node));
+      report->warnings.push_back(
+          strprintf("node %d: extras is not an object; lightmapScaleOffset not written", node));
       continue;
     }
     auto so = [&](size_t i) {
@@ -447,7 +457,8 @@ Result<WritebackReport> write_lightmapped_glb(const std::string& source_path,
   const std::string bytes = ss.str();
   WritebackReport report;
   const std::string base_dir = std::filesystem::path(source_path).parent_path().string();
-  auto glb = lightmapped_glb_bytes(bytes, base_dir.empty() ? "." : base_dir, scene, result, &report);
+  auto glb =
+      lightmapped_glb_bytes(bytes, base_dir.empty() ? "." : base_dir, scene, result, &report);
   if (!glb) return glb.status();
   LUXEL_RETURN_IF_ERROR(write_file_atomic(out_path, glb.value()));
   return report;

@@ -28,9 +28,9 @@
 namespace luxel::pipeline {
 
 struct WritebackReport {
-  size_t primitives = 0;       // primitives given generated TEXCOORD_1
-  size_t added_vertices = 0;   // seam copies appended over all primitives
-  size_t nodes = 0;            // nodes given extras.lightmapScaleOffset(s)
+  size_t primitives = 0;              // primitives given generated TEXCOORD_1
+  size_t added_vertices = 0;          // seam copies appended over all primitives
+  size_t nodes = 0;                   // nodes given extras.lightmapScaleOffset(s)
   std::vector<std::string> warnings;  // what could not be written, by name
 };
 

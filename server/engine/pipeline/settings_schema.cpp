@@ -238,22 +238,23 @@ std::vector<Setting> make_schema() {
                                      : v.text == "opencl" ? accel::IntersectorKind::kOpenCl
                                                           : accel::IntersectorKind::kAuto;
                    }});
-  t.push_back({.name = "uv",
-               .type = Type::kChoice,
-               .units = "",
-               .help = "lightmap UVs: auto (TEXCOORD_1 when valid, else generated), generate, "
-                       "existing",
-               .flag = "--uv",
-               .metavar = "M",
-               .default_value = SettingValue::of_text("auto"),
-               .choices = {"auto", "generate", "existing"},
-               .get = [](const BakeSettings& s) { return SettingValue::of_text(uv_mode_name(s.uv)); },
-               .set =
-                   [](BakeSettings& s, const SettingValue& v) {
-                     s.uv = v.text == "generate"   ? UvMode::kGenerate
-                            : v.text == "existing" ? UvMode::kExisting
-                                                   : UvMode::kAuto;
-                   }});
+  t.push_back(
+      {.name = "uv",
+       .type = Type::kChoice,
+       .units = "",
+       .help = "lightmap UVs: auto (TEXCOORD_1 when valid, else generated), generate, "
+               "existing",
+       .flag = "--uv",
+       .metavar = "M",
+       .default_value = SettingValue::of_text("auto"),
+       .choices = {"auto", "generate", "existing"},
+       .get = [](const BakeSettings& s) { return SettingValue::of_text(uv_mode_name(s.uv)); },
+       .set =
+           [](BakeSettings& s, const SettingValue& v) {
+             s.uv = v.text == "generate"   ? UvMode::kGenerate
+                    : v.text == "existing" ? UvMode::kExisting
+                                           : UvMode::kAuto;
+           }});
   t.push_back({.name = "clamp_luminance",
                .type = Type::kFloat,
                .units = "W/m^2/sr",

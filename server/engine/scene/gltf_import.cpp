@@ -232,9 +232,10 @@ Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, 
       return invalid_argument(strprintf("%s[%d] is not a number", where.c_str(), k));
     const double d = e.GetNumberAsDouble();
     if (!std::isfinite(d) || (k < 2 && d == 0) || std::fabs(d) > 1e6)
-      return invalid_argument(strprintf("%s[%d] is %g; scales must be non-zero and every entry "
-                                        "finite and at most 1e6 in magnitude",
-                                        where.c_str(), k, d));
+      return invalid_argument(
+          strprintf("%s[%d] is %g; scales must be non-zero and every entry "
+                    "finite and at most 1e6 in magnitude",
+                    where.c_str(), k, d));
     inst->lightmap_scale_offset[k] = static_cast<float>(d);
   }
   inst->has_lightmap_scale_offset = true;

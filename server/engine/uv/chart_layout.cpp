@@ -12,7 +12,8 @@ double cross2(DVec2 o, DVec2 a, DVec2 b) {
 
 // Andrew's monotone chain; counter-clockwise, collinear points dropped.
 std::vector<DVec2> convex_hull(std::vector<DVec2> p) {
-  std::sort(p.begin(), p.end(), [](DVec2 a, DVec2 b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
+  std::sort(p.begin(), p.end(),
+            [](DVec2 a, DVec2 b) { return a.x != b.x ? a.x < b.x : a.y < b.y; });
   if (p.size() < 3) return p;
   std::vector<DVec2> h(2 * p.size());
   size_t k = 0;

@@ -68,15 +68,15 @@ struct ChartOptions {
 };
 
 struct ChartStats {
-  size_t triangles = 0;               // triangles in the mesh
-  size_t degenerate_triangles = 0;    // zero-area: in no chart
-  size_t charts = 0;                  // charts returned
-  size_t planar_charts = 0;           // parametrized by projection
-  size_t lscm_charts = 0;             // parametrized by LSCM
-  size_t rejected_splits = 0;         // charts split because validation failed
-  size_t aspect_splits = 0;           // charts split because they were long and thin
-  size_t stretch_splits = 0;          // charts split because their L2 stretch was too high
-  size_t welded_vertices = 0;         // topological vertices after welding
+  size_t triangles = 0;             // triangles in the mesh
+  size_t degenerate_triangles = 0;  // zero-area: in no chart
+  size_t charts = 0;                // charts returned
+  size_t planar_charts = 0;         // parametrized by projection
+  size_t lscm_charts = 0;           // parametrized by LSCM
+  size_t rejected_splits = 0;       // charts split because validation failed
+  size_t aspect_splits = 0;         // charts split because they were long and thin
+  size_t stretch_splits = 0;        // charts split because their L2 stretch was too high
+  size_t welded_vertices = 0;       // topological vertices after welding
 };
 
 // Segments and parametrizes one mesh. Every non-degenerate triangle is in

@@ -149,7 +149,7 @@ Result<PackAttempt> pack_at(const std::vector<MeshCharts>& meshes, double densit
         const Chart& chart = mc.charts[c];
         for (uint32_t i : chart.indices) {
           const DPoint p = placed_point(chart.uv[i].x * layout.scale, chart.uv[i].y * layout.scale,
-                                       layout.placements[c]);
+                                        layout.placements[c]);
           s.corners.push_back({static_cast<float>(p.x * grow), static_cast<float>(p.y * grow)});
         }
       }
@@ -260,23 +260,24 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       }
     } else {
       std::vector<uint32_t> all;
-      for (const Chart& c : mc.charts) all.insert(all.end(), c.triangles.begin(), c.triangles.end());
+      for (const Chart& c : mc.charts)
+        all.insert(all.end(), c.triangles.begin(), c.triangles.end());
       mc.min_instance_scale = std::numeric_limits<double>::infinity();
       for (uint32_t inst : mc.instances) {
         const double w = world_area(mesh, scene.instances[inst].object_to_world, all);
         const double s = std::sqrt(w / mesh_area);
         if (!(std::isfinite(s) && s > 0))
-          return invalid_argument(strprintf(
-              "instance '%s' of mesh '%s' has a zero or non-finite world area",
-              scene.instances[inst].name.c_str(), mesh.name.c_str()));
+          return invalid_argument(
+              strprintf("instance '%s' of mesh '%s' has a zero or non-finite world area",
+                        scene.instances[inst].name.c_str(), mesh.name.c_str()));
         mc.instance_scale.push_back(s);
         mc.min_instance_scale = std::min(mc.min_instance_scale, s);
       }
     }
     for (size_t c = 0; c < mc.charts.size(); ++c)
       if (!(std::isfinite(mc.chart_scale.empty() ? 1.0 : mc.chart_scale[c])))
-        return invalid_argument(strprintf("mesh '%s' has a non-finite world area",
-                                          mesh.name.c_str()));
+        return invalid_argument(
+            strprintf("mesh '%s' has a non-finite world area", mesh.name.c_str()));
   }
   report.chart_seconds = seconds_since(t_charts);
 
@@ -353,7 +354,8 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         const uint32_t t = chart.triangles[k];
         placed[t] = true;
         for (int j = 0; j < 3; ++j)
-          mesh.indices[3 * t + static_cast<size_t>(j)] = target[chart.indices[3 * k + static_cast<size_t>(j)]];
+          mesh.indices[3 * t + static_cast<size_t>(j)] =
+              target[chart.indices[3 * k + static_cast<size_t>(j)]];
       }
     }
     // A triangle in no chart (degenerate) collapses onto one UV point, so it
@@ -401,8 +403,8 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       // Atlas UVs directly.
       assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
         const double k = density * mc.chart_scale[c];
-        const DPoint p = placed_point(uv.x * k, uv.y * k,
-                                     attempt.pack.placements[shape_of_chart[m][c]]);
+        const DPoint p =
+            placed_point(uv.x * k, uv.y * k, attempt.pack.placements[shape_of_chart[m][c]]);
         return Vec2{static_cast<float>(p.x / aw), static_cast<float>(p.y / ah)};
       });
       atlas::InstancePlacement& p = at.placements[mc.instances[0]];
@@ -415,8 +417,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     const MeshLayout& layout = attempt.layouts[m];
     const double lw = layout.width, lh = layout.height;
     assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
-      const DPoint p =
-          placed_point(uv.x * layout.scale, uv.y * layout.scale, layout.placements[c]);
+      const DPoint p = placed_point(uv.x * layout.scale, uv.y * layout.scale, layout.placements[c]);
       return Vec2{static_cast<float>(p.x / lw), static_cast<float>(p.y / lh)};
     });
     for (size_t k = 0; k < mc.instances.size(); ++k) {

@@ -47,7 +47,8 @@ void project_planar(LocalChart& chart) {
   const DVec3 n = chart.mean_normal;
   // t: the world axis least aligned with n, made perpendicular to it.
   const double ax = std::fabs(n.x), ay = std::fabs(n.y), az = std::fabs(n.z);
-  const DVec3 e = (ax <= ay && ax <= az) ? DVec3{1, 0, 0} : (ay <= az ? DVec3{0, 1, 0} : DVec3{0, 0, 1});
+  const DVec3 e =
+      (ax <= ay && ax <= az) ? DVec3{1, 0, 0} : (ay <= az ? DVec3{0, 1, 0} : DVec3{0, 0, 1});
   const DVec3 t = normalize(e - n * dot(n, e));
   const DVec3 b = cross(n, t);
   // Relative to the first vertex, so that far-from-origin charts keep their

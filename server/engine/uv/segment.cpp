@@ -101,7 +101,8 @@ std::vector<std::vector<uint32_t>> grow_charts(const Topology& topo, const Chart
   return charts;
 }
 
-std::vector<std::vector<uint32_t>> connected_parts(const Topology& topo, std::vector<uint32_t> tris) {
+std::vector<std::vector<uint32_t>> connected_parts(const Topology& topo,
+                                                   std::vector<uint32_t> tris) {
   std::sort(tris.begin(), tris.end());
   std::vector<uint8_t> seen(tris.size(), 0);
   auto slot = [&](int32_t t) -> int64_t {
@@ -129,7 +130,8 @@ std::vector<std::vector<uint32_t>> connected_parts(const Topology& topo, std::ve
   return parts;
 }
 
-std::vector<std::vector<uint32_t>> split_chart(const Topology& topo, const std::vector<uint32_t>& tris) {
+std::vector<std::vector<uint32_t>> split_chart(const Topology& topo,
+                                               const std::vector<uint32_t>& tris) {
   DVec3 mean{};
   for (uint32_t t : tris) mean = mean + topo.centroid[t];
   mean = mean * (1.0 / static_cast<double>(tris.size()));

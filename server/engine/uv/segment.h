@@ -25,10 +25,12 @@ std::vector<std::vector<uint32_t>> grow_charts(const Topology& topo, const Chart
 // Splits a set of triangles in two halves at the median of their centroids
 // along the centroids' principal axis (ties broken by triangle index), then
 // into connected parts. Needs at least two triangles.
-std::vector<std::vector<uint32_t>> split_chart(const Topology& topo, const std::vector<uint32_t>& tris);
+std::vector<std::vector<uint32_t>> split_chart(const Topology& topo,
+                                               const std::vector<uint32_t>& tris);
 
 // Connected parts of a set of triangles through crossable edges, each sorted,
 // ordered by their smallest triangle.
-std::vector<std::vector<uint32_t>> connected_parts(const Topology& topo, std::vector<uint32_t> tris);
+std::vector<std::vector<uint32_t>> connected_parts(const Topology& topo,
+                                                   std::vector<uint32_t> tris);
 
 }  // namespace luxel::uv

@@ -110,11 +110,13 @@ Result<Topology> build_topology(const scene::Mesh& mesh, const ChartOptions& opt
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = idx[3 * t + k];
       if (v >= pos.size())
-        return invalid_argument(strprintf("mesh '%s' triangle %zu: vertex index %u out of range (%zu vertices)",
-                                          mesh.name.c_str(), t, v, pos.size()));
+        return invalid_argument(
+            strprintf("mesh '%s' triangle %zu: vertex index %u out of range (%zu vertices)",
+                      mesh.name.c_str(), t, v, pos.size()));
       if (!is_finite(pos[v]))
-        return invalid_argument(strprintf("mesh '%s' triangle %zu: vertex %u has a non-finite position",
-                                          mesh.name.c_str(), t, v));
+        return invalid_argument(
+            strprintf("mesh '%s' triangle %zu: vertex %u has a non-finite position",
+                      mesh.name.c_str(), t, v));
       used[v] = 1;
       bounds.extend(pos[v]);
     }
@@ -131,7 +133,8 @@ Result<Topology> build_topology(const scene::Mesh& mesh, const ChartOptions& opt
   std::vector<EdgeRef> edges;
   edges.reserve(3 * n_tri);
   for (size_t t = 0; t < n_tri; ++t) {
-    const DVec3 a = to_d(pos[idx[3 * t]]), b = to_d(pos[idx[3 * t + 1]]), c = to_d(pos[idx[3 * t + 2]]);
+    const DVec3 a = to_d(pos[idx[3 * t]]), b = to_d(pos[idx[3 * t + 1]]),
+                c = to_d(pos[idx[3 * t + 2]]);
     topo.centroid[t] = (a + b + c) * (1.0 / 3.0);
     const DVec3 n = cross(b - a, c - a);
     const double twice_area = std::sqrt(dot(n, n));

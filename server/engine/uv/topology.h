@@ -17,9 +17,9 @@ struct Topology {
   size_t welded_count = 0;
   std::vector<uint8_t> valid;  // per triangle: non-degenerate (else in no chart)
   size_t degenerate_count = 0;
-  std::vector<DVec3> normal;    // per triangle, unit (zero when degenerate)
-  std::vector<DVec3> centroid;  // per triangle
-  std::vector<double> area;     // per triangle (object space)
+  std::vector<DVec3> normal;        // per triangle, unit (zero when degenerate)
+  std::vector<DVec3> centroid;      // per triangle
+  std::vector<double> area;         // per triangle (object space)
   std::vector<double> edge_length;  // 3 per triangle: |v[(i+1)%3] - v[i]|
   // 3 per triangle: the triangle across edge (v[i], v[(i+1)%3]) when a chart
   // may cross that edge, else -1 (border, cut, non-manifold).

@@ -60,11 +60,16 @@ bool boundary_crosses(const std::vector<Vec2>& uv, const std::vector<uint32_t>& 
 
 const char* chart_defect_name(ChartDefect defect) {
   switch (defect) {
-    case ChartDefect::kNone: return "none";
-    case ChartDefect::kNonFinite: return "non-finite UV";
-    case ChartDefect::kZeroArea: return "zero-area UV triangle";
-    case ChartDefect::kFlipped: return "flipped UV triangle";
-    case ChartDefect::kBoundaryCrossing: return "crossing boundary edges";
+    case ChartDefect::kNone:
+      return "none";
+    case ChartDefect::kNonFinite:
+      return "non-finite UV";
+    case ChartDefect::kZeroArea:
+      return "zero-area UV triangle";
+    case ChartDefect::kFlipped:
+      return "flipped UV triangle";
+    case ChartDefect::kBoundaryCrossing:
+      return "crossing boundary edges";
   }
   return "?";
 }

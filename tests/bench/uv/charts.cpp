@@ -4,6 +4,8 @@
 // scene, worst chart L2 and Linf).
 //
 //   bench_uv_charts [--repeats R] [SCENE...]   (default: the shared sponza.glb)
+#include "uv/charts.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,7 +16,6 @@
 #include <vector>
 
 #include "scene/gltf_import.h"
-#include "uv/charts.h"
 #include "uv/stretch.h"
 #include "uv/validate.h"
 
@@ -31,8 +32,11 @@ int main(int argc, char** argv) {
   }
   if (scenes.empty()) scenes.push_back(std::string(LUXEL_SHARED_SCENES_DIR) + "/sponza.glb");
 
-  std::printf("| scene | meshes | triangles | degenerate | charts | planar | LSCM | rejected splits | aspect splits | stretch splits | time s (best of %d) | L2 mean | L2 max chart | Linf max chart | invalid charts |\n",
-              repeats);
+  std::printf(
+      "| scene | meshes | triangles | degenerate | charts | planar | LSCM | rejected splits | "
+      "aspect splits | stretch splits | time s (best of %d) | L2 mean | L2 max chart | Linf max "
+      "chart | invalid charts |\n",
+      repeats);
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& path : scenes) {
     scene::ImportOptions io;
@@ -68,7 +72,8 @@ int main(int argc, char** argv) {
         sum.stretch_splits += st.stretch_splits;
         all.push_back(std::move(c.value()));
       }
-      const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double sec =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       best = std::min(best, sec);
       if (r == 0) {
         total = sum;
@@ -84,11 +89,13 @@ int main(int argc, char** argv) {
       }
     }
     const char* name = std::strrchr(path.c_str(), '/');
-    std::printf("| %s | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %.3f | %.4f | %.3f | %.3f | %zu |\n",
-                name ? name + 1 : path.c_str(), s->meshes.size(), total.triangles,
-                total.degenerate_triangles, total.charts, total.planar_charts, total.lscm_charts,
-                total.rejected_splits, total.aspect_splits, total.stretch_splits, best,
-                area > 0 ? std::sqrt(l2_sum / area) : 1.0, l2_max, linf_max, invalid);
+    std::printf(
+        "| %s | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %zu | %.3f | %.4f | %.3f | %.3f | "
+        "%zu |\n",
+        name ? name + 1 : path.c_str(), s->meshes.size(), total.triangles,
+        total.degenerate_triangles, total.charts, total.planar_charts, total.lscm_charts,
+        total.rejected_splits, total.aspect_splits, total.stretch_splits, best,
+        area > 0 ? std::sqrt(l2_sum / area) : 1.0, l2_max, linf_max, invalid);
   }
   return 0;
 }

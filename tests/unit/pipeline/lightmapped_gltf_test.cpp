@@ -3,6 +3,8 @@
 // the layout is honoured exactly (extras.lightmapScaleOffset, atlas mode
 // "placed"), and baking the written file with --uv existing gives the same
 // lightmap bit for bit.
+#include "pipeline/lightmapped_gltf.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,12 +13,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "../scene/gltf_builder.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
-#include "pipeline/lightmapped_gltf.h"
 #include "scene/gltf_import.h"
-#include "../scene/gltf_builder.h"
 
 namespace luxel {
 namespace {
@@ -93,15 +94,18 @@ class LightmappedGltfTest : public ::testing::Test {
   static std::string scene_glb() {
     GltfBuilder b;
     b.add_material({{"name", "wall"},
-                    {"pbrMetallicRoughness", {{"baseColorFactor", {0.8, 0.8, 0.8, 1}},
-                                              {"metallicFactor", 0.0}}},
+                    {"pbrMetallicRoughness",
+                     {{"baseColorFactor", {0.8, 0.8, 0.8, 1}}, {"metallicFactor", 0.0}}},
                     {"extras", {{"keep", "me"}}},
                     {"extensions", {{"EXT_luxel_unknown", {{"answer", 42}}}}}});
     const int shared = b.add_mesh("shared_box", {box_primitive(b, 0.5f)});
     const int own = b.add_mesh("own_box", {box_primitive(b, 1.0f)});
     b.add_node({{"name", "small"}, {"mesh", shared}, {"translation", {-3, 0, 0}}});
-    b.add_node({{"name", "large"}, {"mesh", shared}, {"translation", {3, 0, 0}},
-                {"scale", {2, 2, 2}}, {"extras", {{"tag", 7}}}});
+    b.add_node({{"name", "large"},
+                {"mesh", shared},
+                {"translation", {3, 0, 0}},
+                {"scale", {2, 2, 2}},
+                {"extras", {{"tag", 7}}}});
     b.add_node({{"name", "single"}, {"mesh", own}, {"translation", {0, 0, 4}}});
     b.doc["extensionsUsed"] = {"EXT_luxel_unknown"};
     return b.glb();
@@ -124,9 +128,9 @@ TEST_F(LightmappedGltfTest, RoundTripKeepsTheFileAndBakesTheSameBits) {
   EXPECT_EQ(first.value().atlas.mode, atlas::AtlasMode::kGenerated);
   EXPECT_NE(first.value().uv_layout->reason.find("TEXCOORD_1"), std::string::npos);
 
-  auto written = pipeline::write_bake_outputs(dir.path() + "/out", scene.value(),
-                                              settings(pipeline::UvMode::kAuto), first.value(), "",
-                                              source);
+  auto written =
+      pipeline::write_bake_outputs(dir.path() + "/out", scene.value(),
+                                   settings(pipeline::UvMode::kAuto), first.value(), "", source);
   ASSERT_TRUE(written) << written.status().to_string();
   ASSERT_FALSE(written.value().lightmapped_glb.empty());
   EXPECT_NE(written.value().lightmapped_glb.find("boxes_lightmapped.glb"), std::string::npos);
@@ -148,7 +152,8 @@ TEST_F(LightmappedGltfTest, RoundTripKeepsTheFileAndBakesTheSameBits) {
   const auto& placements = first.value().atlas.placements;
   for (size_t i = 0; i < placements.size(); ++i) {
     const auto& inst = scene.value().instances[i];
-    const json so = out["nodes"][static_cast<size_t>(inst.node_index)]["extras"]["lightmapScaleOffset"];
+    const json so =
+        out["nodes"][static_cast<size_t>(inst.node_index)]["extras"]["lightmapScaleOffset"];
     EXPECT_EQ(so[0].get<float>(), placements[i].scale[0]);
     EXPECT_EQ(so[1].get<float>(), placements[i].scale[1]);
     EXPECT_EQ(so[2].get<float>(), placements[i].offset[0]);
@@ -193,8 +198,8 @@ TEST_F(LightmappedGltfTest, OverlappingPlacementsAreRefusedNamingBothNodes) {
   auto first = pipeline::bake(scene.value(), settings(pipeline::UvMode::kGenerate), *ctx_);
   ASSERT_TRUE(first) << first.status().to_string();
   auto written = pipeline::write_bake_outputs(dir.path() + "/out", scene.value(),
-                                              settings(pipeline::UvMode::kGenerate),
-                                              first.value(), "", dir.path() + "/boxes.glb");
+                                              settings(pipeline::UvMode::kGenerate), first.value(),
+                                              "", dir.path() + "/boxes.glb");
   ASSERT_TRUE(written) << written.status().to_string();
   auto placed = scene::import_gltf_file(written.value().lightmapped_glb);
   ASSERT_TRUE(placed);

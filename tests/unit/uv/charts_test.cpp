@@ -1,13 +1,14 @@
 // build_charts on meshes built in code: the invariants chart.h promises,
 // segmentation across hard edges / materials / winding, stretch bounds,
 // determinism and scale invariance.
+#include "uv/charts.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <set>
 
-#include "uv/charts.h"
 #include "uv/stretch.h"
 #include "uv/validate.h"
 #include "uv_meshes.h"
@@ -19,7 +20,8 @@ double uv_area(const Chart& c) {
   double a = 0;
   for (size_t t = 0; t < c.indices.size(); t += 3) {
     const Vec2 p = c.uv[c.indices[t]], q = c.uv[c.indices[t + 1]], r = c.uv[c.indices[t + 2]];
-    a += 0.5 * ((double(q.x) - p.x) * (double(r.y) - p.y) - (double(q.y) - p.y) * (double(r.x) - p.x));
+    a += 0.5 *
+         ((double(q.x) - p.x) * (double(r.y) - p.y) - (double(q.y) - p.y) * (double(r.x) - p.x));
   }
   return a;
 }
@@ -152,7 +154,7 @@ scene::Mesh fold(bool shared_vertices, bool same_normals) {
 
 TEST(UvCharts, HardEdgesInTheFileAreCutSeamsAreWelded) {
   EXPECT_EQ(charts_checked(fold(true, true)).size(), 1u);
-  EXPECT_EQ(charts_checked(fold(false, true)).size(), 1u);  // UV seam: welded
+  EXPECT_EQ(charts_checked(fold(false, true)).size(), 1u);   // UV seam: welded
   EXPECT_EQ(charts_checked(fold(false, false)).size(), 2u);  // hard edge: cut
   // The dihedral limit cuts the same fold even with shared vertices.
   ChartOptions sharp;
@@ -169,7 +171,8 @@ TEST(UvCharts, MaterialBoundariesAreCut) {
   const auto charts = charts_checked(m);
   EXPECT_EQ(charts.size(), 2u);
   for (const Chart& c : charts)
-    for (uint32_t t : c.triangles) EXPECT_EQ(m.triangle_material[t], m.triangle_material[c.triangles[0]]);
+    for (uint32_t t : c.triangles)
+      EXPECT_EQ(m.triangle_material[t], m.triangle_material[c.triangles[0]]);
   // Without the split, one flat chart with no stretch.
   const auto one = charts_checked(grid(8));
   ASSERT_EQ(one.size(), 1u);
@@ -200,11 +203,13 @@ TEST(UvCharts, StretchLimitSplitsCharts) {
   wide.max_dihedral_deg = 90;
   wide.max_stretch_l2 = 0;
   double worst = 0;
-  for (const Chart& c : charts_checked(m, nullptr, wide)) worst = std::max(worst, chart_stretch(m, c).l2);
+  for (const Chart& c : charts_checked(m, nullptr, wide))
+    worst = std::max(worst, chart_stretch(m, c).l2);
   EXPECT_GT(worst, 1.05);  // else the limit below is not exercised
   wide.max_stretch_l2 = 1.05;
   ChartStats st;
-  for (const Chart& c : charts_checked(m, &st, wide)) EXPECT_LE(chart_stretch(m, c).l2, 1.05 + 1e-6);
+  for (const Chart& c : charts_checked(m, &st, wide))
+    EXPECT_LE(chart_stretch(m, c).l2, 1.05 + 1e-6);
   EXPECT_GT(st.stretch_splits, 0u);
 }
 
@@ -220,7 +225,8 @@ TEST(UvCharts, FlippedAndDegenerateTrianglesAreHandled) {
   const size_t n = m.triangle_count();
   // Inconsistent winding: reverse every fifth triangle.
   size_t flipped = 0;
-  for (size_t t = 0; t < n; t += 5, ++flipped) std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+  for (size_t t = 0; t < n; t += 5, ++flipped)
+    std::swap(m.indices[3 * t + 1], m.indices[3 * t + 2]);
   // Degenerate: a repeated index, three collinear points, a zero-length edge
   // from two coincident vertices.
   const uint32_t v0 = 0, v1 = 1, v2 = 2;

@@ -113,8 +113,8 @@ scene::Mesh capped_cylinder(float radius, float height, int segments, int stacks
 scene::Mesh box(Vec3 e) {
   scene::Mesh m;
   m.name = "box";
-  const Vec3 p[8] = {{0, 0, 0},    {e.x, 0, 0},    {e.x, e.y, 0},    {0, e.y, 0},
-                     {0, 0, e.z},  {e.x, 0, e.z},  {e.x, e.y, e.z},  {0, e.y, e.z}};
+  const Vec3 p[8] = {{0, 0, 0},   {e.x, 0, 0},   {e.x, e.y, 0},   {0, e.y, 0},
+                     {0, 0, e.z}, {e.x, 0, e.z}, {e.x, e.y, e.z}, {0, e.y, e.z}};
   add_flat_quad(m, p[0], p[3], p[2], p[1]);  // -z
   add_flat_quad(m, p[4], p[5], p[6], p[7]);  // +z
   add_flat_quad(m, p[0], p[1], p[5], p[4]);  // -y
@@ -134,7 +134,8 @@ scene::Mesh l_wall(float len, float th, float h, int pieces) {
     const Vec3 a = f[i], b = f[(i + 1) % 6];
     const int n = (length(b - a) > 2 * th) ? pieces : 1;
     for (int k = 0; k < n; ++k) {
-      const Vec3 p = a + (b - a) * (float(k) / float(n)), q = a + (b - a) * (float(k + 1) / float(n));
+      const Vec3 p = a + (b - a) * (float(k) / float(n)),
+                 q = a + (b - a) * (float(k + 1) / float(n));
       add_flat_quad(m, p, q, q + up, p + up);
     }
   }
@@ -173,7 +174,8 @@ double triangle_area(const scene::Mesh& m, uint32_t t) {
   const auto a = d(0), b = d(1), c = d(2);
   const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
   const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-  const double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2], z = u[0] * w[1] - u[1] * w[0];
+  const double x = u[1] * w[2] - u[2] * w[1], y = u[2] * w[0] - u[0] * w[2],
+               z = u[0] * w[1] - u[1] * w[0];
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
