@@ -11,6 +11,7 @@
 
 #include "common/atomic_file.h"
 #include "common/uri.h"
+#include "scene/mesh_build.h"
 
 namespace luxel::pipeline {
 namespace {
@@ -306,11 +307,10 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
       const std::string where =
           strprintf("mesh '%s' primitive %d", mesh.name.c_str(), span.primitive);
       const int mode = prim.value("mode", 4);
-      if (mode != 4 || (prim.contains("extensions") &&
-                        prim["extensions"].contains("KHR_draco_mesh_compression"))) {
-        report->warnings.push_back(where + ": not a plain triangle list (mode " +
-                                   std::to_string(mode) +
-                                   " or Draco); its TEXCOORD_1 was not written");
+      if (mode < 4 || mode > 6 || (prim.contains("extensions") &&
+                                   prim["extensions"].contains("KHR_draco_mesh_compression"))) {
+        report->warnings.push_back(where + ": not triangles (mode " + std::to_string(mode) +
+                                   ") or Draco-compressed; its TEXCOORD_1 was not written");
         continue;
       }
       // Vertices of this primitive: its own (first copies), then the seam
@@ -327,7 +327,10 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
       }
       auto indices = read_indices(doc, bin, prim, span.vertex_count);
       if (!indices) return indices.status();
-      std::vector<uint32_t>& idx = indices.value();
+      // Strips and fans are written as the triangle list the importer read
+      // (mesh_build.h), so source_triangle positions apply.
+      std::vector<uint32_t> idx = scene::detail::to_triangle_list(mode, indices.value());
+      prim["mode"] = 4;
       for (uint32_t t = 0; t < span.triangle_count; ++t) {
         const uint32_t st = span.first_triangle + t;
         const uint32_t src = mesh.source_triangle[st];

@@ -43,25 +43,6 @@ struct Attribute {
   bool present = false;
 };
 
-// Triangle lists from the three triangle topologies (glTF 2.0 §3.7.2.1):
-// strip triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), which keeps every
-// triangle's winding that of the first; fan triangle i is (v_{i+1}, v_{i+2},
-// v_0).
-std::vector<uint32_t> to_triangle_list(int mode, const std::vector<uint32_t>& v) {
-  if (mode == TINYGLTF_MODE_TRIANGLES) return v;
-  std::vector<uint32_t> out;
-  if (v.size() < 3) return out;
-  out.reserve(3 * (v.size() - 2));
-  for (size_t i = 0; i + 2 < v.size(); ++i) {
-    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-      out.insert(out.end(), {v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]});
-    } else {
-      out.insert(out.end(), {v[i + 1], v[i + 2], v[0]});
-    }
-  }
-  return out;
-}
-
 // q - p in double (exact for float inputs of similar magnitude).
 void diff(const Vec3& q, const Vec3& p, double out[3]) {
   for (int k = 0; k < 3; ++k) out[k] = static_cast<double>(q[k]) - static_cast<double>(p[k]);
@@ -240,6 +221,24 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
 }
 
 }  // namespace
+
+// Strip triangle i is (v_i, v_{i+1+i%2}, v_{i+2-i%2}), which keeps every
+// triangle's winding that of the first; fan triangle i is (v_{i+1}, v_{i+2},
+// v_0) (glTF 2.0 §3.7.2.1).
+std::vector<uint32_t> to_triangle_list(int mode, const std::vector<uint32_t>& v) {
+  if (mode == TINYGLTF_MODE_TRIANGLES) return v;
+  std::vector<uint32_t> out;
+  if (v.size() < 3) return out;
+  out.reserve(3 * (v.size() - 2));
+  for (size_t i = 0; i + 2 < v.size(); ++i) {
+    if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+      out.insert(out.end(), {v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]});
+    } else {
+      out.insert(out.end(), {v[i + 1], v[i + 2], v[0]});
+    }
+  }
+  return out;
+}
 
 std::string mesh_label(const tinygltf::Model& model, int mesh_index) {
   const std::string& name = model.meshes[static_cast<size_t>(mesh_index)].name;

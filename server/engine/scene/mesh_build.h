@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 #include "scene/gltf_import.h"
@@ -14,6 +15,11 @@ namespace luxel::scene::detail {
 
 // "mesh 'floor' (mesh[2])", or "mesh[2]" for an unnamed mesh.
 std::string mesh_label(const tinygltf::Model& model, int mesh_index);
+
+// The triangle list of a primitive of mode TRIANGLES (4), TRIANGLE_STRIP (5)
+// or TRIANGLE_FAN (6) from its index list (or 0..n-1 when it has none).
+// Mesh::source_triangle counts triangles of this list.
+std::vector<uint32_t> to_triangle_list(int mode, const std::vector<uint32_t>& indices);
 
 // Builds the mesh. Primitives without a material get the glTF default
 // material, appended to scene->materials on first use. `budget` limits the

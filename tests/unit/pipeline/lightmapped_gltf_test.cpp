@@ -221,5 +221,49 @@ TEST_F(LightmappedGltfTest, OverlappingPlacementsAreRefusedNamingBothNodes) {
       << partial.status().message();
 }
 
+// A triangle strip (mode 5) comes back as the triangle list the importer
+// read (mode 4) with its generated UVs, and bakes to the same bits.
+TEST_F(LightmappedGltfTest, StripsAreWrittenBackAsTriangleLists) {
+  GltfBuilder b;
+  b.add_material({{"name", "floor"}, {"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}});
+  // A folded ribbon: two rows of 6 vertices, the second row bent upwards.
+  std::vector<float> pos, nrm;
+  for (int i = 0; i < 6; ++i) {
+    const float x = static_cast<float>(i);
+    pos.insert(pos.end(), {x, 0, 0, x, i < 3 ? 0.0f : 0.5f, i < 3 ? 1.0f : 1.5f});
+    nrm.insert(nrm.end(), {0, 1, 0, 0, 1, 0});
+  }
+  std::vector<uint32_t> strip;
+  for (uint32_t i = 0; i < 6; ++i) strip.insert(strip.end(), {2 * i, 2 * i + 1});
+  json prim;
+  prim["attributes"]["POSITION"] = b.add_floats(pos, "VEC3");
+  prim["attributes"]["NORMAL"] = b.add_floats(nrm, "VEC3");
+  prim["indices"] = b.add_indices(strip, test::kUShort);
+  prim["mode"] = 5;
+  prim["material"] = 0;
+  b.add_node({{"name", "ribbon"}, {"mesh", b.add_mesh("ribbon", {prim})}});
+  test::TempDir dir;
+  const std::string source = dir.write("ribbon.glb", b.glb());
+  auto scene = scene::import_gltf_file(source);
+  ASSERT_TRUE(scene) << scene.status().to_string();
+  ASSERT_EQ(scene.value().meshes[0].triangle_count(), 10u);
+  auto first = pipeline::bake(scene.value(), settings(pipeline::UvMode::kAuto), *ctx_);
+  ASSERT_TRUE(first) << first.status().to_string();
+  auto written = pipeline::write_bake_outputs(dir.path() + "/out", scene.value(),
+                                              settings(pipeline::UvMode::kAuto), first.value(), "",
+                                              source);
+  ASSERT_TRUE(written) << written.status().to_string();
+  const json out = glb_json(read_all(written.value().lightmapped_glb));
+  EXPECT_EQ(out["meshes"][0]["primitives"][0]["mode"], 4);
+  auto again = scene::import_gltf_file(written.value().lightmapped_glb);
+  ASSERT_TRUE(again) << again.status().to_string();
+  ASSERT_EQ(again.value().meshes[0].triangle_count(), 10u);
+  auto second = pipeline::bake(again.value(), settings(pipeline::UvMode::kExisting), *ctx_);
+  ASSERT_TRUE(second) << second.status().to_string();
+  ASSERT_EQ(second.value().irradiance.size(), first.value().irradiance.size());
+  EXPECT_EQ(0, std::memcmp(second.value().irradiance.data(), first.value().irradiance.data(),
+                           first.value().irradiance.size() * sizeof(float)));
+}
+
 }  // namespace
 }  // namespace luxel
