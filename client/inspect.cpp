@@ -1,5 +1,6 @@
 // `luxel inspect SCENE`: what Luxel sees in a scene and how fast it traces it.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -13,6 +14,7 @@
 #include "accel/triangle_soup.h"
 #include "commands.h"
 #include "device/context.h"
+#include "pipeline/lightmap_layout.h"
 #include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
 
@@ -25,6 +27,10 @@ struct InspectArgs {
   size_t rays = 1u << 20;
   uint64_t seed = 1;
   bool trace = true;
+  // --uv: the lightmap UVs a bake would generate (--uv generate), laid out
+  // at --resolution or --texel-density, and their quality report.
+  bool uv = false;
+  pipeline::BakeSettings uv_settings;
 };
 
 bool parse(const std::vector<std::string>& args, InspectArgs& out) {
@@ -59,6 +65,26 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
       out.seed = std::strtoull(v->c_str(), nullptr, 10);
     } else if (a == "--no-trace") {
       out.trace = false;
+    } else if (a == "--uv") {
+      out.uv = true;
+    } else if (a == "--resolution" || a == "--texel-density" || a == "--max-resolution") {
+      const auto* v = value(a.c_str());
+      if (!v) return false;
+      char* end = nullptr;
+      const double d = std::strtod(v->c_str(), &end);
+      atlas::AtlasSettings& as = out.uv_settings.atlas;
+      const bool integer = a != "--texel-density";
+      if (*end != '\0' || !(d > 0 && d <= 65536) || (integer && d != std::floor(d))) {
+        std::fprintf(stderr, "luxel inspect: %s must be %s in (0, 65536], got '%s'\n", a.c_str(),
+                     integer ? "an integer" : "a number", v->c_str());
+        return false;
+      }
+      if (a == "--resolution") as.resolution = static_cast<int>(d);
+      if (a == "--max-resolution") as.max_resolution = static_cast<int>(d);
+      if (a == "--texel-density") {
+        as.texel_density = static_cast<float>(d);
+        as.resolution = 0;
+      }
     } else if (!a.empty() && a[0] == '-') {
       std::fprintf(stderr, "luxel inspect: unknown option '%s'\n", a.c_str());
       return false;
@@ -72,7 +98,8 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
   if (out.scene.empty()) {
     std::fprintf(stderr,
                  "usage: luxel inspect SCENE.gltf|SCENE.glb [--device SPEC] [--rays N] [--seed S] "
-                 "[--no-trace]\n");
+                 "[--no-trace]\n"
+                 "       [--uv [--resolution N | --texel-density D] [--max-resolution N]]\n");
     return false;
   }
   return true;
@@ -81,6 +108,44 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
 int fail(const Status& st) {
   std::fprintf(stderr, "luxel: %s\n", st.to_string().c_str());
   return 1;
+}
+
+// The quality report of generated lightmap UVs (uv::UvReport; the manifest's
+// uv_layout carries the same figures).
+int report_uvs(const scene::Scene& scene, pipeline::BakeSettings settings) {
+  // What the default --uv auto does; when it keeps the file's TEXCOORD_1,
+  // the layout --uv generate would make instead.
+  settings.uv = pipeline::UvMode::kAuto;
+  auto layout = pipeline::lay_out_lightmap(scene, settings);
+  std::string auto_does;
+  if (layout && layout->generated) {
+    auto_does = "--uv auto generates them: " + layout->generated->reason;
+  } else {
+    auto_does = layout ? "--uv auto bakes the file's TEXCOORD_1; these are what --uv generate makes"
+                       : "--uv auto refuses: " + layout.status().message();
+    settings.uv = pipeline::UvMode::kGenerate;
+    layout = pipeline::lay_out_lightmap(scene, settings);
+  }
+  if (!layout) return fail(layout.status());
+  const atlas::Atlas& at = layout->atlas;
+  const uv::UvReport& u = layout->generated->report;
+  std::printf("\nlightmap UVs, generated (%s)\n", auto_does.c_str());
+  std::printf("atlas      %d x %d%s at %.4g texels per unit\n", at.width, at.page_height(),
+              at.pages > 1 ? strprintf(", %d pages", at.pages).c_str() : "", at.texels_per_unit);
+  std::printf(
+      "charts     %zu on %zu meshes (%zu triangles, %zu degenerate left out, %zu seam vertices)\n",
+      u.charts, u.meshes, u.triangles, u.unplaced_triangles, u.seam_vertices);
+  std::printf("stretch    L2 %.4f, Linf %.4f (Sander et al. 2001; 1 = none)\n", u.stretch_l2,
+              u.stretch_linf);
+  std::printf("packing    %.1f %% of the atlas texels covered (%d packings tried)\n",
+              100 * u.efficiency, u.pack_attempts);
+  std::printf("density    spread %.3f (largest / smallest texels per unit over instances)\n",
+              u.density_spread);
+  std::printf("overlaps   %zu texel centres inside two triangles%s\n", u.overlapping_texels,
+              u.overlapping_texels ? " (a layout error)" : "");
+  std::printf("time       %.2f s (charts %.2f s, packing %.2f s)\n", u.total_seconds,
+              u.chart_seconds, u.pack_seconds);
+  return u.overlapping_texels == 0 ? 0 : 1;
 }
 
 }  // namespace
@@ -113,6 +178,10 @@ int run_inspect(const std::vector<std::string>& argv) {
     // scene would measure nothing either.
     std::fprintf(stderr, "luxel inspect: '%s' has no triangles to bake\n", args.scene.c_str());
     return 1;
+  }
+  if (args.uv) {
+    const int uv_status = report_uvs(scene.value(), args.uv_settings);
+    if (uv_status != 0) return uv_status;
   }
 
   auto ctx = device::Context::create(args.device);

@@ -14,13 +14,6 @@ namespace luxel::service {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-namespace {
-
-const char* kArtifacts[] = {"irradiance.exr", "preview.png",      "samples.exr",
-                            "rel_error.exr",  "error_series.csv", "manifest.json"};
-
-}  // namespace
-
 BakeRunner::BakeRunner(SceneStore& scenes, BakeStore& bakes, JobQueue& queue, RunnerOptions options)
     : scenes_(scenes), bakes_(bakes), queue_(queue), options_(std::move(options)) {}
 
@@ -306,10 +299,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
         p->set_eta_s(0);
         p->set_fraction(1);
         b.clear_artifacts();
-        for (const char* a : kArtifacts) b.add_artifacts(a);
-        for (const auto& e : r.encodings) b.add_artifacts(e.name + ".exr");
-        if (!written.value().lightmapped_glb.empty())
-          b.add_artifacts(fs::path(written.value().lightmapped_glb).filename().string());
+        for (const std::string& a : written.value().files) b.add_artifacts(a);
       },
       true);
   // Only once the record says SUCCEEDED: a crash before this line re-runs

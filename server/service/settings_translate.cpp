@@ -211,6 +211,25 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
   s.lights.sun.enabled = s.lights.sun.illuminance > 0;
   if (!size_given) s.atlas.resolution = std::min(s.atlas.resolution, limits.max_resolution);
   if (!s.job.reference_bake_id.empty()) s.reference_name = "bake " + s.job.reference_bake_id;
+  // Placements: a list of structures, outside the schema's scalar settings
+  // (validate_settings checks them and names placements[i]).
+  for (int i = 0; i < in.placements_size(); ++i) {
+    const v1::NodePlacement& in_p = in.placements(i);
+    pipeline::NodePlacement p;
+    p.node = in_p.node() > 0x7fffffffu ? 0x7fffffff : static_cast<int>(in_p.node());
+    p.element = in_p.has_instance() ? static_cast<int>(std::min(in_p.instance(), 0x7fffffffu)) : -1;
+    p.page = static_cast<int>(std::min(in_p.page(), 0x7fffffffu));
+    if (in_p.scale_offset_size() != 4) {
+      if (errors)
+        errors->emplace("placements", invalid_argument(strprintf(
+                                          "settings.placements[%d].scale_offset: expected 4 "
+                                          "values [sx, sy, ox, oy], got %d",
+                                          i, in_p.scale_offset_size())));
+      continue;
+    }
+    for (int k = 0; k < 4; ++k) p.scale_offset[k] = in_p.scale_offset(k);
+    s.node_placements.push_back(p);
+  }
 }
 
 }  // namespace
@@ -243,6 +262,7 @@ Result<pipeline::BakeSettings> to_engine_settings(const v1::BakeSettings& in,
     auto e = errors.find(st.name);
     if (e != errors.end() && st.is_active(s)) return e->second;
   }
+  if (auto e = errors.find("placements"); e != errors.end()) return e->second;
   LUXEL_RETURN_IF_ERROR(pipeline::validate_settings(s, "the daemon's limit --max-resolution"));
   return s;
 }
@@ -295,6 +315,13 @@ Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
         for (int i = 0; i < 3; ++i) r->AddFloat(&m, f, v.vec[i]);
         break;
     }
+  }
+  for (const pipeline::NodePlacement& p : s.node_placements) {
+    v1::NodePlacement* out_p = out.add_placements();
+    out_p->set_node(static_cast<uint32_t>(std::max(p.node, 0)));
+    if (p.element >= 0) out_p->set_instance(static_cast<uint32_t>(p.element));
+    for (float v : p.scale_offset) out_p->add_scale_offset(v);
+    out_p->set_page(static_cast<uint32_t>(std::max(p.page, 0)));
   }
   return out;
 }

@@ -154,6 +154,19 @@ class SettingsTest(unittest.TestCase):
         self.assertEqual(list(make_settings(encodings=["sh1", "SG6"]).encodings),
                          [luxel_pb2.ENCODING_SH1, luxel_pb2.ENCODING_SG6])
 
+    def test_placements_take_a_list_of_dicts(self):
+        s = make_settings(placements=[{"node": 2, "scale_offset": (0.5, 0.25, 0.125, 0.75)},
+                                      {"node": 3, "instance": 1, "scale_offset": [1, 1, 0, 0],
+                                       "page": 2}])
+        self.assertEqual(len(s.placements), 2)
+        self.assertEqual(s.placements[0].node, 2)
+        self.assertFalse(s.placements[0].HasField("instance"))
+        self.assertEqual(list(s.placements[0].scale_offset), [0.5, 0.25, 0.125, 0.75])
+        self.assertEqual((s.placements[1].instance, s.placements[1].page), (1, 2))
+        with self.assertRaises(LuxelError) as e:
+            make_settings(placements=[{"node": 0}, {"nod": 1}])
+        self.assertIn("settings.placements[1].nod", str(e.exception))
+
     def test_schema_comes_from_the_build(self):
         from luxel_client import settings
         self.assertIn("max_bounces", settings.SCHEMA, "settings_schema.json missing beside the stubs")

@@ -21,6 +21,9 @@ Conveniences on top of the plain values:
 - ``sky`` takes a dict (``{"color": (r, g, b), "intensity": 1.0}``; a colour
   alone implies KIND_CONSTANT) or a 3-sequence of linear RGB radiance;
 - ``sun`` takes a dict with direction, color, illuminance, angular_radius_degrees;
+- ``placements`` (client-dictated lightmap placement per node) takes a list of
+  dicts: ``[{"node": 0, "scale_offset": (sx, sy, ox, oy), "page": 0}, ...]``
+  (``instance`` selects an EXT_mesh_gpu_instancing element);
 - a message field also takes the message itself.
 """
 
@@ -118,6 +121,15 @@ def _set_field(message, field, value, where):
     if field.label == _FD.LABEL_REPEATED:
         container = getattr(message, field.name)
         del container[:]
+        if field.type == _FD.TYPE_MESSAGE:
+            # A list of messages or dicts, each named by its index in errors.
+            for i, item in enumerate(value):
+                target = container.add()
+                if isinstance(item, type(target)):
+                    target.CopyFrom(item)
+                else:
+                    _fill(target, dict(item), f"{where}[{i}]")
+            return
         if field.type == _FD.TYPE_ENUM:
             items = value.split(",") if isinstance(value, str) else value
             value = [enum_value(field.enum_type, v.strip() if isinstance(v, str) else v, where)

@@ -178,6 +178,8 @@ Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<Instance
           inst.name.c_str()));
   Atlas atlas;
   atlas.mode = AtlasMode::kPlaced;
+  for (const auto& inst : scene.instances)
+    atlas.pages = std::max(atlas.pages, inst.lightmap_page + 1);
   double world_area = 0, atlas_uv_area = 0;
   for (size_t i = 0; i < charts.size(); ++i) {
     const float* so = scene.instances[i].lightmap_scale_offset;
@@ -185,6 +187,9 @@ Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<Instance
     atlas_uv_area += charts[i].layout->area * std::fabs(double(so[0]) * so[1]);
   }
   int side = settings.resolution;
+  // Several pages: each is the resolution given, or max_resolution (the page
+  // size of generated layouts).
+  if (side == 0 && atlas.pages > 1) side = settings.max_resolution;
   if (side == 0) {
     const double d = settings.texel_density;
     const double needed = std::ceil(std::sqrt(world_area * d * d / atlas_uv_area));
@@ -196,19 +201,28 @@ Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<Instance
   }
   atlas.width = atlas.height = side;
   atlas.texels_per_unit = world_area > 0 ? std::sqrt(atlas_uv_area / world_area) * side : 0;
+  atlas.height = side * atlas.pages;  // pages stacked from the top
   for (size_t i = 0; i < charts.size(); ++i) {
     const float* so = scene.instances[i].lightmap_scale_offset;
     InstancePlacement p;
     p.instance = static_cast<uint32_t>(i);
+    p.page = scene.instances[i].lightmap_page;
     p.scale[0] = so[0];
     p.scale[1] = so[1];
     p.offset[0] = so[2];
     p.offset[1] = so[3];
+    if (atlas.pages > 1) {
+      // The page's scale/offset into the stacked image (the inverse of
+      // page_relative).
+      p.scale[1] = static_cast<float>(double(so[1]) / atlas.pages);
+      p.offset[1] = static_cast<float>((double(so[3]) + p.page) / atlas.pages);
+    }
     const UvBounds& b = charts[i].layout->bounds;
     double lo[2], hi[2];
     for (int a = 0; a < 2; ++a) {
-      const double e0 = (b.lo[a] * p.scale[a] + p.offset[a]) * side;
-      const double e1 = (b.hi[a] * p.scale[a] + p.offset[a]) * side;
+      // On the instance's own page, in texels.
+      const double e0 = (b.lo[a] * so[a] + so[2 + a]) * side;
+      const double e1 = (b.hi[a] * so[a] + so[2 + a]) * side;
       lo[a] = std::min(e0, e1);
       hi[a] = std::max(e0, e1);
       if (lo[a] < -1e-3 || hi[a] > side + 1e-3)
@@ -221,6 +235,7 @@ Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<Instance
     p.rect[1] = static_cast<int>(std::floor(lo[1]));
     p.rect[2] = std::min(side - p.rect[0], static_cast<int>(std::ceil(hi[0])) - p.rect[0]);
     p.rect[3] = std::min(side - p.rect[1], static_cast<int>(std::ceil(hi[1])) - p.rect[1]);
+    p.rect[1] += side * p.page;
     atlas.placements.push_back(p);
   }
   LUXEL_RETURN_IF_ERROR(check_instances_disjoint(scene, atlas));

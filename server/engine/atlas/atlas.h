@@ -54,6 +54,7 @@ const char* atlas_mode_name(AtlasMode mode);
 
 struct InstancePlacement {
   uint32_t instance = 0;
+  int page = 0;  // lightmap page (Atlas::pages); scale/offset/rect are in the stacked image
   float scale[2] = {1, 1};  // atlas_uv = uv1 * scale + offset
   float offset[2] = {0, 0};
   int rect[4] = {0, 0, 0, 0};  // x, y, w, h in texels (the whole atlas in shared mode)
@@ -64,12 +65,29 @@ struct Atlas {
   AtlasMode mode = AtlasMode::kShared;
   std::vector<InstancePlacement> placements;  // one per Scene::instances, same order
   double texels_per_unit = 0;                 // achieved mean density (texels per world unit)
+  // Lightmap pages (generated layouts past max_resolution): `pages` squares
+  // of width x (height / pages) stacked from the top; the bake treats them as
+  // one image and the outputs cut it into pages (pipeline/bake_outputs.h).
+  int pages = 1;
+  int page_height() const { return height / pages; }
 
   Vec2 to_atlas(uint32_t instance, Vec2 uv1) const {
     const InstancePlacement& p = placements[instance];
     return {uv1.x * p.scale[0] + p.offset[0], uv1.y * p.scale[1] + p.offset[1]};
   }
 };
+
+// A placement relative to its page (what the manifest and the written-back
+// glTF give: atlas_uv on the page = uv1 * scale + offset, rect on the page).
+// The identity for a one-page atlas.
+inline InstancePlacement page_relative(const Atlas& atlas, InstancePlacement p) {
+  if (atlas.pages <= 1) return p;
+  const double pages = atlas.pages;
+  p.scale[1] = static_cast<float>(double(p.scale[1]) * pages);
+  p.offset[1] = static_cast<float>(double(p.offset[1]) * pages - p.page);
+  p.rect[1] -= atlas.page_height() * p.page;
+  return p;
+}
 
 // Lays out the scene's lightmap. With resolution > 0 the atlas is that square
 // (texel_density is ignored); packed mode then uses the largest density that

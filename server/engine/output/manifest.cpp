@@ -28,13 +28,15 @@ double json_float(float f) {
   return static_cast<float>(shortest) == f ? shortest : static_cast<double>(f);
 }
 
-Json instance_to_json(const Manifest::Instance& in) {
-  return Json{{"name", in.name},
-              {"node", in.node},
-              {"mesh", in.mesh},
-              {"scale", {json_float(in.scale[0]), json_float(in.scale[1])}},
-              {"offset", {json_float(in.offset[0]), json_float(in.offset[1])}},
-              {"rect", {in.rect[0], in.rect[1], in.rect[2], in.rect[3]}}};
+Json instance_to_json(const Manifest::Instance& in, int pages) {
+  Json j{{"name", in.name},
+         {"node", in.node},
+         {"mesh", in.mesh},
+         {"scale", {json_float(in.scale[0]), json_float(in.scale[1])}},
+         {"offset", {json_float(in.offset[0]), json_float(in.offset[1])}},
+         {"rect", {in.rect[0], in.rect[1], in.rect[2], in.rect[3]}}};
+  if (pages > 1) j["page"] = in.page;
+  return j;
 }
 
 Json stats_to_json(const Manifest::Stats& s) {
@@ -75,11 +77,15 @@ Json to_json(const Manifest& m) {
   j["atlas_mode"] = m.atlas_mode;
   j["dilation_texels"] = m.dilation_texels;
   j["instances"] = Json::array();
-  for (const auto& in : m.instances) j["instances"].push_back(instance_to_json(in));
+  if (m.pages > 1) j["pages"] = m.pages;
+  for (const auto& in : m.instances) j["instances"].push_back(instance_to_json(in, m.pages));
   j["files"] = Json::array();
-  for (const auto& f : m.files)
-    j["files"].push_back(
-        {{"role", f.role}, {"path", f.path}, {"format", f.format}, {"description", f.description}});
+  for (const auto& f : m.files) {
+    Json file{
+        {"role", f.role}, {"path", f.path}, {"format", f.format}, {"description", f.description}};
+    if (f.page >= 0) file["page"] = f.page;
+    j["files"].push_back(file);
+  }
   j["settings"] = Json::object();
   for (const auto& [key, value] : m.settings) j["settings"][key] = value;
   j["features"] = m.features;
@@ -219,6 +225,7 @@ Status read_instance(const Json& j, const std::string& where, const std::string&
   LUXEL_RETURN_IF_ERROR(f.finite_floats("scale", in.scale, 2));
   LUXEL_RETURN_IF_ERROR(f.finite_floats("offset", in.offset, 2));
   LUXEL_RETURN_IF_ERROR(f.ints("rect", in.rect, 4, 0));
+  if (j.contains("page")) LUXEL_RETURN_IF_ERROR(f.integer("page", in.page, 0, m.pages - 1));
   if (int64_t{in.rect[0]} + in.rect[2] > m.width || int64_t{in.rect[1]} + in.rect[3] > m.height)
     return f.error("rect", strprintf("[%d, %d, %d, %d] leaves the %d x %d lightmap", in.rect[0],
                                      in.rect[1], in.rect[2], in.rect[3], m.width, m.height));
@@ -234,6 +241,7 @@ Status read_file_entry(const Json& j, const std::string& where, const std::strin
   LUXEL_RETURN_IF_ERROR(f.string("role", file.role, true));
   LUXEL_RETURN_IF_ERROR(f.string("path", file.path, true));
   LUXEL_RETURN_IF_ERROR(f.string("format", file.format));
+  if (j.contains("page")) LUXEL_RETURN_IF_ERROR(f.integer("page", file.page, 0));
   return f.string("description", file.description);
 }
 
@@ -280,6 +288,8 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.string("scene_sha256", m.scene_sha256));
   LUXEL_RETURN_IF_ERROR(f.integer("width", m.width, 1));
   LUXEL_RETURN_IF_ERROR(f.integer("height", m.height, 1));
+  m.pages = 1;
+  if (j.contains("pages")) LUXEL_RETURN_IF_ERROR(f.integer("pages", m.pages, 1));
   LUXEL_RETURN_IF_ERROR(f.string("encoding", m.encoding, true));
   LUXEL_RETURN_IF_ERROR(f.string("units", m.units, true));
   LUXEL_RETURN_IF_ERROR(f.string("uv_set", m.uv_set, true));

@@ -53,8 +53,11 @@ struct Manifest {
     float scale[2]{1, 1};
     float offset[2]{0, 0};
     // The instance's texel block in the atlas: x, y (from the top row),
-    // width, height; inside the lightmap.
+    // width, height; inside the lightmap (its page).
     int rect[4]{0, 0, 0, 0};
+    // Lightmap page the instance is on (0..pages-1; scale, offset and rect
+    // are relative to that page). Written only when pages > 1.
+    int page = 0;
   };
   std::vector<Instance> instances;
 
@@ -63,8 +66,13 @@ struct Manifest {
     std::string path;    // relative to the manifest's folder; not empty
     std::string format;  // e.g. "exr", "png"
     std::string description;
+    int page = -1;  // lightmap page of a per-page image; -1 (absent in JSON): not per page
   };
   std::vector<File> files;
+  // Lightmap pages (lightmap arrays): each page is width x height and has
+  // its own images, "<name>_<page>.<ext>" (files[].page says which); 1 (absent
+  // in JSON): one lightmap with plain names.
+  int pages = 1;
 
   std::map<std::string, std::string> settings;  // bake settings as given
   std::string features;                         // compiled feature list

@@ -29,6 +29,8 @@ std::string uv_layout_json(const GeneratedUvLayout& g) {
                       {"stretch_linf", r.stretch_linf},
                       {"packing_efficiency", r.efficiency},
                       {"texel_density_spread", r.density_spread},
+                      {"overlapping_texels", r.overlapping_texels},
+                      {"pages", r.pages},
                       {"pack_attempts", r.pack_attempts},
                       {"chart_seconds", r.chart_seconds},
                       {"pack_seconds", r.pack_seconds},
@@ -65,16 +67,19 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.git_revision = LUXEL_GIT_REVISION;
   m.scene_name = scene.source_name;
   m.scene_sha256 = scene_sha256;
+  m.pages = result.atlas.pages;
   m.width = result.width;
-  m.height = result.height;
+  m.height = result.height / std::max(1, result.atlas.pages);
   m.encoding = "irradiance";
   m.units =
       "irradiance E in W/m^2 on the front side of the surface (radiometric; glTF emissive "
       "radiance and light intensities taken 1:1); outgoing diffuse radiance = albedo * E / pi";
   m.uv_set = "TEXCOORD_1";
   m.atlas_mode = atlas::atlas_mode_name(result.atlas.mode);
-  for (const auto& p : result.atlas.placements) {
+  for (const auto& stacked : result.atlas.placements) {
+    const atlas::InstancePlacement p = atlas::page_relative(result.atlas, stacked);
     output::Manifest::Instance inst;
+    inst.page = p.page;
     const auto& si = scene.instances[p.instance];
     inst.name = si.name;
     inst.node = si.node_index;
@@ -141,69 +146,110 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   paths.series_csv = at("error_series.csv");
   paths.manifest_json = at("manifest.json");
 
-  output::Image lightmap = to_image(result.width, result.height, 4, result.irradiance);
-  LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
+  // Per page (lightmap arrays; one page: plain names): rows
+  // [page * h, (page + 1) * h) of every image, dilated on its own so no
+  // page bleeds into another.
+  const int pages = std::max(1, result.atlas.pages);
+  const int page_h = result.height / pages;
+  auto rows = [&](const std::vector<float>& px, int channels, int page) {
+    const size_t row = size_t(result.width) * size_t(channels);
+    return std::vector<float>(px.begin() + static_cast<long>(row * size_t(page_h) * page),
+                              px.begin() + static_cast<long>(row * size_t(page_h) * (page + 1)));
+  };
+  auto name = [&](const std::string& stem, const char* ext, int page) {
+    return pages == 1 ? stem + ext : strprintf("%s_%d%s", stem.c_str(), page, ext);
+  };
+  std::vector<output::Manifest::File> files;
+  auto add_file = [&](const std::string& role, const std::string& file, const char* format,
+                      const std::string& description, int page) {
+    output::Manifest::File f{role, file, format, description, pages == 1 ? -1 : page};
+    files.push_back(f);
+    paths.files.push_back(file);
+  };
   const std::map<std::string, std::string> meta = {
       {"luxel/encoding", "irradiance"},
       {"luxel/units", "W/m^2"},
       {"luxel/alpha", "fraction of the texel covered by geometry"},
       {"luxel/scene", scene.source_name}};
-  LUXEL_RETURN_IF_ERROR(
-      output::write_exr(paths.irradiance_exr, lightmap, {"R", "G", "B", "A"}, meta));
-  LUXEL_RETURN_IF_ERROR(output::write_png_preview(paths.preview_png, lightmap));
-  LUXEL_RETURN_IF_ERROR(output::write_exr(paths.samples_exr,
-                                          to_image(result.width, result.height, 1, result.samples),
-                                          {"Y"}, {{"luxel/content", "samples per texel"}}));
-  LUXEL_RETURN_IF_ERROR(
-      output::write_exr(paths.error_exr, to_image(result.width, result.height, 1, result.rel_error),
-                        {"Y"}, {{"luxel/content", "relative standard error of the texel mean"}}));
-  // Directional encodings: one EXR each, channels c00.R .. cNN.B, dilated
-  // with the irradiance map's coverage so every channel pads the same texels.
-  output::Image coverage = to_image(result.width, result.height, 1, {});
-  coverage.pixels.resize(size_t(result.width) * result.height);
-  for (size_t t = 0; t < coverage.pixels.size(); ++t)
-    coverage.pixels[t] = result.irradiance[t * 4 + 3];
-  std::vector<output::Manifest::File> encoding_files;
-  for (const auto& e : result.encodings) {
-    output::Image img = to_image(result.width, result.height, e.count * 3, e.coefficients);
-    LUXEL_RETURN_IF_ERROR(output::dilate(img, coverage, settings.dilation_texels));
-    std::vector<std::string> names;
-    for (int i = 0; i < e.count; ++i)
-      for (const char* c : {"R", "G", "B"}) names.push_back(strprintf("c%02d.%s", i, c));
-    const std::string file = e.name + ".exr";
-    LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), img, names,
-                                            {{"luxel/encoding", e.name},
-                                             {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
-                                             {"luxel/scene", scene.source_name}}));
-    paths.encodings.push_back(at(file.c_str()));
-    encoding_files.push_back({e.name, file, "exr",
-                              strprintf("float32, %d coefficients x RGB of the %s basis (see "
-                                        "encodings in this manifest)",
-                                        e.count, e.name.c_str())});
+  for (int page = 0; page < pages; ++page) {
+    const std::string page_note = pages == 1 ? "" : strprintf(" (page %d)", page);
+    output::Image lightmap = to_image(result.width, page_h, 4, rows(result.irradiance, 4, page));
+    LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
+    const std::string irradiance = name("irradiance", ".exr", page);
+    const std::string preview = name("preview", ".png", page);
+    const std::string samples = name("samples", ".exr", page);
+    const std::string error = name("rel_error", ".exr", page);
+    LUXEL_RETURN_IF_ERROR(
+        output::write_exr(at(irradiance.c_str()), lightmap, {"R", "G", "B", "A"}, meta));
+    LUXEL_RETURN_IF_ERROR(output::write_png_preview(at(preview.c_str()), lightmap));
+    LUXEL_RETURN_IF_ERROR(output::write_exr(
+        at(samples.c_str()), to_image(result.width, page_h, 1, rows(result.samples, 1, page)),
+        {"Y"}, {{"luxel/content", "samples per texel"}}));
+    LUXEL_RETURN_IF_ERROR(output::write_exr(
+        at(error.c_str()), to_image(result.width, page_h, 1, rows(result.rel_error, 1, page)),
+        {"Y"}, {{"luxel/content", "relative standard error of the texel mean"}}));
+    add_file("irradiance", irradiance, "exr",
+             "RGBA float32, linear irradiance; A = coverage" + page_note, page);
+    add_file("preview", preview, "png",
+             "tone-mapped sRGB preview of the dilated lightmap" + page_note, page);
+    add_file("samples", samples, "exr", "float32 Y: samples per texel" + page_note, page);
+    add_file("rel_error", error, "exr", "float32 Y: relative standard error per texel" + page_note,
+             page);
+    if (page == 0) {
+      paths.irradiance_exr = at(irradiance.c_str());
+      paths.preview_png = at(preview.c_str());
+      paths.samples_exr = at(samples.c_str());
+      paths.error_exr = at(error.c_str());
+    }
+    // Directional encodings: one EXR each, channels c00.R .. cNN.B, dilated
+    // with the irradiance map's coverage so every channel pads the same texels.
+    output::Image coverage = to_image(result.width, page_h, 1, {});
+    coverage.pixels.resize(size_t(result.width) * size_t(page_h));
+    const size_t first = size_t(result.width) * size_t(page_h) * size_t(page);
+    for (size_t t = 0; t < coverage.pixels.size(); ++t)
+      coverage.pixels[t] = result.irradiance[(first + t) * 4 + 3];
+    for (const auto& e : result.encodings) {
+      output::Image img =
+          to_image(result.width, page_h, e.count * 3, rows(e.coefficients, e.count * 3, page));
+      LUXEL_RETURN_IF_ERROR(output::dilate(img, coverage, settings.dilation_texels));
+      std::vector<std::string> names;
+      for (int i = 0; i < e.count; ++i)
+        for (const char* c : {"R", "G", "B"}) names.push_back(strprintf("c%02d.%s", i, c));
+      const std::string file = name(e.name, ".exr", page);
+      LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), img, names,
+                                              {{"luxel/encoding", e.name},
+                                               {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
+                                               {"luxel/scene", scene.source_name}}));
+      paths.encodings.push_back(at(file.c_str()));
+      add_file(e.name, file, "exr",
+               strprintf("float32, %d coefficients x RGB of the %s basis (see encodings in this "
+                         "manifest)",
+                         e.count, e.name.c_str()) +
+                   page_note,
+               page);
+    }
   }
 
   const std::string csv = series_csv(result);
   LUXEL_RETURN_IF_ERROR(write_file_atomic(paths.series_csv, csv.data(), csv.size()));
 
   output::Manifest m = make_manifest(scene, settings, result, scene_sha256);
-  m.files = {
-      {"irradiance", "irradiance.exr", "exr", "RGBA float32, linear irradiance; A = coverage"},
-      {"preview", "preview.png", "png", "tone-mapped sRGB preview of the dilated lightmap"},
-      {"samples", "samples.exr", "exr", "float32 Y: samples per texel"},
-      {"rel_error", "rel_error.exr", "exr", "float32 Y: relative standard error per texel"},
-      {"error_series", "error_series.csv", "csv", "error estimate against time"}};
-  m.files.insert(m.files.end(), encoding_files.begin(), encoding_files.end());
+  add_file("error_series", "error_series.csv", "csv", "error estimate against time", -1);
+  m.files = std::move(files);
   if (result.uv_layout && !source_path.empty()) {
-    const std::string name = lightmapped_glb_name(scene);
-    auto written = write_lightmapped_glb(source_path, scene, result, at(name.c_str()));
+    const std::string glb = lightmapped_glb_name(scene);
+    auto written = write_lightmapped_glb(source_path, scene, result, at(glb.c_str()));
     if (!written) return written.status();
     for (const std::string& w : written.value().warnings) m.import_warnings.push_back(w);
-    paths.lightmapped_glb = at(name.c_str());
-    m.files.push_back({"lightmapped_gltf", name, "glb",
+    paths.lightmapped_glb = at(glb.c_str());
+    m.files.push_back({"lightmapped_gltf", glb, "glb",
                        "the scene with the generated lightmap UVs in TEXCOORD_1 and each node's "
-                       "extras.lightmapScaleOffset"});
+                       "extras.lightmapScaleOffset (and lightmapIndex: its page)",
+                       -1});
+    paths.files.push_back(glb);
   }
   LUXEL_RETURN_IF_ERROR(output::write_manifest(paths.manifest_json, m));
+  paths.files.push_back("manifest.json");
   return paths;
 }
 

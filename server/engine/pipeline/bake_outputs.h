@@ -20,6 +20,9 @@ struct OutputPaths {
   std::string irradiance_exr, preview_png, samples_exr, error_exr, series_csv, manifest_json;
   std::vector<std::string> encodings;  // one EXR per directional encoding ("sh2.exr", ...)
   std::string lightmapped_glb;         // "<scene>_lightmapped.glb"; empty without generated UVs
+  // Every file written, by name in `dir` (a multi-page lightmap has
+  // "irradiance_<page>.exr", ...; the fields above then name page 0's).
+  std::vector<std::string> files;
 };
 
 // "<stem of the scene's file name>_lightmapped.glb" (characters outside

@@ -60,6 +60,18 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["filter"] = filter_name(filter);
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
+  if (!node_placements.empty()) {
+    // node[/element]:sx,sy,ox,oy@page, exact to the float (%.9g).
+    std::string list;
+    for (const NodePlacement& p : node_placements) {
+      if (!list.empty()) list += ' ';
+      list += std::to_string(p.node);
+      if (p.element >= 0) list += "/" + std::to_string(p.element);
+      list += strprintf(":%.9g,%.9g,%.9g,%.9g@%d", p.scale_offset[0], p.scale_offset[1],
+                        p.scale_offset[2], p.scale_offset[3], p.page);
+    }
+    m["placements"] = list;
+  }
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";
@@ -116,6 +128,23 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",
                strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
+  for (size_t i = 0; i < s.node_placements.size(); ++i) {
+    const NodePlacement& np = s.node_placements[i];
+    const std::string field = strprintf("placements[%zu]", i);
+    if (np.node < 0) return bad(field.c_str(), "node must be a glTF node index >= 0");
+    for (int k = 0; k < 4; ++k)
+      if (!std::isfinite(np.scale_offset[k]) || (k < 2 && np.scale_offset[k] == 0))
+        return bad((field + ".scale_offset").c_str(),
+                   "must be 4 finite numbers [sx, sy, ox, oy] with non-zero scales");
+    if (np.page < 0 || np.page >= 1024)
+      return bad((field + ".page").c_str(), "must be in [0, 1024)");
+    for (size_t j = 0; j < i; ++j)
+      if (s.node_placements[j].node == np.node && s.node_placements[j].element == np.element)
+        return bad(
+            field.c_str(),
+            strprintf("node %d%s is placed twice (also placements[%zu])", np.node,
+                      np.element >= 0 ? strprintf(" instance %d", np.element).c_str() : "", j));
+  }
   if (s.reference) {
     for (float v : *s.reference)
       if (!std::isfinite(v)) return bad("reference", "contains a non-finite value");

@@ -42,8 +42,21 @@ struct JobSettings {
   std::string reference_bake_id;  // benchmark mode on the daemon
 };
 
+// Lightmap placement of one glTF node dictated by the client (an editor
+// plugin that owns the layout): what the node's extras.lightmapScaleOffset
+// and lightmapIndex would say, given through the API so the file need not
+// be rewritten. Overrides the node's extras; as with extras, either every
+// baked instance ends up with a placement or none does.
+struct NodePlacement {
+  int node = -1;     // glTF node index
+  int element = -1;  // EXT_mesh_gpu_instancing element; -1: the node's one instance
+  float scale_offset[4] = {1, 1, 0, 0};  // atlas_uv = uv1 * (sx, sy) + (ox, oy), glTF UVs
+  int page = 0;                          // lightmap page, [0, 1024)
+};
+
 struct BakeSettings {
-  atlas::AtlasSettings atlas;  // resolution or texel density
+  atlas::AtlasSettings atlas;                  // resolution or texel density
+  std::vector<NodePlacement> node_placements;  // empty: the file's extras, or packed
 
   // Stopping rules: whichever is reached first. 0 disables a rule; at least
   // one must be set.

@@ -1,5 +1,6 @@
 #include "pipeline/lightmap_layout.h"
 
+#include <memory>
 #include <vector>
 
 namespace luxel::pipeline {
@@ -56,9 +57,60 @@ Result<LightmapLayout> generate(const scene::Scene& scene, const BakeSettings& s
   return layout;
 }
 
+// The scene with the client's placements in place of the nodes' extras.
+Result<std::unique_ptr<scene::Scene>> apply_placements(const scene::Scene& scene,
+                                                       const std::vector<NodePlacement>& list) {
+  auto placed = std::make_unique<scene::Scene>(scene);
+  for (size_t i = 0; i < list.size(); ++i) {
+    const NodePlacement& np = list[i];
+    size_t matched = 0, elements = 0;
+    for (scene::Instance& inst : placed->instances) {
+      if (inst.node_index != np.node) continue;
+      ++elements;
+      if (np.element >= 0 && inst.instance_element != np.element) continue;
+      inst.has_lightmap_scale_offset = true;
+      for (int k = 0; k < 4; ++k) inst.lightmap_scale_offset[k] = np.scale_offset[k];
+      inst.lightmap_page = np.page;
+      ++matched;
+    }
+    if (elements == 0)
+      return invalid_argument(
+          strprintf("settings.placements[%zu].node: node %d is not a baked mesh node of the scene",
+                    i, np.node));
+    if (matched == 0)
+      return invalid_argument(
+          strprintf("settings.placements[%zu].instance: node %d has no instance %d (it has %zu)", i,
+                    np.node, np.element, elements));
+    if (np.element < 0 && matched > 1)
+      return invalid_argument(
+          strprintf("settings.placements[%zu].instance: node %d has %zu instances "
+                    "(EXT_mesh_gpu_instancing); place each one by its instance index",
+                    i, np.node, matched));
+  }
+  return placed;
+}
+
 }  // namespace
 
 Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings) {
+  if (!settings.node_placements.empty()) {
+    // Placement dictated by the client through the API: honoured exactly,
+    // as the nodes' extras would be (atlas::build_atlas, placed mode).
+    auto placed = apply_placements(scene, settings.node_placements);
+    if (!placed) return placed.status();
+    BakeSettings rest = settings;
+    rest.node_placements.clear();
+    if (rest.uv == UvMode::kGenerate)
+      return invalid_argument(
+          "settings.placements: placement maps the file's TEXCOORD_1 into the atlas; it cannot "
+          "be combined with --uv generate");
+    rest.uv = UvMode::kExisting;
+    auto layout = lay_out_lightmap(*placed.value(), rest);
+    if (!layout) return layout.status();
+    layout->generated_scene = std::move(placed.value());
+    layout->scene = layout->generated_scene.get();
+    return layout;
+  }
   if (settings.uv == UvMode::kGenerate) return generate(scene, settings, "--uv generate");
   std::string reason = missing_lightmap_uvs(scene);
   if (reason.empty()) {

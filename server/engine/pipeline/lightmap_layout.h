@@ -34,6 +34,8 @@ struct GeneratedUvLayout {
 
 struct LightmapLayout {
   const scene::Scene* scene = nullptr;  // what the bake reads: the input or generated_scene
+  // The scene the bake reads when it is not the input: generated UVs, or
+  // the client's placements (BakeSettings::node_placements) applied.
   std::unique_ptr<scene::Scene> generated_scene;
   atlas::Atlas atlas;
   std::shared_ptr<const GeneratedUvLayout> generated;  // null when TEXCOORD_1 was used

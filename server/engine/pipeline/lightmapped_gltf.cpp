@@ -307,8 +307,9 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
       const std::string where =
           strprintf("mesh '%s' primitive %d", mesh.name.c_str(), span.primitive);
       const int mode = prim.value("mode", 4);
-      if (mode < 4 || mode > 6 || (prim.contains("extensions") &&
-                                   prim["extensions"].contains("KHR_draco_mesh_compression"))) {
+      if (mode < 4 || mode > 6 ||
+          (prim.contains("extensions") &&
+           prim["extensions"].contains("KHR_draco_mesh_compression"))) {
         report->warnings.push_back(where + ": not triangles (mode " + std::to_string(mode) +
                                    ") or Draco-compressed; its TEXCOORD_1 was not written");
         continue;
@@ -416,16 +417,26 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
           strprintf("node %d: extras is not an object; lightmapScaleOffset not written", node));
       continue;
     }
+    // Relative to the instance's page; the page is Unity's lightmapIndex.
+    auto placed = [&](size_t i) {
+      return atlas::page_relative(result.atlas, result.atlas.placements[i]);
+    };
     auto so = [&](size_t i) {
-      const atlas::InstancePlacement& p = result.atlas.placements[i];
+      const atlas::InstancePlacement p = placed(i);
       return json::array({p.scale[0], p.scale[1], p.offset[0], p.offset[1]});
     };
+    const bool paged = result.atlas.pages > 1;
     if (list.size() == 1) {
       n["extras"]["lightmapScaleOffset"] = so(list[0]);
+      if (paged) n["extras"]["lightmapIndex"] = placed(list[0]).page;
     } else {
-      json all = json::array();
-      for (size_t i : list) all.push_back(so(i));
+      json all = json::array(), index = json::array();
+      for (size_t i : list) {
+        all.push_back(so(i));
+        index.push_back(placed(i).page);
+      }
       n["extras"]["lightmapScaleOffsets"] = all;
+      if (paged) n["extras"]["lightmapIndices"] = index;
     }
     ++report->nodes;
   }

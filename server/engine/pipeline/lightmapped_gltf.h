@@ -8,7 +8,9 @@
 //     atlas_uv = uv1 * (sx, sy) + (ox, oy) in glTF UV convention (Unity's
 //     Renderer.lightmapScaleOffset). A node that instantiates several
 //     instances (EXT_mesh_gpu_instancing) gets extras.lightmapScaleOffsets,
-//     one entry per instance in the extension's order.
+//     one entry per instance in the extension's order. With several lightmap
+//     pages the scale/offset are relative to the instance's page and
+//     extras.lightmapIndex (lightmapIndices) names the page.
 // Everything else survives as it was in the JSON: nodes, materials, textures,
 // extensions, extras, unknown members. The file is always a GLB: buffers
 // (external, data URIs, the GLB chunk) are merged into its one binary chunk,

@@ -217,17 +217,29 @@ Result<std::vector<int>> scene_roots(const tinygltf::Model& model, const std::ve
   return roots;
 }
 
-// extras.lightmapScaleOffset of a node: absent, or four finite numbers with
-// non-zero scales; anything else is INVALID_ARGUMENT naming the node.
-Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, Instance* inst) {
+// extras.lightmapScaleOffset (and lightmapIndex, the page) of a node, or
+// entry `element` of lightmapScaleOffsets (lightmapIndices) for the
+// instances of an EXT_mesh_gpu_instancing node: absent, or four finite
+// numbers with non-zero scales and a page in [0, 1024); anything else is
+// INVALID_ARGUMENT naming the node.
+Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, int element,
+                                  Instance* inst) {
   const tinygltf::Value& extras = model.nodes[static_cast<size_t>(node_index)].extras;
-  if (!extras.IsObject() || !extras.Has("lightmapScaleOffset")) return Status::ok();
-  const tinygltf::Value& v = extras.Get("lightmapScaleOffset");
-  const std::string where = node_label(model, node_index) + ": extras.lightmapScaleOffset";
-  if (!v.IsArray() || v.ArrayLen() != 4)
+  const char* key = element < 0 ? "lightmapScaleOffset" : "lightmapScaleOffsets";
+  const char* page_key = element < 0 ? "lightmapIndex" : "lightmapIndices";
+  if (!extras.IsObject() || !extras.Has(key)) return Status::ok();
+  std::string where = node_label(model, node_index) + ": extras." + key;
+  const tinygltf::Value* v = &extras.Get(key);
+  if (element >= 0) {
+    if (!v->IsArray() || element >= static_cast<int>(v->ArrayLen()))
+      return invalid_argument(strprintf("%s has no entry for instance %d", where.c_str(), element));
+    v = &v->Get(element);
+    where += strprintf("[%d]", element);
+  }
+  if (!v->IsArray() || v->ArrayLen() != 4)
     return invalid_argument(where + " must be an array of 4 numbers [sx, sy, ox, oy]");
   for (int k = 0; k < 4; ++k) {
-    const tinygltf::Value& e = v.Get(k);
+    const tinygltf::Value& e = v->Get(k);
     if (!e.IsNumber())
       return invalid_argument(strprintf("%s[%d] is not a number", where.c_str(), k));
     const double d = e.GetNumberAsDouble();
@@ -239,6 +251,17 @@ Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, 
     inst->lightmap_scale_offset[k] = static_cast<float>(d);
   }
   inst->has_lightmap_scale_offset = true;
+  inst->lightmap_page = 0;
+  if (extras.Has(page_key)) {
+    const tinygltf::Value* p = &extras.Get(page_key);
+    if (element >= 0)
+      p = p->IsArray() && element < static_cast<int>(p->ArrayLen()) ? &p->Get(element) : nullptr;
+    const double d = p && p->IsNumber() ? p->GetNumberAsDouble() : -1;
+    if (!(d >= 0 && d < 1024 && d == std::floor(d)))
+      return invalid_argument(node_label(model, node_index) + ": extras." + page_key +
+                              " must be a whole number in [0, 1024) (the lightmap page)");
+    inst->lightmap_page = static_cast<int>(d);
+  }
   return Status::ok();
 }
 
@@ -287,7 +310,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.node_index = item.node;
       inst.mesh = slot;
       inst.object_to_world = world;
-      LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, &inst));
+      LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, -1, &inst));
       LUXEL_RETURN_IF_ERROR(instance_transforms(model, item.node, &budget, &per_instance));
       if (per_instance.empty()) {
         scene->instances.push_back(std::move(inst));
@@ -297,6 +320,9 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
         for (size_t k = 0; k < per_instance.size(); ++k) {
           Instance copy = inst;
           copy.name = strprintf("node '%s' instance %zu", inst.name.c_str(), k);
+          copy.instance_element = static_cast<int>(k);
+          LUXEL_RETURN_IF_ERROR(
+              read_lightmap_scale_offset(model, item.node, static_cast<int>(k), &copy));
           copy.object_to_world = world * per_instance[k];
           for (double v : copy.object_to_world.m) {
             if (!std::isfinite(v)) {

@@ -65,16 +65,18 @@ struct Mesh {
 };
 
 struct Instance {
-  std::string name;      // node name, or "node[<index>]"
-  int node_index = -1;   // glTF node
-  int mesh = -1;         // index into Scene::meshes
-  Mat4 object_to_world;  // composed down the node hierarchy
+  std::string name;           // node name, or "node[<index>]"
+  int node_index = -1;        // glTF node
+  int instance_element = -1;  // EXT_mesh_gpu_instancing element of the node; -1: none
+  int mesh = -1;              // index into Scene::meshes
+  Mat4 object_to_world;       // composed down the node hierarchy
   // The node's extras.lightmapScaleOffset = [sx, sy, ox, oy] (Unity's
   // Renderer.lightmapScaleOffset convention, in glTF UV convention): where
   // the client placed this instance in the atlas, atlas_uv = uv1 * (sx, sy) +
   // (ox, oy). Honoured exactly by the atlas when every instance has one.
   bool has_lightmap_scale_offset = false;
   float lightmap_scale_offset[4] = {1, 1, 0, 0};
+  int lightmap_page = 0;  // extras.lightmapIndex: the lightmap page (array layer)
 };
 
 enum class AlphaMode { kOpaque, kMask, kBlend };

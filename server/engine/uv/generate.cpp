@@ -4,8 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "atlas/chart_geometry.h"
+#include "scene/uv_raster.h"
 #include "uv/bitimage_packer.h"
 #include "uv/stretch.h"
 
@@ -93,9 +95,11 @@ struct MeshLayout {
 };
 
 struct PackAttempt {
-  PackResult pack;
+  PackResult pack;  // one page: placements in page texels; multi-page: the pages' concatenated
   std::vector<ShapeSource> sources;
   std::vector<MeshLayout> layouts;  // per mesh (instanced ones only)
+  std::vector<int> page;            // per shape (all 0 on one page)
+  int pages = 1;
 };
 
 PackShape chart_shape(const Chart& chart, double scale, bool allow_rotation) {
@@ -109,13 +113,13 @@ PackShape chart_shape(const Chart& chart, double scale, bool allow_rotation) {
   return s;
 }
 
-// Packs every baked mesh at `density` texels per world unit into the atlas
-// size of `pack` (0: the smallest that fits).
-Result<PackAttempt> pack_at(const std::vector<MeshCharts>& meshes, double density,
-                            const PackOptions& pack) {
-  PackAttempt a;
+// The shapes of every baked mesh at `density` texels per world unit (each
+// instanced mesh's own layout packed on the way), with their sources.
+Status build_shapes(const std::vector<MeshCharts>& meshes, double density, const PackOptions& pack,
+                    PackAttempt* out, std::vector<PackShape>* out_shapes) {
+  PackAttempt& a = *out;
+  std::vector<PackShape>& shapes = *out_shapes;
   a.layouts.resize(meshes.size());
-  std::vector<PackShape> shapes;
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     const MeshCharts& mc = meshes[m];
     if (mc.instances.empty() || mc.charts.empty()) continue;
@@ -158,9 +162,164 @@ Result<PackAttempt> pack_at(const std::vector<MeshCharts>& meshes, double densit
     }
   }
   if (shapes.empty()) return invalid_argument("scene has no triangle that can be laid out");
+  return Status::ok();
+}
+
+// Packs every baked mesh at `density` texels per world unit into the atlas
+// size of `pack` (0: the smallest that fits).
+Result<PackAttempt> pack_at(const std::vector<MeshCharts>& meshes, double density,
+                            const PackOptions& pack) {
+  PackAttempt a;
+  std::vector<PackShape> shapes;
+  LUXEL_RETURN_IF_ERROR(build_shapes(meshes, density, pack, &a, &shapes));
   auto packed = pack_shapes(shapes, pack);
   if (!packed) return packed.status();
   a.pack = std::move(packed.value());
+  a.page.assign(shapes.size(), 0);
+  return a;
+}
+
+// Measured on the final UVs, so the report checks the whole chain: texel
+// centres of the laid-out atlas inside two or more triangles of any
+// instances (the packer's conservative masks make it 0), and the spread of
+// the achieved texel density, sqrt(texel area / world area) per instance.
+// One page at a time, so memory stays that of one page.
+void measure_layout(const scene::Scene& scene, const atlas::Atlas& at, UvReport* report) {
+  size_t overlaps = 0;
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  const int page_h = at.page_height();
+  scene::UvRaster raster(at.width, page_h);
+  std::vector<uint32_t> all;
+  for (int page = 0; page < at.pages; ++page) {
+    for (const atlas::InstancePlacement& stacked : at.placements) {
+      if (stacked.page != page) continue;
+      const atlas::InstancePlacement p = atlas::page_relative(at, stacked);
+      const scene::Instance& inst = scene.instances[p.instance];
+      const scene::Mesh& m = scene.meshes[static_cast<size_t>(inst.mesh)];
+      if (m.uv1.size() != m.positions.size() || m.triangle_count() == 0) continue;
+      auto to_page = [&](uint32_t v) {
+        const Vec2 uv = m.uv1[v];
+        return Vec2{uv.x * p.scale[0] + p.offset[0], uv.y * p.scale[1] + p.offset[1]};
+      };
+      double texel_area = 0;
+      for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const Vec2 a = to_page(m.indices[3 * t]), b = to_page(m.indices[3 * t + 1]),
+                   c = to_page(m.indices[3 * t + 2]);
+        raster.add(a, b, c);
+        texel_area += 0.5 *
+                      std::fabs(double(b.x - a.x) * double(c.y - a.y) -
+                                double(c.x - a.x) * double(b.y - a.y)) *
+                      at.width * page_h;
+      }
+      all.resize(m.triangle_count());
+      for (uint32_t t = 0; t < all.size(); ++t) all[t] = t;
+      const double world = world_area(m, inst.object_to_world, all);
+      if (world > 0 && texel_area > 0) {
+        const double density = std::sqrt(texel_area / world);
+        lo = std::min(lo, density);
+        hi = std::max(hi, density);
+      }
+    }
+    raster.resolve([&](size_t, int32_t count) { overlaps += count > 1; });
+  }
+  report->overlapping_texels = overlaps;
+  report->density_spread = hi > 0 ? hi / lo : 1;
+}
+
+// The instance a shape belongs to: a page holds whole instances, so that
+// each instance has one page and one scale/offset.
+uint32_t shape_instance(const std::vector<MeshCharts>& meshes, const ShapeSource& s) {
+  return s.instance >= 0 ? static_cast<uint32_t>(s.instance) : meshes[s.mesh].instances[0];
+}
+
+// Lightmap arrays (as Unity's and Unreal's): when `density` needs more than
+// one max_resolution square, instances are dealt to pages of that size,
+// largest first, each page filled to an estimated 80 % of its area and
+// packed; an instance that does not fit moves to the next page. Placements
+// come back in page texels with a page per shape.
+Result<PackAttempt> pack_pages(const std::vector<MeshCharts>& meshes, double density,
+                               const PackOptions& pack, int max_pages) {
+  PackAttempt a;
+  std::vector<PackShape> shapes;
+  LUXEL_RETURN_IF_ERROR(build_shapes(meshes, density, pack, &a, &shapes));
+  const int side = pack.max_resolution;
+  // Per instance: its shapes and their estimated footprint (bounding boxes
+  // grown by the padding).
+  std::map<uint32_t, std::vector<size_t>> by_instance;
+  std::map<uint32_t, double> footprint;
+  for (size_t i = 0; i < shapes.size(); ++i) {
+    const uint32_t inst = shape_instance(meshes, a.sources[i]);
+    by_instance[inst].push_back(i);
+    float lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+    for (const Vec2& c : shapes[i].corners) {
+      lo[0] = std::min(lo[0], c.x), hi[0] = std::max(hi[0], c.x);
+      lo[1] = std::min(lo[1], c.y), hi[1] = std::max(hi[1], c.y);
+    }
+    footprint[inst] +=
+        (hi[0] - lo[0] + 1 + pack.padding_texels) * (hi[1] - lo[1] + 1 + pack.padding_texels);
+  }
+  std::vector<uint32_t> order;
+  for (const auto& [inst, list] : by_instance) order.push_back(inst);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t x, uint32_t y) { return footprint[x] > footprint[y]; });
+  const double budget = 0.8 * double(side) * double(side);
+  std::vector<std::vector<uint32_t>> pages;
+  std::vector<double> filled;
+  for (uint32_t inst : order) {
+    size_t p = 0;
+    while (p < pages.size() && filled[p] + footprint[inst] > budget) ++p;
+    if (p == pages.size()) {
+      pages.emplace_back();
+      filled.push_back(0);
+    }
+    pages[p].push_back(inst);
+    filled[p] += footprint[inst];
+  }
+  a.page.assign(shapes.size(), -1);
+  a.pack.placements.assign(shapes.size(), ShapePlacement{});
+  a.pack.width = side;
+  a.pack.height = side;
+  long long covered = 0;
+  PackOptions fixed = pack;
+  fixed.width = fixed.height = side;
+  for (size_t p = 0; p < pages.size(); ++p) {
+    if (static_cast<int>(p) >= max_pages)
+      return resource_exhausted(strprintf(
+          "the lightmap needs more than %d pages of %dx%d at texel_density %g; lower the density "
+          "or raise max_resolution",
+          max_pages, side, side, density));
+    while (true) {
+      std::vector<PackShape> page_shapes;
+      std::vector<size_t> index;
+      for (uint32_t inst : pages[p])
+        for (size_t i : by_instance[inst]) {
+          page_shapes.push_back(shapes[i]);
+          index.push_back(i);
+        }
+      auto packed = pack_shapes(page_shapes, fixed);
+      if (packed) {
+        for (size_t k = 0; k < index.size(); ++k) {
+          a.pack.placements[index[k]] = packed.value().placements[k];
+          a.page[index[k]] = static_cast<int>(p);
+        }
+        covered += packed.value().covered_texels;
+        break;
+      }
+      if (packed.status().code() != StatusCode::kResourceExhausted) return packed.status();
+      if (pages[p].size() == 1)
+        return resource_exhausted(strprintf(
+            "instance %u alone does not fit one %dx%d lightmap page at texel_density %g; lower "
+            "the density or raise max_resolution",
+            pages[p][0], side, side, density));
+      // The smallest instance of the page moves on to the next page.
+      if (p + 1 == pages.size()) pages.emplace_back();
+      pages[p + 1].insert(pages[p + 1].begin(), pages[p].back());
+      pages[p].pop_back();
+    }
+  }
+  a.pages = static_cast<int>(pages.size());
+  a.pack.covered_texels = covered;
+  a.pack.efficiency = double(covered) / (double(side) * double(side) * a.pages);
   return a;
 }
 
@@ -296,9 +455,15 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
   } else {
     ++report.pack_attempts;
     auto a = pack_at(meshes, density, pack);
+    if (!a && a.status().code() == StatusCode::kResourceExhausted && options.max_pages > 1) {
+      // Too large for one max_resolution square: several pages.
+      ++report.pack_attempts;
+      a = pack_pages(meshes, density, pack, options.max_pages);
+    }
     if (!a) return a.status();
     attempt = std::move(a.value());
   }
+  report.pages = attempt.pages;
   report.pack_seconds = seconds_since(t_pack);
   report.efficiency = attempt.pack.efficiency;
 
@@ -307,8 +472,11 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
   out.vertex_origin.resize(scene.meshes.size());
   atlas::Atlas& at = out.atlas;
   at.mode = atlas::AtlasMode::kGenerated;
+  // Pages are stacked from the top in one image of pages x page height:
+  // the bake sees one lightmap; the outputs cut it into pages again.
   at.width = attempt.pack.width;
-  at.height = attempt.pack.height;
+  at.height = attempt.pack.height * attempt.pages;
+  at.pages = attempt.pages;
   at.texels_per_unit = density;
   at.placements.resize(scene.instances.size());
   for (uint32_t i = 0; i < scene.instances.size(); ++i) at.placements[i].instance = i;
@@ -395,7 +563,12 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     }
   }
 
-  double min_density = std::numeric_limits<double>::infinity(), max_density = 0;
+  // A shape's placement in the stacked image.
+  const double page_height = attempt.pack.height;
+  auto stacked = [&](DPoint p, size_t shape) {
+    return DPoint{p.x, p.y + page_height * attempt.page[shape]};
+  };
+
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     const MeshCharts& mc = meshes[m];
     if (mc.instances.empty() || mc.charts.empty()) continue;
@@ -403,15 +576,17 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       // Atlas UVs directly.
       assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
         const double k = density * mc.chart_scale[c];
+        const size_t shape = shape_of_chart[m][c];
         const DPoint p =
-            placed_point(uv.x * k, uv.y * k, attempt.pack.placements[shape_of_chart[m][c]]);
+            stacked(placed_point(uv.x * k, uv.y * k, attempt.pack.placements[shape]), shape);
         return Vec2{static_cast<float>(p.x / aw), static_cast<float>(p.y / ah)};
       });
       atlas::InstancePlacement& p = at.placements[mc.instances[0]];
+      // Its page (a page holds whole instances).
+      p.page = attempt.page[shape_of_chart[m][0]];
+      p.rect[1] = static_cast<int>(page_height) * p.page;
       p.rect[2] = at.width;
-      p.rect[3] = at.height;
-      min_density = std::min(min_density, density);
-      max_density = std::max(max_density, density);
+      p.rect[3] = static_cast<int>(page_height);
       continue;
     }
     const MeshLayout& layout = attempt.layouts[m];
@@ -421,12 +596,14 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       return Vec2{static_cast<float>(p.x / lw), static_cast<float>(p.y / lh)};
     });
     for (size_t k = 0; k < mc.instances.size(); ++k) {
-      const ShapePlacement& sp = attempt.pack.placements[shape_of_instance[m][k]];
+      const size_t shape = shape_of_instance[m][k];
+      const ShapePlacement& sp = attempt.pack.placements[shape];
       const double grow = mc.instance_scale[k] / mc.min_instance_scale;
       atlas::InstancePlacement& p = at.placements[mc.instances[k]];
       // atlas texel = layout texel * grow + offset (no turn: allow_rotation
       // was false), so atlas_uv = uv1 * (l * grow / a) + offset / a.
-      const DPoint origin = placed_point(0, 0, sp);
+      const DPoint origin = stacked(placed_point(0, 0, sp), shape);
+      p.page = attempt.page[shape];
       p.scale[0] = static_cast<float>(lw * grow / aw);
       p.scale[1] = static_cast<float>(lh * grow / ah);
       p.offset[0] = static_cast<float>(origin.x / aw);
@@ -436,13 +613,10 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         p.rect[axis] = sp.mask_origin[axis];
         p.rect[2 + axis] = sp.mask_size[axis];
       }
-      const double d = density * mc.instance_scale[k] / mc.min_instance_scale;
-      min_density = std::min(min_density, d);
-      max_density = std::max(max_density, d);
+      p.rect[1] += static_cast<int>(page_height) * p.page;
     }
   }
   if (report.meshes == 0) return invalid_argument("scene has no triangle that can be laid out");
-  report.density_spread = min_density > 0 ? max_density / min_density : 1;
 
   // Stretch over the laid-out charts (Sander et al. 2001: L2 combines as
   // the root of the area-weighted mean of squares).
@@ -455,6 +629,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     report.stretch_linf = std::max(report.stretch_linf, st.linf);
   }
   if (area > 0) report.stretch_l2 = std::sqrt(l2_sq / area);
+  measure_layout(out.scene, at, &report);
   report.total_seconds = seconds_since(t0);
   return out;
 }

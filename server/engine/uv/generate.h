@@ -14,7 +14,8 @@
 //     offset (atlas_uv = uv1 * scale + offset, as AtlasMode::kPacked).
 //   - With AtlasSettings::resolution the density is the largest (within 3 %)
 //     whose packing fits; with texel_density the atlas is the smallest square
-//     that holds the charts.
+//     that holds the charts, or, past max_resolution, several pages of
+//     max_resolution squared, each holding whole instances (lightmap arrays).
 // Deterministic: the same scene and settings give the same bits.
 #pragma once
 
@@ -31,6 +32,10 @@ namespace luxel::uv {
 struct GenerateOptions {
   atlas::AtlasSettings atlas;  // resolution or texel_density, padding, max_resolution
   ChartOptions charts;
+  // With texel_density, a layout larger than max_resolution squared goes on
+  // up to this many pages of max_resolution x max_resolution (lightmap
+  // arrays); 1: RESOURCE_EXHAUSTED instead.
+  int max_pages = 64;
 };
 
 // What `luxel inspect --uv` and the manifest report about a generated layout.
@@ -44,9 +49,15 @@ struct UvReport {
   // area normalisation: area-weighted L2 over all triangles (1 = none) and
   // the largest L-infinity of any triangle.
   double stretch_l2 = 1, stretch_linf = 1;
-  double efficiency = 0;      // covered texels / atlas texels (packer's masks)
-  double density_spread = 1;  // largest / smallest texels per world unit over instances
-  int pack_attempts = 0;      // packings tried while searching the density
+  double efficiency = 0;  // covered texels / atlas texels (packer's masks)
+  // Largest / smallest achieved texels per world unit over instances,
+  // sqrt(texel area / world area) measured on the final UVs.
+  double density_spread = 1;
+  int pack_attempts = 0;  // packings tried while searching the density
+  int pages = 1;          // lightmap pages (atlas::Atlas::pages)
+  // Texel centres inside two or more laid-out triangles (any instances);
+  // required to be 0.
+  size_t overlapping_texels = 0;
   double chart_seconds = 0, pack_seconds = 0, total_seconds = 0;
 };
 

@@ -83,6 +83,11 @@ TEST(SettingsProto, EverySchemaSettingHasItsProtoFieldAndViceVersa) {
     }
   }
   fields.erase("sky.kind");  // covered above; listed for clarity
+  // Per-node placements: a list of structures outside the schema's scalar
+  // settings, translated on their own (PlacementsRoundTripAndErrors).
+  for (const char* f :
+       {"placements.node", "placements.instance", "placements.scale_offset", "placements.page"})
+    EXPECT_EQ(fields.erase(f), 1u) << f;
   for (const auto& f : fields)
     EXPECT_TRUE(f == "sky.kind") << "proto field settings." << f << " has no schema setting";
 }
@@ -227,6 +232,52 @@ TEST(SettingsProto, RoundTripThroughTheApiKeepsTheBake) {
   s.dilation_texels = 0;
   EXPECT_EQ(to_proto_settings(s).status().message().rfind("settings.dilation_texels: 0 cannot", 0),
             0u);
+}
+
+// Per-node placements cross the API exactly (bits of the floats, the
+// instance's presence) and are validated at submit, naming the entry.
+TEST(SettingsProto, PlacementsRoundTripAndErrors) {
+  pipeline::BakeSettings s = pipeline::default_settings();
+  pipeline::NodePlacement a;
+  a.node = 4;
+  const float so[4] = {0.1f, 0.3f, 1.0f / 3.0f, 0.7f};
+  for (int k = 0; k < 4; ++k) a.scale_offset[k] = so[k];
+  pipeline::NodePlacement b = a;
+  b.node = 5;
+  b.element = 0;
+  b.page = 2;
+  s.node_placements = {a, b};
+  auto p = to_proto_settings(s);
+  ASSERT_TRUE(p) << p.status().message();
+  ASSERT_EQ(p->placements_size(), 2);
+  EXPECT_FALSE(p->placements(0).has_instance());
+  EXPECT_TRUE(p->placements(1).has_instance());
+  auto back = to_engine_settings(p.value(), SettingsLimits{});
+  ASSERT_TRUE(back) << back.status().message();
+  ASSERT_EQ(back->node_placements.size(), 2u);
+  EXPECT_EQ(back->node_placements[0].element, -1);
+  EXPECT_EQ(back->node_placements[1].element, 0);
+  EXPECT_EQ(back->node_placements[1].page, 2);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(back->node_placements[0].scale_offset[k], so[k]);
+  // Placements shape the lightmap, so they are part of the settings the
+  // checkpoint fingerprint covers.
+  EXPECT_EQ(back->describe(), s.describe());
+  EXPECT_NE(bake_fingerprint("scene", s), bake_fingerprint("scene", pipeline::default_settings()));
+
+  v1::BakeSettings bad = base();
+  auto* np = bad.add_placements();
+  np->set_node(1);
+  np->add_scale_offset(1);
+  EXPECT_EQ(service_error(bad),
+            "settings.placements[0].scale_offset: expected 4 values [sx, sy, ox, oy], got 1");
+  for (int k = 0; k < 3; ++k) np->add_scale_offset(k == 0 ? 0.0f : 1.0f);
+  EXPECT_NE(service_error(bad).find("settings.placements[0].scale_offset: must be 4 finite"),
+            std::string::npos)
+      << service_error(bad);
+  np->set_scale_offset(1, 1);
+  EXPECT_EQ(service_error(bad), "ok");
+  np->set_page(5000);
+  EXPECT_EQ(service_error(bad), "settings.placements[0].page: must be in [0, 1024)");
 }
 
 }  // namespace
