@@ -38,8 +38,11 @@ class EventPrinter {
     if (o_.quiet) return grpc::Status::OK;
     if (!snapshot_file.empty()) {
       end_line();
-      std::printf("snapshot   %s (%ux%u)\n", snapshot_file.c_str(), event.snapshot().width(),
-                  event.snapshot().height());
+      std::printf("snapshot   %s (%ux%u%s)\n", snapshot_file.c_str(), event.snapshot().width(),
+                  event.snapshot().height(),
+                  event.snapshot().pages() > 1
+                      ? strprintf(", %u pages stacked", event.snapshot().pages()).c_str()
+                      : "");
     }
     // Snapshot events repeat the progress of the last progress event; in a
     // log (not a terminal) print a line only when something changed.

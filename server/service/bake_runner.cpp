@@ -215,7 +215,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
       bakes_.publish_snapshot(
           bake_id, std::make_shared<SnapshotFrame>(
                        std::move(image), to_proto(s.progress), to_proto(opts.snapshot_format),
-                       opts.snapshot_max_side, bakes_.bake_dir(bake_id)));
+                       opts.snapshot_max_side, bakes_.bake_dir(bake_id), s.pages));
     };
   }
   if (options_.checkpoint_interval_s > 0) {
@@ -269,9 +269,9 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   const std::string final_dir = bakes_.results_dir(bake_id);
   remove_tree(partial);
   remove_tree(final_dir);
-  auto written =
-      pipeline::write_bake_outputs(partial, *scene.value(), settings.value(), r, info->scene_id(),
-                                   scenes_.main_file_path(scene_info.value()));
+  auto written = pipeline::write_bake_outputs(
+      partial, *scene.value(), settings.value(), r, info->scene_id(),
+      scenes_.main_file_path(scene_info.value()), scene_info.value().name());
   if (!written) return finish_failed(bake_id, written.status());
   if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
   if (Status st = rename_durable(partial, final_dir); !st.is_ok())

@@ -20,9 +20,11 @@ namespace luxel::service {
 class SnapshotFrame {
  public:
   // `scratch_dir` is where EXR bytes are assembled (OpenImageIO writes files).
+  // `pages`: lightmap pages stacked from the top in `image` (Snapshot.pages).
   SnapshotFrame(output::Image image, v1::BakeProgress progress, v1::SnapshotFormat format,
-                int max_side, std::string scratch_dir)
+                int max_side, std::string scratch_dir, int pages = 1)
       : image_(std::move(image)),
+        pages_(pages),
         progress_(std::move(progress)),
         format_(format),
         max_side_(max_side),
@@ -34,6 +36,7 @@ class SnapshotFrame {
 
  private:
   output::Image image_;
+  int pages_;
   v1::BakeProgress progress_;
   v1::SnapshotFormat format_;
   int max_side_;

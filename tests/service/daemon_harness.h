@@ -12,20 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include "../unit/scene/gltf_builder.h"  // TempDir, and glTF files for uploads
 #include "luxel/v1/luxel.grpc.pb.h"
 
 namespace luxel::test {
-
-// A fresh folder under /tmp, removed with its content on destruction.
-class TempDir {
- public:
-  TempDir();
-  ~TempDir();
-  const std::string& path() const { return path_; }
-
- private:
-  std::string path_;
-};
 
 class Daemon {
  public:

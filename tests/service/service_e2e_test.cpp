@@ -408,5 +408,95 @@ TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {
   EXPECT_GE(list.bakes_size(), 1);
 }
 
+// Four separate 2 x 2 quads without TEXCOORD_1 (each its own mesh and node).
+std::string quads_glb() {
+  GltfBuilder b;
+  b.add_material({{"name", "grey"}, {"pbrMetallicRoughness", {{"metallicFactor", 0.0}}}});
+  for (int i = 0; i < 4; ++i) {
+    json prim = b.triangles({-1, 0, -1, 1, 0, -1, 1, 0, 1, -1, 0, 1}, {0, 2, 1, 0, 3, 2}, kUInt,
+                            /*with_uv1=*/false);
+    prim["material"] = 0;
+    b.add_node({{"name", "quad" + std::to_string(i)},
+                {"mesh", b.add_mesh("quad" + std::to_string(i), {prim})},
+                {"translation", {3.0 * i, 0, 0}}});
+  }
+  return b.glb();
+}
+
+// A scene without lightmap UVs bakes through the daemon with generated UVs:
+// the written-back scene is an artifact; past the daemon's --max-resolution
+// the lightmap goes on pages, whose files are artifacts and whose
+// snapshots arrive stacked with Snapshot.pages.
+TEST(ServiceUv, GeneratedUvsAndPagesAreArtifacts) {
+  TempDir dir;
+  Daemon daemon(dir.path() + "/data", {"--max-resolution", "64"}, kToken);
+  v1::SceneInfo scene;
+  ASSERT_TRUE(
+      upload_scene(daemon, "quads.glb", v1::SCENE_FORMAT_GLB, quads_glb(), {}, &scene).ok());
+  auto stub = daemon.stub();
+  struct Case {
+    float density;
+    int pages;
+  };
+  // 8 texels per unit: all four quads on one 64^2 page; 20: each quad's
+  // 40 x 40 texels (with padding) takes more than half a page.
+  for (const Case c : {Case{8, 1}, Case{20, 4}}) {
+    v1::SubmitBakeRequest submit;
+    submit.set_scene_id(scene.scene_id());
+    // Enough samples that snapshots (every 0.1 s) come before the end.
+    *submit.mutable_settings() = small_settings(512, 0);
+    submit.mutable_settings()->set_texel_density(c.density);
+    submit.mutable_settings()->mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
+    v1::BakeInfo bake;
+    auto ctx = daemon.context();
+    ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
+    v1::WatchBakeRequest watch;
+    watch.set_bake_id(bake.bake_id());
+    auto wctx = daemon.context(std::chrono::seconds(60));
+    auto reader = stub->WatchBake(wctx.get(), watch);
+    v1::BakeEvent event;
+    uint32_t snapshot_pages = 0;
+    while (reader->Read(&event))
+      if (event.has_snapshot()) snapshot_pages = std::max(snapshot_pages, event.snapshot().pages());
+    ASSERT_TRUE(reader->Finish().ok());
+    ASSERT_EQ(event.info().state(), v1::BAKE_STATE_SUCCEEDED) << event.info().error_message();
+    const std::vector<std::string> names(event.info().artifacts().begin(),
+                                         event.info().artifacts().end());
+    auto has = [&](const std::string& n) {
+      return std::find(names.begin(), names.end(), n) != names.end();
+    };
+    EXPECT_TRUE(has("quads_lightmapped.glb")) << c.density;
+    EXPECT_TRUE(has("manifest.json"));
+    if (c.pages == 1) {
+      EXPECT_TRUE(has("irradiance.exr"));
+      EXPECT_FALSE(has("irradiance_0.exr"));
+      EXPECT_LE(snapshot_pages, 1u);
+    } else {
+      for (int p = 0; p < c.pages; ++p)
+        for (const char* stem : {"irradiance_", "preview_", "samples_", "rel_error_"}) {
+          const std::string ext = std::string(stem) == "preview_" ? ".png" : ".exr";
+          EXPECT_TRUE(has(stem + std::to_string(p) + ext)) << stem << p;
+        }
+      EXPECT_FALSE(has("irradiance.exr"));
+      EXPECT_FALSE(has("irradiance_" + std::to_string(c.pages) + ".exr"));
+      EXPECT_EQ(snapshot_pages, static_cast<uint32_t>(c.pages));
+    }
+    std::string bytes, sha;
+    uint64_t total = 0;
+    ASSERT_TRUE(
+        download(daemon, bake.bake_id(), "quads_lightmapped.glb", &bytes, &sha, &total).ok());
+    EXPECT_EQ(bytes.substr(0, 4), "glTF");
+    EXPECT_NE(bytes.find("TEXCOORD_1"), std::string::npos);
+    EXPECT_NE(bytes.find("lightmapScaleOffset"), std::string::npos);
+    EXPECT_EQ(bytes.find("lightmapIndex") != std::string::npos, c.pages > 1);
+    ASSERT_TRUE(download(daemon, bake.bake_id(), "manifest.json", &bytes, &sha, &total).ok());
+    const json manifest = json::parse(bytes);
+    EXPECT_EQ(manifest.value("pages", 1), c.pages);
+    EXPECT_EQ(manifest["uv_layout"]["pages"], c.pages);
+    EXPECT_EQ(manifest["uv_layout"]["overlapping_texels"], 0);
+  }
+  EXPECT_EQ(daemon.stop(SIGTERM), 0) << daemon.log();
+}
+
 }  // namespace
 }  // namespace luxel::test

@@ -448,6 +448,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
         BakeSnapshot snap;
         snap.width = s_.atlas.width;
         snap.height = s_.atlas.height;
+        snap.pages = s_.atlas.pages;
         snap.irradiance = result.irradiance;  // the finished tiles (zero untiled)
         fill_irradiance(s_, state.value().mean, tile.begin, snap.irradiance);
         // The image's own statistics (error, min spp), not those of the last

@@ -105,6 +105,7 @@ using ProgressFn = std::function<bool(const BakeProgress&)>;
 // A progressive image of the bake so far (not dilated).
 struct BakeSnapshot {
   int width = 0, height = 0;
+  int pages = 1;                  // lightmap pages stacked from the top, height / pages rows each
   std::vector<float> irradiance;  // RGBA like BakeResult::irradiance
   BakeProgress progress;
 };

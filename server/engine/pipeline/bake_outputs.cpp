@@ -119,8 +119,8 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   return m;
 }
 
-std::string lightmapped_glb_name(const scene::Scene& scene) {
-  std::string stem = std::filesystem::path(scene.source_name).stem().string();
+std::string lightmapped_glb_name(const std::string& scene_file_name) {
+  std::string stem = std::filesystem::path(scene_file_name).stem().string();
   if (stem.empty()) stem = "scene";
   for (char& c : stem)
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' || c == '-')) c = '_';
@@ -130,7 +130,8 @@ std::string lightmapped_glb_name(const scene::Scene& scene) {
 Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
                                        const BakeSettings& settings, const BakeResult& result,
                                        const std::string& scene_sha256,
-                                       const std::string& source_path) {
+                                       const std::string& source_path,
+                                       const std::string& scene_name) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -237,7 +238,8 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   add_file("error_series", "error_series.csv", "csv", "error estimate against time", -1);
   m.files = std::move(files);
   if (result.uv_layout && !source_path.empty()) {
-    const std::string glb = lightmapped_glb_name(scene);
+    const std::string glb =
+        lightmapped_glb_name(scene_name.empty() ? scene.source_name : scene_name);
     auto written = write_lightmapped_glb(source_path, scene, result, at(glb.c_str()));
     if (!written) return written.status();
     for (const std::string& w : written.value().warnings) m.import_warnings.push_back(w);

@@ -28,15 +28,18 @@ struct OutputPaths {
 // "<stem of the scene's file name>_lightmapped.glb" (characters outside
 // [A-Za-z0-9._-] become '_'): the scene with its generated UVs
 // (lightmapped_gltf.h).
-std::string lightmapped_glb_name(const scene::Scene& scene);
+std::string lightmapped_glb_name(const std::string& scene_file_name);
 
 // Creates `dir` if needed. `scene_sha256` may be empty. With generated UVs
 // (result.uv_layout) and the scene's file at `source_path`, also writes the
-// scene with those UVs as lightmapped_glb_name(scene).
+// scene with those UVs as lightmapped_glb_name(scene_name), where
+// `scene_name` is the name the user knows the scene by (the daemon stores
+// uploads under fixed file names; empty: scene.source_name).
 Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
                                        const BakeSettings& settings, const BakeResult& result,
                                        const std::string& scene_sha256 = "",
-                                       const std::string& source_path = "");
+                                       const std::string& source_path = "",
+                                       const std::string& scene_name = "");
 
 // The manifest that write_bake_outputs writes (without the file list).
 output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,
