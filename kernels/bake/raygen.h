@@ -46,7 +46,20 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
                          (float2)(uvt.uv2.x, uvt.uv2.y), (float)params.width, (float)params.height,
                          tx, ty, offset, &w0, &w1, &w2);
   const float2 bary = (float2)(w1, w2);
-  const LuxSurface s = lux_surface_at(tris, tri, bary.x, bary.y);
+  LuxSurface s = lux_surface_at(tris, tri, bary.x, bary.y);
+#if LUX_NORMAL_MAP && !LUX_BASIS
+  /* Irradiance lightmaps integrate about the normal-mapped normal, what the
+   * surface's shading sees; directional encodings record the light arriving
+   * at the unmapped surface, and the runtime applies the normal map when it
+   * reconstructs (docs/accuracy.md "Normal maps"). */
+  {
+#if LUX_TEXCOORD1
+    s.uv1 = lux_surface_uv1(material_uv1, tri, bary.x, bary.y);
+#endif
+    const LuxMaterial m = materials[s.material];
+    lux_surface_normal_map(&s, &m, textures, texels, tangents, tri, bary.x, bary.y);
+  }
+#endif
 
   LuxPath path;
   path.texel = texel;

@@ -88,6 +88,11 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     metallic *= mr.z;
   }
 #endif
+#if LUX_NORMAL_MAP
+  /* The BSDF, its sampling and the light sample's cosine all use the mapped
+   * normal (docs/accuracy.md "Normal maps"). */
+  lux_surface_normal_map(&s, &m, textures, texels, tangents, hit.prim, hit.u, hit.v);
+#endif
   LuxSurface sf = s;
   if (dot(wo, sf.ng) < 0.0f) {
     sf.ng = -sf.ng;

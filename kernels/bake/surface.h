@@ -1,8 +1,9 @@
 /* Surface points of the bake: a triangle's interpolated position, normals and
- * material UV, and the material evaluated there. Device only. */
+ * material UV, the material's normal map, and ray offsets. Device only. */
 #ifndef LUXEL_BAKE_SURFACE_H
 #define LUXEL_BAKE_SURFACE_H
 
+#include "shading/texture.h"
 #include "shared/bake.h"
 #include "shared/geometry.h"
 #include "shared/ray_offset.h"
@@ -11,7 +12,8 @@ typedef struct LuxSurface {
   float3 p;          /* world position */
   float3 ng;         /* unit geometric normal, on the shading normal's side */
   float3 ng_winding; /* unit geometric normal from the winding (emitter front side) */
-  float3 ns;         /* unit shading normal, on the same side as ng */
+  float3 ns;         /* unit shading normal, on the same side as ng (normal-mapped
+                        after lux_surface_normal_map) */
   float2 uv;         /* material UV set 0 (TEXCOORD_0) */
   float2 uv1;        /* material UV set 1 (TEXCOORD_1) with LUX_TEXCOORD1, else uv */
   int material;
@@ -52,6 +54,29 @@ inline float2 lux_surface_uv1(const __global LuxTriangleUV* uvs, int tri, float 
   return b0 * (float2)(t.uv0.x, t.uv0.y) + b1 * (float2)(t.uv1.x, t.uv1.y) +
          b2 * (float2)(t.uv2.x, t.uv2.y);
 }
+
+#if LUX_NORMAL_MAP
+/* Vertex tangent of triangle tri at (b1, b2), interpolated (w: the sign of
+ * the interpolated bitangent sign; constant over a triangle in practice). */
+inline float4 lux_surface_tangent(const __global LuxTriangleTangents* tangents, int tri, float b1,
+                                  float b2) {
+  const LuxTriangleTangents t = tangents[tri];
+  return (1.0f - b1 - b2) * t.t0 + b1 * t.t1 + b2 * t.t2;
+}
+
+/* Applies material m's normal map to s->ns (shading/texture.h), in the
+ * surface's own frame (before any flip toward the viewer). The geometric
+ * normal stays as it is: ray offsets and the hemisphere test use it. */
+inline void lux_surface_normal_map(LuxSurface* s, const LuxMaterial* m,
+                                   const __global LuxTexture* textures, const __global uint* texels,
+                                   const __global LuxTriangleTangents* tangents, int tri, float b1,
+                                   float b2) {
+  if (m->normal_tex.texture < 0) return;
+  const float3 rgb = lux_texture_slot_sample(texels, textures, m->normal_tex, s->uv, s->uv1).xyz;
+  s->ns = lux_normal_map_perturb(s->ns, s->ng, lux_surface_tangent(tangents, tri, b1, b2), rgb,
+                                 m->normal_scale);
+}
+#endif
 
 /* The robust offset of kernels/shared/ray_offset.h (Wächter & Binder) with
  * its near-origin constants scaled by the scene size (`scale` = the scene's

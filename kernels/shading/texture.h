@@ -149,4 +149,36 @@ inline float4 lux_texture_slot_sample(const __global uint* texels,
                                  LUX_SLOT_WRAP_S(s.flags), LUX_SLOT_WRAP_T(s.flags));
 }
 
+/* Normal maps (glTF 2.0 §3.9.3 "normalTexture"; material.normalTextureInfo
+ * .scale, §5.22): a linear texel rgb in [0, 1] is the tangent-space vector
+ * (2 rgb - 1) * (scale, scale, 1) in the frame (t, b, n): t the vertex
+ * tangent Gram-Schmidt orthogonalised against n (interpolation tilts it),
+ * b = cross(n, t) * sign(tangent.w) (§3.7.2.1 TANGENT), n the interpolated
+ * vertex normal. The result is the unit shading normal.
+ *
+ * A map can tilt the normal below the geometric surface (strong maps,
+ * grazing vertex normals). Such a normal is bent back toward ng until it is
+ * LUX_NORMAL_MAP_MIN_COS above the tangent plane: the smallest change that
+ * keeps every later step defined. Cycles' ensure_valid_reflection does the
+ * same against the view direction; the texel point has none, so the bake
+ * uses the geometric normal alone (docs/accuracy.md "Normal maps"). A frame
+ * without a usable tangent or a zero map vector leaves n unchanged. */
+#define LUX_NORMAL_MAP_MIN_COS 0.01f
+
+inline float3 lux_normal_map_perturb(float3 n, float3 ng, float4 tangent, float3 rgb, float scale) {
+  float3 t = tangent.xyz - n * dot(n, tangent.xyz);
+  const float tl = length(t);
+  if (!(tl > 1e-6f)) return n;
+  t /= tl;
+  const float3 b = cross(n, t) * (tangent.w < 0.0f ? -1.0f : 1.0f);
+  const float3 m = (2.0f * rgb - 1.0f) * (float3)(scale, scale, 1.0f);
+  float3 p = m.x * t + m.y * b + m.z * n;
+  const float pl = length(p);
+  if (!(pl > 1e-12f) || !isfinite(pl)) return n;
+  p /= pl;
+  const float d = dot(p, ng);
+  if (d < LUX_NORMAL_MAP_MIN_COS) p = normalize(p + ng * (LUX_NORMAL_MAP_MIN_COS - d));
+  return p;
+}
+
 #endif /* LUXEL_SHADING_TEXTURE_H */

@@ -35,7 +35,20 @@ typedef struct LuxSurfaceTri {
   float2 pad;
 } LuxSurfaceTri;
 
-/* Device material, 160 bytes. A slot's texture is -1 when absent.
+/* Per-vertex tangents of one world triangle (TriangleSoup order), 48 bytes,
+ * present only when a used material has a normal map (LUX_NORMAL_MAP):
+ * xyz = world-space tangent (+u of the normal texture's UV set), w = the
+ * bitangent sign in world space (bitangent = cross(n, t) * w, glTF 2.0
+ * §3.7.2.1; the file's sign times the sign of the instance transform's
+ * determinant, since a mirroring transform flips handedness). Triangles
+ * without a normal map hold zeros. */
+typedef struct LuxTriangleTangents {
+  float4 t0;
+  float4 t1;
+  float4 t2;
+} LuxTriangleTangents;
+
+/* Device material, 208 bytes. A slot's texture is -1 when absent.
  *   flags bit 0: double-sided; bit 1: emits light.
  *   specular: rgb = F0 of the dielectric layer, w = its F90. Without
  *     KHR_materials_specular, rgb = ((ior - 1) / (ior + 1))^2
@@ -53,6 +66,9 @@ typedef struct LuxMaterial {
   LuxTextureSlot base_color_tex;
   LuxTextureSlot metallic_roughness_tex;
   LuxTextureSlot emissive_tex;
+  LuxTextureSlot normal_tex; /* tangent-space normal map (LUX_NORMAL_MAP) */
+  float normal_scale;        /* normalTextureInfo.scale: multiplies the map's x and y */
+  float pad[3];
 } LuxMaterial;
 
 #define LUX_MATERIAL_DOUBLE_SIDED 1

@@ -47,12 +47,14 @@
   X(buffer, float, sky_block_cdfs, "sky block cdfs")        \
   X(buffer, float, sky_texel_cdfs, "sky texel cdfs")
 
-/* Material textures (kernels/shared/texture.h) and the per-triangle
- * material UV set 1, present only when a material reads TEXCOORD_1. */
-#define LUX_GROUP_textures(X)                 \
-  X(buffer, LuxTexture, textures, "textures") \
-  X(buffer, uint, texels, "texture texels")   \
-  X(buffer, LuxTriangleUV, material_uv1, "material uv1")
+/* Material textures (kernels/shared/texture.h), the per-triangle
+ * material UV set 1, present only when a material reads TEXCOORD_1, and the
+ * per-triangle tangents, present only when a material has a normal map. */
+#define LUX_GROUP_textures(X)                            \
+  X(buffer, LuxTexture, textures, "textures")            \
+  X(buffer, uint, texels, "texture texels")              \
+  X(buffer, LuxTriangleUV, material_uv1, "material uv1") \
+  X(buffer, LuxTriangleTangents, tangents, "normal-map tangents")
 
 /* Path state: sized by the batch (paths per iteration). keys = the texel of
  * each path slot, sorted; offsets = the offset buffer (Listing 3.1). */

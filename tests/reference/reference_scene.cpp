@@ -27,7 +27,7 @@ Status check_material(const scene::Material& m) {
   if (m.metallic_factor > 0.0f) return refuse("metallic > 0");
   if (m.roughness_factor < 1.0f) return refuse("roughness < 1");
   if (m.base_color_texture.texture >= 0 || m.metallic_roughness_texture.texture >= 0 ||
-      m.emissive_texture.texture >= 0)
+      m.emissive_texture.texture >= 0 || m.normal_texture.texture >= 0)
     return refuse("has a texture");
   if (m.alpha_mode != scene::AlphaMode::kOpaque) return refuse("alpha mode is not OPAQUE");
   return Status::ok();

@@ -80,7 +80,9 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
       a.upload(l.sky_texel_cdfs, s.lights.sky_texel_cdfs, "sky texel cdfs", image_sky));
 
   TextureArgs& t = args.textures;
-  if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE")) {
+  const bool normal_map = s.features.has("NORMAL_MAP");
+  LUXEL_RETURN_IF_ERROR(a.upload(t.tangents, s.data.tangents, "normal-map tangents", normal_map));
+  if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE") && !normal_map) {
     LUXEL_RETURN_IF_ERROR(a.upload(t.textures, std::vector<cl::LuxTexture>{}, "textures", false));
     LUXEL_RETURN_IF_ERROR(a.upload(t.texels, std::vector<uint32_t>{}, "texels", false));
     return a.upload(t.material_uv1, std::vector<cl::LuxTriangleUV>{}, "material uv1", false);

@@ -6,10 +6,13 @@
 namespace luxel::cl {
 static_assert(sizeof(LuxSurfaceTri) == 128 && alignof(LuxSurfaceTri) == 16);
 static_assert(offsetof(LuxSurfaceTri, uv0) == 96);
-static_assert(sizeof(LuxMaterial) == 160 && alignof(LuxMaterial) == 16);
+static_assert(sizeof(LuxTriangleTangents) == 48 && alignof(LuxTriangleTangents) == 16);
+static_assert(sizeof(LuxMaterial) == 208 && alignof(LuxMaterial) == 16);
 static_assert(offsetof(LuxMaterial, specular) == 32 && offsetof(LuxMaterial, metallic) == 48);
 static_assert(offsetof(LuxMaterial, base_color_tex) == 64 &&
               offsetof(LuxMaterial, emissive_tex) == 128);
+static_assert(offsetof(LuxMaterial, normal_tex) == 160 &&
+              offsetof(LuxMaterial, normal_scale) == 192);
 static_assert(sizeof(LuxPath) == 96);
 static_assert(offsetof(LuxPath, texel) == 64 && offsetof(LuxPath, sample_pos) == 80);
 static_assert(sizeof(LuxBakeParams) == 80 && alignof(LuxBakeParams) == 8);

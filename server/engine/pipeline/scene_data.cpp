@@ -1,6 +1,9 @@
 #include "pipeline/scene_data.h"
 
+#include <cmath>
 #include <cstring>
+
+#include "scene/tangents.h"
 
 namespace luxel::pipeline {
 namespace {
@@ -69,10 +72,28 @@ cl::LuxMaterial to_device(const scene::Material& m) {
   d.base_color_tex = to_slot(m.base_color_texture);
   d.metallic_roughness_tex = to_slot(m.metallic_roughness_texture);
   d.emissive_tex = to_slot(m.emissive_texture);
+  d.normal_tex = to_slot(m.normal_texture);
+  d.normal_scale = m.normal_scale;
   d.flags = (m.double_sided ? LUX_MATERIAL_DOUBLE_SIDED : 0) |
             (m.is_emissive() ? LUX_MATERIAL_EMISSIVE : 0);
   d.alpha_cutoff = m.alpha_cutoff;
   return d;
+}
+
+// The mesh's tangents: the importer's (TANGENT or generated), or, for meshes
+// built without them (scenes made in code, or UVs of another set), generated
+// here once per mesh from the UV set the normal map reads.
+const std::vector<Vec4>& mesh_tangents(const scene::Scene& scene, int mesh_index, int texcoord,
+                                       std::vector<std::vector<Vec4>>* generated) {
+  const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(mesh_index)];
+  if (mesh.tangents.size() == mesh.positions.size()) return mesh.tangents;
+  std::vector<Vec4>& g = (*generated)[static_cast<size_t>(mesh_index)];
+  if (g.empty()) {
+    std::vector<Vec2> uvs = mesh.material_uvs(texcoord);
+    uvs.resize(mesh.positions.size(), Vec2{0, 0});
+    g = scene::generate_tangents(mesh.positions, mesh.normals, uvs, mesh.indices);
+  }
+  return g;
 }
 
 }  // namespace
@@ -100,11 +121,17 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
 
   // Material UV set 1 per triangle only when some material reads it: the
   // surface records stay 128 bytes and scenes on TEXCOORD_0 pay nothing.
-  for (const auto& m : scene.materials)
-    for (const scene::TextureRef* r :
-         {&m.base_color_texture, &m.metallic_roughness_texture, &m.emissive_texture})
+  bool any_normal_map = false;
+  for (const auto& m : scene.materials) {
+    for (const scene::TextureRef* r : {&m.base_color_texture, &m.metallic_roughness_texture,
+                                       &m.emissive_texture, &m.normal_texture})
       if (r->texture >= 0 && r->texcoord == 1) out.uses_texcoord1 = true;
+    if (m.normal_texture.texture >= 0) any_normal_map = true;
+  }
   if (out.uses_texcoord1) out.material_uv1.assign(n, cl::LuxTriangleUV{});
+  // Tangents likewise only with a normal map (48 bytes per triangle).
+  if (any_normal_map) out.tangents.assign(n, cl::LuxTriangleTangents{});
+  std::vector<std::vector<Vec4>> generated(scene.meshes.size());
 
   std::vector<bool> material_used(scene.materials.size(), false);
   out.surface.resize(n);
@@ -139,6 +166,21 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
     }
     out.atlas_uvs[t].pad = {0, 0};
     s.pad = {0, 0};
+    const auto& normal_map = scene.materials[static_cast<size_t>(material)].normal_texture;
+    if (!out.tangents.empty() && normal_map.texture >= 0) {
+      const std::vector<Vec4>& tangents =
+          mesh_tangents(scene, instance.mesh, normal_map.texcoord, &generated);
+      // A mirroring transform flips the frame's handedness (bitangent sign).
+      const float sign = determinant3x3(instance.object_to_world) < 0 ? -1.0f : 1.0f;
+      cl::float4* tw[3] = {&out.tangents[t].t0, &out.tangents[t].t1, &out.tangents[t].t2};
+      for (int k = 0; k < 3; ++k) {
+        const Vec4 to = tangents[mesh.indices[mt * 3 + static_cast<size_t>(k)]];
+        Vec3 w = transform_vector(instance.object_to_world, {to.x, to.y, to.z});
+        const float len = length(w);
+        w = len > 0 && std::isfinite(len) ? w * (1.0f / len) : Vec3{0, 0, 0};
+        *tw[k] = f4(w, to.w < 0 ? -sign : sign);
+      }
+    }
   }
   for (size_t m = 0; m < scene.materials.size(); ++m) {
     if (!material_used[m]) continue;
@@ -148,7 +190,9 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
       out.uses_textures = true;
     if (mat.is_emissive() && d.emissive_tex.texture >= 0) out.uses_emissive_texture = true;
     if (!is_rough_dielectric(mat)) out.needs_specular = true;
+    if (mat.normal_texture.texture >= 0) out.uses_normal_map = true;
   }
+  if (!out.uses_normal_map) out.tangents.clear();
   return out;
 }
 

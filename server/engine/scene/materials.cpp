@@ -282,12 +282,22 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   if (!em) return em.status();
   m.emissive_texture = *em;
 
+  // glTF 2.0 §3.9.3 / §5.22 (material.normalTextureInfo): linear RGB, the
+  // scale multiplies the map's X and Y.
+  auto nt =
+      table->resolve(gm.normalTexture.index, gm.normalTexture.texCoord, gm.normalTexture.extensions,
+                     ColorSpace::kLinear, label + " normalTexture");
+  if (!nt) return nt.status();
+  m.normal_texture = *nt;
+  if (!std::isfinite(gm.normalTexture.scale) || std::fabs(gm.normalTexture.scale) > 1e6)
+    return invalid_argument(
+        strprintf("%s: normalTexture scale %g is not a finite number in "
+                  "[-1e6, 1e6]",
+                  label.c_str(), gm.normalTexture.scale));
+  m.normal_scale = static_cast<float>(gm.normalTexture.scale);
+
   // Inputs that change baked light but are not modelled yet, by name.
   auto& warnings = table->warnings();
-  if (gm.normalTexture.index >= 0)
-    warnings.push_back(label +
-                       ": normalTexture is not supported; the interpolated vertex "
-                       "normal is used");
   for (const auto& [name, value] : gm.extensions)
     if (!is_supported_extension(name))
       warnings.push_back(label + ": material extension " + name +

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "scene/accessor.h"
+#include "scene/tangents.h"
 
 namespace luxel::scene::detail {
 namespace {
@@ -76,9 +77,53 @@ int default_material(const tinygltf::Model& model, Scene* scene) {
   return static_cast<int>(index);
 }
 
+// Tangents of one primitive's vertices, appended to mesh->tangents (which
+// stays empty while no primitive of the mesh has a normal-mapped material):
+// TANGENT when the primitive has it, else generated from the UV set the
+// normal texture reads (scene/tangents.h). `kept`: the primitive's triangles.
+Status append_tangents(const Material& material, const std::string& ctx,
+                       const std::vector<float>* file_tangents, const std::vector<float>& pos,
+                       const std::vector<Vec3>& normals, const std::vector<float>* uv0,
+                       const std::vector<float>* uv1, const std::vector<uint32_t>& kept,
+                       Scene* scene, Mesh* mesh) {
+  const size_t base = mesh->positions.size() - normals.size();
+  const size_t count = normals.size();
+  const TextureRef& map = material.normal_texture;
+  if (map.texture < 0) {
+    if (!mesh->tangents.empty()) mesh->tangents.resize(base + count, Vec4{0, 0, 0, 1});
+    return Status::ok();
+  }
+  mesh->tangents.resize(base, Vec4{0, 0, 0, 1});
+  if (file_tangents) {
+    for (size_t i = 0; i < count; ++i) {
+      const float* t = &(*file_tangents)[4 * i];
+      // glTF 2.0 §3.7.2.1: XYZ unit length, W +1 or -1; normalised here, and
+      // a zero or non-finite tangent falls back to one the kernel builds.
+      Vec3 xyz = {t[0], t[1], t[2]};
+      const float len = length(xyz);
+      xyz = len > 0 && std::isfinite(len) ? xyz * (1.0f / len) : Vec3{0, 0, 0};
+      mesh->tangents.push_back({xyz.x, xyz.y, xyz.z, t[3] < 0 ? -1.0f : 1.0f});
+    }
+    return Status::ok();
+  }
+  const std::vector<float>* uv = map.texcoord == 1 ? uv1 : uv0;
+  std::vector<Vec2> uvs(count, Vec2{0, 0});
+  if (uv) {
+    for (size_t i = 0; i < count; ++i) uvs[i] = {(*uv)[2 * i], (*uv)[2 * i + 1]};
+  } else {
+    scene->import_stats.warnings.push_back(
+        strprintf("%s: material '%s' has a normalTexture on TEXCOORD_%d, which the primitive "
+                  "lacks; its tangents are arbitrary",
+                  ctx.c_str(), material.name.c_str(), map.texcoord));
+  }
+  std::vector<Vec3> p(count);
+  for (size_t i = 0; i < count; ++i) p[i] = vec3_at(pos, i);
+  for (const Vec4& t : generate_tangents(p, normals, uvs, kept)) mesh->tangents.push_back(t);
+  return Status::ok();
+}
+
 Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, int mode,
-                        const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh,
-                        bool* all_tangents) {
+                        const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh) {
   const auto& prim =
       model.meshes[static_cast<size_t>(mesh_index)].primitives[static_cast<size_t>(prim_index)];
   const std::string ctx =
@@ -200,13 +245,10 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     mesh->uv0.push_back(attrs[3].present ? Vec2{uv0[2 * i], uv0[2 * i + 1]} : Vec2{});
     mesh->uv1.push_back(attrs[4].present ? Vec2{uv1[2 * i], uv1[2 * i + 1]} : Vec2{});
   }
-  if (*all_tangents && attrs[2].present) {
-    for (size_t i = 0; i < vertex_count; ++i)
-      mesh->tangents.push_back({tan[4 * i], tan[4 * i + 1], tan[4 * i + 2], tan[4 * i + 3]});
-  } else {
-    *all_tangents = false;
-    mesh->tangents.clear();
-  }
+  LUXEL_RETURN_IF_ERROR(append_tangents(scene->materials[static_cast<size_t>(material)], ctx,
+                                        attrs[2].present ? &tan : nullptr, pos, normals,
+                                        attrs[3].present ? &uv0 : nullptr,
+                                        attrs[4].present ? &uv1 : nullptr, kept, scene, mesh));
   Mesh::PrimitiveSpan span;
   span.primitive = prim_index;
   span.first_vertex = static_cast<uint32_t>(base);
@@ -252,7 +294,6 @@ Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const Impo
   Mesh mesh;
   mesh.name = gm.name.empty() ? strprintf("mesh[%d]", mesh_index) : gm.name;
   mesh.gltf_index = mesh_index;
-  bool all_tangents = true;
   for (size_t p = 0; p < gm.primitives.size(); ++p) {
     int mode = gm.primitives[p].mode;
     if (mode == -1) mode = TINYGLTF_MODE_TRIANGLES;  // the default (glTF 2.0 §5.24)
@@ -267,9 +308,8 @@ Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const Impo
       continue;
     }
     LUXEL_RETURN_IF_ERROR(append_primitive(model, mesh_index, static_cast<int>(p), mode, options,
-                                           budget, scene, &mesh, &all_tangents));
+                                           budget, scene, &mesh));
   }
-  if (!all_tangents) mesh.tangents.clear();
   return mesh;
 }
 

@@ -1,5 +1,6 @@
 // glTF mesh -> scene::Mesh: reads the triangle primitives of one glTF mesh,
-// validates them, drops degenerate triangles and generates missing normals.
+// validates them, drops degenerate triangles and generates missing normals
+// (and missing tangents where a material has a normal map).
 #pragma once
 
 #include <cstdint>

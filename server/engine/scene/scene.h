@@ -24,8 +24,14 @@ struct Mesh {
   std::string name;     // glTF mesh name, or "mesh[<index>]"
   int gltf_index = -1;  // index in the glTF meshes array
   std::vector<Vec3> positions;
-  std::vector<Vec3> normals;               // always present (generated when missing)
-  std::vector<Vec4> tangents;              // empty unless the file had TANGENT everywhere
+  std::vector<Vec3> normals;  // always present (generated when missing)
+  // Per vertex, xyz = unit tangent (+U of the normal texture's UV set),
+  // w = bitangent sign (bitangent = cross(normal, tangent) * w, glTF 2.0
+  // §3.7.2.1 TANGENT). Empty unless a triangle's material has a normal
+  // texture; then from TANGENT where the primitive has it, generated
+  // (scene/tangents.h) elsewhere, and (0, 0, 0, 1) on vertices of primitives
+  // without a normal map.
+  std::vector<Vec4> tangents;
   std::vector<Vec2> uv0;                   // material UVs (TEXCOORD_0); zeros when absent
   std::vector<Vec2> uv1;                   // lightmap UVs (TEXCOORD_1); zeros when absent
   std::vector<uint32_t> indices;           // 3 per triangle
@@ -123,7 +129,11 @@ struct Material {
   float roughness_factor = 1.0f;
   TextureRef metallic_roughness_texture;  // G = roughness, B = metallic (linear)
   Vec3 emissive_factor{0, 0, 0};
-  TextureRef emissive_texture;     // sRGB in the file, linear here
+  TextureRef emissive_texture;  // sRGB in the file, linear here
+  // Tangent-space normal map (linear; glTF 2.0 §3.9.3): n = normalize(
+  // (2 rgb - 1) * (scale, scale, 1)) in the frame (tangent, bitangent, normal).
+  TextureRef normal_texture;
+  float normal_scale = 1.0f;       // normalTextureInfo.scale
   float emissive_strength = 1.0f;  // KHR_materials_emissive_strength
   bool double_sided = false;
   AlphaMode alpha_mode = AlphaMode::kOpaque;

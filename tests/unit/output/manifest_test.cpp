@@ -37,8 +37,9 @@ Manifest full_manifest() {
   m.settings = {{"samples", "1024"}, {"bounces", "4"}, {"seed", "7"}, {"filter", "box"}};
   m.features = "LUX_POINT_LIGHTS LUX_SORT";
   m.device = "pthread-cpu (PoCL 3.1)";
-  m.import_warnings = {"extension KHR_materials_ior is used by the file and not supported",
-                       "material 'x' (material[0]): normalTexture is not supported"};
+  m.import_warnings = {
+      "extension KHR_materials_ior is used by the file and not supported",
+      "material 'x' (material[0]): material extension KHR_materials_clearcoat is not supported"};
   m.stats.seconds = 12.5;
   m.stats.paths = (1ull << 60) + 3;
   m.stats.mean_spp = 1023.75;

@@ -15,10 +15,13 @@
 #include <cstring>
 #include <functional>
 
+#include "accel/triangle_soup.h"
 #include "atlas/sample_info.h"
+#include "common/half.h"
 #include "device/context.h"
 #include "output/exr.h"
 #include "pipeline/bake.h"
+#include "pipeline/scene_data.h"
 #include "shared/sample_info.h"
 #include "test_scenes.h"
 
@@ -335,6 +338,197 @@ TEST_F(ClosedFormTest, FurnaceBoxAtExtremeScalesAndHighAlbedo) {
     EXPECT_FALSE(check(r, expected(1.03)).ok()) << "a 3 % error must be detected";
     EXPECT_EQ(r.nonfinite_dropped, 0u);
   }
+}
+
+// The open plane with a constant tangent-space normal map (a 2 x 2 RGBA16F
+// texture, so (0.5, 0.5, 1) is exact) of scale `scale`, lit by a
+// directional light of illuminance `lux` at normal incidence travelling
+// along -to_light. `rgb`: the map's texel, or no map when empty.
+scene::Scene normal_mapped_plane(const std::vector<float>& rgb, float scale, Vec3 to_light,
+                                 float lux) {
+  scene::Scene s = testing::open_plane();
+  if (!rgb.empty()) {
+    scene::Texture tex;
+    tex.name = "normal map";
+    tex.width = tex.height = 2;
+    tex.format = scene::TexelFormat::kRGBA16F;
+    for (int i = 0; i < 4; ++i)
+      for (float c : {rgb[0], rgb[1], rgb[2], 1.0f}) tex.rgba16f.push_back(float_to_half(c));
+    s.textures.push_back(tex);
+    s.materials[0].normal_texture.texture = 0;
+    s.materials[0].normal_scale = scale;
+  }
+  scene::Light light;
+  light.type = scene::LightType::kDirectional;
+  light.intensity = lux;
+  light.direction = normalize(to_light) * -1.0f;
+  s.lights.push_back(light);
+  return s;
+}
+
+// The normal the map asks for, in double, from the texel as the device reads
+// it (half-rounded): normalize(T x scale + B y scale + N z), (x, y, z) = 2 rgb
+// - 1 (glTF 2.0 §3.9.3). The open plane's frame: N = +y, +u along +z (T),
+// +v along +x, so the bitangent cross(N, T) * w with w = -1 (v runs along
+// cross(N, T): a mirrored mapping) is -x. `bitangent_sign` and `use_scale`
+// inject errors.
+std::array<double, 3> mapped_normal(const std::vector<float>& rgb, double scale,
+                                    double bitangent_sign = -1, bool use_scale = true) {
+  double m[3];
+  for (int k = 0; k < 3; ++k)
+    m[k] = 2.0 * half_to_float(float_to_half(rgb[static_cast<size_t>(k)])) - 1.0;
+  if (use_scale) m[0] *= scale, m[1] *= scale;
+  // T = (0, 0, 1), B = (bitangent_sign, 0, 0), N = (0, 1, 0).
+  std::array<double, 3> n = {m[1] * bitangent_sign, m[2], m[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (double& c : n) c /= len;
+  return n;
+}
+
+TEST_F(ClosedFormTest, NormalMapTiltsIrradianceByItsAngle) {
+  // Irradiance lightmaps integrate about the normal-mapped normal
+  // (docs/accuracy.md "Normal maps"): under a directional light of
+  // illuminance E, a texel whose map tilts the normal by theta receives
+  // E cos(theta) at normal incidence, and E dot(n, l) in general. Direct
+  // light from a delta source: no variance, so the bound is the 1e-5 floor.
+  const std::vector<float> rgb = {0.5f, 0.8f, 0.9f};  // tilt along the bitangent
+  const float scale = 0.5f, lux = 2.0f;
+  auto st = settings(16, 16, 0);
+
+  // 1. Normal incidence: E cos(theta), theta from the scaled map; on UV set
+  // 0 and on UV set 1 (the open plane's TEXCOORD_1 maps like its TEXCOORD_0).
+  for (int texcoord : {0, 1}) {
+    SCOPED_TRACE(strprintf("texCoord %d", texcoord));
+    scene::Scene plane = normal_mapped_plane(rgb, scale, {0, 1, 0}, lux);
+    plane.materials[0].normal_texture.texcoord = texcoord;
+    auto r = bake(plane, st);
+    ASSERT_GT(r.covered_texels, 200u);
+    EXPECT_NE(r.features.find("normal_map"), std::string::npos) << r.features;
+    EXPECT_EQ(r.features.find("texcoord1") != std::string::npos, texcoord == 1) << r.features;
+    auto expected = [&](bool use_scale) {
+      const double cos_theta = mapped_normal(rgb, scale, -1, use_scale)[1];
+      return [=](uint32_t, int) { return lux * cos_theta; };
+    };
+    EXPECT_TRUE(check(r, expected(true)).ok());
+    EXPECT_FALSE(check(r, expected(false)).ok()) << "ignoring the scale must be detected";
+  }
+  // 2. Oblique light in the bitangent's plane: E dot(n, l); the bitangent's
+  // sign decides which way the normal leans.
+  const Vec3 to_light = normalize(Vec3{-0.5f, 1.0f, 0.0f});
+  {
+    auto r = bake(normal_mapped_plane(rgb, scale, to_light, lux), st);
+    auto expected = [&](double sign) {
+      const auto n = mapped_normal(rgb, scale, sign);
+      const double e = lux * (n[0] * to_light.x + n[1] * to_light.y + n[2] * to_light.z);
+      return [=](uint32_t, int) { return e; };
+    };
+    EXPECT_TRUE(check(r, expected(-1)).ok());
+    EXPECT_FALSE(check(r, expected(+1)).ok()) << "the wrong tangent sign must be detected";
+  }
+  // 3. A flat map (0.5, 0.5, 1) changes nothing: the bake without a map,
+  // texel by texel (and E cos of the light's angle).
+  {
+    auto flat = bake(normal_mapped_plane({0.5f, 0.5f, 1.0f}, scale, to_light, lux), st);
+    auto none = bake(normal_mapped_plane({}, scale, to_light, lux), st);
+    EXPECT_EQ(none.features.find("normal_map"), std::string::npos) << none.features;
+    ASSERT_EQ(flat.irradiance.size(), none.irradiance.size());
+    EXPECT_TRUE(check(flat, [&](uint32_t t, int c) {
+                  return double(none.irradiance[t * 4 + static_cast<size_t>(c)]);
+                }).ok());
+    EXPECT_TRUE(check(flat, [&](uint32_t, int) { return lux * double(to_light.y); }).ok());
+    EXPECT_FALSE(check(flat, [&](uint32_t, int) { return lux * 1.02 * double(to_light.y); }).ok())
+        << "a 2 % error must be detected";
+  }
+  // 4. With a directional encoding the texel point is not mapped (the
+  // runtime applies the map when it reconstructs): the irradiance that comes
+  // with the encoding is about the unmapped normal, E at normal incidence;
+  // the map still shades bounces, so it is compiled.
+  {
+    auto enc = st;
+    enc.encodings.names = {"sh2"};
+    auto r = bake(normal_mapped_plane(rgb, scale, {0, 1, 0}, lux), enc);
+    ASSERT_EQ(r.encodings.size(), 1u);
+    EXPECT_NE(r.features.find("normal_map"), std::string::npos) << r.features;
+    EXPECT_TRUE(check(r, [&](uint32_t, int) { return double(lux); }).ok());
+    const double cos_theta = mapped_normal(rgb, scale)[1];
+    EXPECT_FALSE(check(r, [&](uint32_t, int) { return lux * cos_theta; }).ok())
+        << "a mapped texel point must be detected";
+  }
+}
+
+// The device tangents of the open plane (prepare_scene_data): world +u,
+// the generated sign (w = -1: its v runs along cross(N, T)), and, under an
+// instance that mirrors x, the same tangent with w = +1: in world space the
+// plane's v then runs along -x, so the bitangent cross(N, T) w must flip
+// with the transform's determinant.
+TEST(NormalMapTangents, MirroringInstanceFlipsTheBitangentSign) {
+  for (bool mirrored : {false, true}) {
+    SCOPED_TRACE(mirrored ? "mirrored" : "identity");
+    scene::Scene s = normal_mapped_plane({0.5f, 0.8f, 0.9f}, 1.0f, {0, 1, 0}, 1.0f);
+    if (mirrored) s.instances[0].object_to_world.at(0, 0) = -1;
+    auto soup = accel::build_triangle_soup(s);
+    ASSERT_TRUE(soup) << soup.status().to_string();
+    pipeline::BakeSettings st;
+    st.atlas.resolution = 16;
+    auto atlas = atlas::build_atlas(s, st.atlas);
+    ASSERT_TRUE(atlas) << atlas.status().to_string();
+    auto data = pipeline::prepare_scene_data(s, soup.value(), atlas.value(),
+                                             std::vector<int32_t>(soup.value().size(), -1));
+    ASSERT_TRUE(data) << data.status().to_string();
+    EXPECT_TRUE(data.value().uses_normal_map);
+    ASSERT_EQ(data.value().tangents.size(), soup.value().size());
+    for (const cl::LuxTriangleTangents& t : data.value().tangents)
+      for (const cl::float4& v : {t.t0, t.t1, t.t2}) {
+        EXPECT_NEAR(v.x, 0, 1e-6);
+        EXPECT_NEAR(v.y, 0, 1e-6);
+        EXPECT_NEAR(v.z, 1, 1e-6);
+        EXPECT_EQ(v.w, mirrored ? 1.0f : -1.0f);
+      }
+    // Scenes without a normal map get no tangent data.
+    s.materials[0].normal_texture.texture = -1;
+    auto plain = pipeline::prepare_scene_data(s, soup.value(), atlas.value(),
+                                              std::vector<int32_t>(soup.value().size(), -1));
+    ASSERT_TRUE(plain);
+    EXPECT_FALSE(plain.value().uses_normal_map);
+    EXPECT_TRUE(plain.value().tangents.empty());
+  }
+}
+
+// Normal maps at bounce vertices: the Lambert furnace with every wall
+// normal-mapped by a constant tilt theta. A Lambertian lobe about a normal
+// tilted by theta keeps k = (1 + cos theta) / 2 of its clamped-cosine mass
+// above the geometric surface (directions below it carry nothing), so each
+// bounce reflects rho k of a uniform radiance field and the texel point,
+// integrating about the mapped normal, sees pi k of it:
+//   E = pi Le k sum_j (rho k)^j, j = 0..B.
+// Bounces that ignored the map would reflect rho (the plain furnace's sum);
+// a texel point that ignored it would miss the leading k.
+TEST_F(ClosedFormTest, NormalMappedLambertFurnace) {
+  const float le = 0.25f, rho = 0.8f;
+  const int bounces = 4;
+  const std::vector<float> rgb = {0.5f, 0.8f, 0.9f};
+  scene::Scene s = testing::furnace_box(rho, le);
+  scene::Texture tex;
+  tex.width = tex.height = 1;
+  tex.format = scene::TexelFormat::kRGBA16F;
+  for (float c : {rgb[0], rgb[1], rgb[2], 1.0f}) tex.rgba16f.push_back(float_to_half(c));
+  s.textures.push_back(tex);
+  s.materials[0].normal_texture.texture = 0;
+  auto r = bake(s, settings(16, 256, bounces));
+  ASSERT_GT(r.covered_texels, 100u);
+  ASSERT_NE(r.features.find("normal_map"), std::string::npos) << r.features;
+  const double k = (1 + mapped_normal(rgb, 1.0)[1]) / 2;
+  auto furnace = [&](double texel_k, double bounce_k) {
+    double sum = 0;
+    for (int j = 0; j <= bounces; ++j) sum += std::pow(rho * bounce_k, j);
+    const double e = M_PI * le * texel_k * sum;
+    return [e](uint32_t, int) { return e; };
+  };
+  std::printf("  k = %.5f\n", k);
+  EXPECT_TRUE(check(r, furnace(k, k)).ok());
+  EXPECT_FALSE(check(r, furnace(k, 1)).ok()) << "bounces ignoring the map must be detected";
+  EXPECT_FALSE(check(r, furnace(1, k)).ok()) << "a texel point ignoring the map must be detected";
+  EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
 
 TEST_F(ClosedFormTest, SameSeedIsBitIdenticalOtherSeedDiffers) {

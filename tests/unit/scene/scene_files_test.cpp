@@ -77,10 +77,34 @@ TEST(SharedScenes, Sponza) {
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("sponza: imported in %.2f s, %zu textures\n", secs, r->textures.size());
   expect_triangles(*r, 262087, "sponza");
-  // 49 images: 24 base colour (sRGB) + 14 metallic-roughness (linear) are
-  // decoded; the 11 normal maps are not, as the Scene model has no use for
-  // them yet (no image is used both as sRGB and as linear data).
-  EXPECT_EQ(r->textures.size(), 38u);
+  // 49 images: 24 base colour (sRGB), 14 metallic-roughness and 11 normal
+  // maps (linear); no image is used both as sRGB and as linear data.
+  EXPECT_EQ(r->textures.size(), 49u);
+  size_t normal_mapped = 0;
+  for (const auto& m : r->materials) normal_mapped += m.normal_texture.texture >= 0;
+  EXPECT_GT(normal_mapped, 0u);
+  // Meshes of normal-mapped materials carry unit tangents on every vertex.
+  size_t with_tangents = 0;
+  for (const Mesh& mesh : r->meshes) {
+    bool mapped = false;
+    for (int32_t m : mesh.triangle_material)
+      mapped = mapped || r->materials[static_cast<size_t>(m)].normal_texture.texture >= 0;
+    if (!mapped) {
+      EXPECT_TRUE(mesh.tangents.empty()) << mesh.name;
+      continue;
+    }
+    ++with_tangents;
+    ASSERT_EQ(mesh.tangents.size(), mesh.positions.size()) << mesh.name;
+    for (size_t i = 0; i < mesh.indices.size(); ++i) {
+      const Vec4 t = mesh.tangents[mesh.indices[i]];
+      if (r->materials[static_cast<size_t>(mesh.triangle_material[i / 3])].normal_texture.texture <
+          0)
+        continue;
+      ASSERT_NEAR(length(Vec3{t.x, t.y, t.z}), 1.0f, 1e-3f) << mesh.name;
+      ASSERT_TRUE(t.w == 1.0f || t.w == -1.0f) << mesh.name;
+    }
+  }
+  EXPECT_GT(with_tangents, 0u);
   EXPECT_GT(compute_stats(*r, 16).alpha_masked_triangles, 0u);
   bool masked = false;
   for (const auto& m : r->materials)

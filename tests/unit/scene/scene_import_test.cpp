@@ -3,8 +3,10 @@
 // names the thing at fault.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 
 #include "gltf_builder.h"
@@ -306,7 +308,11 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
   EXPECT_EQ(pm.emissive_texture.texcoord, 1);
   EXPECT_FALSE(has({"sampler"}));
   EXPECT_FALSE(has({"texCoord"}));
-  EXPECT_TRUE(has({"material 'painted'", "normalTexture"}));
+  // The normal map is applied; what is named is that this quad lacks the UV
+  // set it reads (its tangents cannot follow the map).
+  EXPECT_FALSE(has({"normalTexture is not supported"}));
+  EXPECT_TRUE(has({"material 'painted'", "normalTexture on TEXCOORD_0", "lacks"}));
+  EXPECT_GE(pm.normal_texture.texture, 0);
   EXPECT_TRUE(has({"material 'painted'", "material extension KHR_materials_clearcoat"}));
   // KHR_materials_specular: F0 = min(F0(ior) color, 1) specular, F90 = specular;
   // its texture is named.
@@ -325,6 +331,153 @@ TEST(SceneImport, UnsupportedMaterialInputsAreNamed) {
   ASSERT_TRUE(plain.is_ok());
   EXPECT_TRUE(plain->import_stats.warnings.empty());
   EXPECT_FLOAT_EQ(plain->materials[0].dielectric_f0(), 0.04f);
+}
+
+// A quad primitive (kQuadPositions, normal +z) with TEXCOORD_0 = uv(x, y) at
+// its corners and material `material`.
+json quad_with_uv0(GltfBuilder& b, const std::function<std::array<float, 2>(float, float)>& uv,
+                   int material) {
+  json prim = b.triangles(kQuadPositions, kQuadIndices);
+  std::vector<float> uvs;
+  for (size_t i = 0; i < kQuadPositions.size(); i += 3) {
+    const auto c = uv(kQuadPositions[i], kQuadPositions[i + 1]);
+    uvs.insert(uvs.end(), {c[0], c[1]});
+  }
+  prim["attributes"]["TEXCOORD_0"] = b.add_floats(uvs, "VEC2");
+  prim["material"] = material;
+  return prim;
+}
+
+int add_normal_map_material(GltfBuilder& b, json normal_texture) {
+  const std::string png = test::encode_png(1, 1, 4, {128, 128, 255, 255});
+  b.doc["images"] = json::array({{{"uri", "data:image/png;base64," + test::base64(png)}}});
+  b.doc["textures"] = json::array({{{"source", 0}}});
+  return b.add_material({{"name", "bumpy"}, {"normalTexture", std::move(normal_texture)}});
+}
+
+// normalTextureInfo: index, texCoord, scale and KHR_texture_transform land in
+// the material's slot (linear, like every data texture), without warnings.
+TEST(SceneImport, NormalTextureSlot) {
+  GltfBuilder b;
+  b.doc["extensionsUsed"] = json::array({"KHR_texture_transform"});
+  const int mat = add_normal_map_material(
+      b,
+      {{"index", 0},
+       {"texCoord", 1},
+       {"scale", 0.25},
+       {"extensions",
+        {{"KHR_texture_transform", {{"offset", {0.5, 0}}, {"rotation", 0.5}, {"texCoord", 0}}}}}});
+  const int plain = b.add_material({{"name", "plain"}});
+  b.add_node({{"mesh", b.add_mesh("bumpy", {quad_with_uv0(
+                                               b,
+                                               [](float x, float y) {
+                                                 return std::array<float, 2>{x, 1 - y};
+                                               },
+                                               mat)})}});
+  b.add_node({{"mesh", b.add_mesh("flat", {quad_with_uv0(
+                                              b,
+                                              [](float x, float y) {
+                                                return std::array<float, 2>{x, y};
+                                              },
+                                              plain)})}});
+  auto r = load(b.gltf_embedded());
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  EXPECT_TRUE(r->import_stats.warnings.empty()) << r->import_stats.warnings.front();
+  const Material& m = r->materials[static_cast<size_t>(mat)];
+  ASSERT_GE(m.normal_texture.texture, 0);
+  EXPECT_EQ(r->textures[static_cast<size_t>(m.normal_texture.texture)].source_space,
+            ColorSpace::kLinear);
+  EXPECT_FLOAT_EQ(m.normal_scale, 0.25f);
+  EXPECT_EQ(m.normal_texture.texcoord, 0) << "KHR_texture_transform's texCoord overrides";
+  EXPECT_TRUE(m.normal_texture.has_transform);
+  EXPECT_FLOAT_EQ(m.normal_texture.offset.x, 0.5f);
+  EXPECT_FLOAT_EQ(m.normal_texture.rotation, 0.5f);
+  EXPECT_FLOAT_EQ(r->materials[static_cast<size_t>(plain)].normal_scale, 1.0f);
+  EXPECT_LT(r->materials[static_cast<size_t>(plain)].normal_texture.texture, 0);
+  // Tangents only where a normal map needs them.
+  ASSERT_EQ(r->meshes.size(), 2u);
+  EXPECT_EQ(r->meshes[0].tangents.size(), 4u);
+  EXPECT_TRUE(r->meshes[1].tangents.empty());
+}
+
+// TANGENT is read (normalised, w reduced to its sign) when the primitive has it.
+TEST(SceneImport, NormalMapReadsTangentAttribute) {
+  GltfBuilder b;
+  const int mat = add_normal_map_material(b, {{"index", 0}});
+  json prim = quad_with_uv0(
+      b,
+      [](float x, float y) {
+        return std::array<float, 2>{x, 1 - y};
+      },
+      mat);
+  prim["attributes"]["TANGENT"] =
+      b.add_floats({0, 2, 0, -1, 0, 2, 0, -1, 0, 2, 0, -1, 0, 2, 0, -1}, "VEC4");
+  b.add_node({{"mesh", b.add_mesh("m", {prim})}});
+  auto r = load(b.gltf_embedded());
+  ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+  ASSERT_EQ(r->meshes[0].tangents.size(), 4u);
+  for (const Vec4& t : r->meshes[0].tangents) {
+    EXPECT_FLOAT_EQ(t.x, 0);
+    EXPECT_FLOAT_EQ(t.y, 1);
+    EXPECT_FLOAT_EQ(t.z, 0);
+    EXPECT_FLOAT_EQ(t.w, -1);
+  }
+}
+
+// Without TANGENT, tangents are generated from the normal map's UV set: unit,
+// orthogonal to the normal, along +u; w = +1 for a mapping that shows the
+// image upright (glTF v runs down the image, the map's +Y up) and -1 for a
+// mirrored one.
+TEST(SceneImport, NormalMapGeneratesTangentsAlongPlusU) {
+  struct Case {
+    const char* what;
+    std::function<std::array<float, 2>(float, float)> uv;
+    Vec3 plus_u;
+    float w;
+  } cases[] = {
+      {"upright",
+       [](float x, float y) {
+         return std::array<float, 2>{x, 1 - y};
+       },
+       {1, 0, 0},
+       1},
+      {"u along +y",
+       [](float x, float y) {
+         return std::array<float, 2>{y, x};
+       },
+       {0, 1, 0},
+       1},
+      {"mirrored",
+       [](float x, float y) {
+         return std::array<float, 2>{1 - x, 1 - y};
+       },
+       {-1, 0, 0},
+       -1},
+      {"scaled, rotated 45 degrees",
+       [](float x, float y) {
+         return std::array<float, 2>{3 * (x + y), 3 * (x - y)};
+       },
+       {0.70710678f, 0.70710678f, 0},
+       1},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    GltfBuilder b;
+    const int mat = add_normal_map_material(b, {{"index", 0}});
+    b.add_node({{"mesh", b.add_mesh("m", {quad_with_uv0(b, c.uv, mat)})}});
+    auto r = load(b.gltf_embedded());
+    ASSERT_TRUE(r.is_ok()) << r.status().to_string();
+    const Mesh& mesh = r->meshes[0];
+    ASSERT_EQ(mesh.tangents.size(), mesh.positions.size());
+    for (size_t v = 0; v < mesh.tangents.size(); ++v) {
+      const Vec4 t = mesh.tangents[v];
+      const Vec3 xyz{t.x, t.y, t.z};
+      EXPECT_NEAR(length(xyz), 1.0f, 1e-6f);
+      EXPECT_NEAR(dot(xyz, mesh.normals[v]), 0.0f, 1e-6f);
+      expect_near(xyz, c.plus_u, 1e-6f);
+      EXPECT_EQ(t.w, c.w);
+    }
+  }
 }
 
 TEST(SceneImportErrors, IorOutsideTheExtensionsRange) {
