@@ -79,11 +79,16 @@ int run_bake(const std::vector<std::string>& args) {
   std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
               ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));
-  auto result =
-      pipeline::bake(scene.value(), a.settings, *ctx.value(), [&](const pipeline::BakeProgress& p) {
-        if (!a.quiet) draw_progress(p, tty);
-        return true;
-      });
+  pipeline::BakeHooks hooks;
+  hooks.on_layout = [](const std::string& line) {
+    std::printf("uv         %s\n", line.c_str());
+    std::fflush(stdout);
+  };
+  hooks.on_progress = [&](const pipeline::BakeProgress& p) {
+    if (!a.quiet) draw_progress(p, tty);
+    return true;
+  };
+  auto result = pipeline::bake(scene.value(), a.settings, *ctx.value(), hooks);
   if (tty && !a.quiet) std::printf("\n");
   if (!result) {
     std::fprintf(stderr, "luxel bake: %s\n", result.status().to_string().c_str());
@@ -98,14 +103,6 @@ int run_bake(const std::vector<std::string>& args) {
   std::printf("lightmap   %dx%d (%s atlas), %zu covered texels, sample-info buffer %.1f MiB\n",
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
-  if (r.uv_layout) {
-    const uv::UvReport& u = r.uv_layout->report;
-    std::printf(
-        "uv         generated (%s): %zu charts on %zu meshes in %.2f s (charts %.2f s, packing "
-        "%.2f s), packing efficiency %.1f %%, stretch L2 %.3f Linf %.3f\n",
-        r.uv_layout->reason.c_str(), u.charts, u.meshes, u.total_seconds, u.chart_seconds,
-        u.pack_seconds, 100 * u.efficiency, u.stretch_l2, u.stretch_linf);
-  }
   std::printf("features   %s\n", r.features.c_str());
   std::printf("intersector %s\n", r.intersector.c_str());
   std::printf(

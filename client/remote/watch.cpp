@@ -36,6 +36,11 @@ class EventPrinter {
       return grpc::Status::OK;
     }
     if (o_.quiet) return grpc::Status::OK;
+    if (!layout_shown_ && !event.info().lightmap_layout().empty()) {
+      end_line();
+      std::printf("uv         %s\n", event.info().lightmap_layout().c_str());
+      layout_shown_ = true;
+    }
     if (!snapshot_file.empty()) {
       end_line();
       std::printf("snapshot   %s (%ux%u%s)\n", snapshot_file.c_str(), event.snapshot().width(),
@@ -77,6 +82,7 @@ class EventPrinter {
   const bool tty_;
   bool bar_open_ = false;
   std::string last_drawn_;
+  bool layout_shown_ = false;
   int next_ = 0;
 };
 

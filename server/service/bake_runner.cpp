@@ -208,6 +208,10 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
         bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
     return true;
   };
+  hooks.on_layout = [&](const std::string& line) {
+    (void)bakes_.update(
+        bake_id, [&](v1::BakeInfo& b) { b.set_lightmap_layout(line); }, false);
+  };
   if (opts.snapshot_format != pipeline::SnapshotFormat::kNone) {
     hooks.snapshot_interval_s = opts.snapshot_interval_s;
     hooks.on_snapshot = [&](const pipeline::BakeSnapshot& s) {

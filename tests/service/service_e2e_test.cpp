@@ -466,6 +466,12 @@ TEST(ServiceUv, GeneratedUvsAndPagesAreArtifacts) {
       return std::find(names.begin(), names.end(), n) != names.end();
     };
     EXPECT_TRUE(has("quads_lightmapped.glb")) << c.density;
+    // Where the UVs came from, with timing and quality, on the bake's record.
+    const std::string& layout = event.info().lightmap_layout();
+    EXPECT_EQ(layout.rfind("generated (", 0), 0u) << layout;
+    EXPECT_NE(layout.find("4 meshes in"), std::string::npos) << layout;
+    EXPECT_EQ(layout.find(", 4 pages") != std::string::npos, c.pages > 1) << layout;
+    EXPECT_NE(layout.find(" 0 overlapping texels"), std::string::npos) << layout;
     EXPECT_TRUE(has("manifest.json"));
     if (c.pages == 1) {
       EXPECT_TRUE(has("irradiance.exr"));

@@ -113,7 +113,10 @@ struct BakeSnapshot {
 // Everything a long-running host (the daemon) hooks into a bake. All
 // callbacks run on the bake's thread between iterations.
 struct BakeHooks {
-  ProgressFn on_progress;          // every settings.progress_interval_s
+  ProgressFn on_progress;  // every settings.progress_interval_s
+  // Once, when the lightmap layout is decided (before the first path): its
+  // describe_lightmap_layout() line (lightmap_layout.h).
+  std::function<void(const std::string&)> on_layout;
   double snapshot_interval_s = 0;  // 0: no snapshots
   std::function<void(const BakeSnapshot&)> on_snapshot;
   double checkpoint_interval_s = 0;  // 0: no periodic checkpoints

@@ -92,6 +92,22 @@ Result<std::unique_ptr<scene::Scene>> apply_placements(const scene::Scene& scene
 
 }  // namespace
 
+std::string describe_lightmap_layout(const LightmapLayout& layout) {
+  const atlas::Atlas& at = layout.atlas;
+  const std::string size = strprintf("%dx%d%s", at.width, at.page_height(),
+                                     at.pages > 1 ? strprintf(", %d pages", at.pages).c_str() : "");
+  if (!layout.generated)
+    return strprintf("TEXCOORD_1 of the file, %s atlas, %s", atlas::atlas_mode_name(at.mode),
+                     size.c_str());
+  const uv::UvReport& u = layout.generated->report;
+  return strprintf(
+      "generated (%s): %zu charts on %zu meshes in %.2f s (charts %.2f s, packing %.2f s), %s, "
+      "packing %.1f %%, stretch L2 %.3f Linf %.3f, %zu overlapping texels",
+      layout.generated->reason.c_str(), u.charts, u.meshes, u.total_seconds, u.chart_seconds,
+      u.pack_seconds, size.c_str(), 100 * u.efficiency, u.stretch_l2, u.stretch_linf,
+      u.overlapping_texels);
+}
+
 Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings) {
   if (!settings.node_placements.empty()) {
     // Placement dictated by the client through the API: honoured exactly,

@@ -43,4 +43,12 @@ struct LightmapLayout {
 
 Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings);
 
+// One line saying where the UVs came from and, when generated, how long that
+// took and the layout's quality ("generated (mesh 'x' has no TEXCOORD_1):
+// 12 charts on 3 meshes in 0.41 s (charts 0.20 s, packing 0.18 s),
+// 2048x2048, 2 pages, packing 78.1 %, stretch L2 1.002 Linf 1.10, 0
+// overlapping texels"); shown by the CLI and the daemon before the first
+// path.
+std::string describe_lightmap_layout(const LightmapLayout& layout);
+
 }  // namespace luxel::pipeline
