@@ -193,6 +193,19 @@ TEST(UvGenerateInput, DISABLED_InstancesOfVeryDifferentSizes) {
   }
 }
 
+// One sliver 3426 units long and 0.0006 wide (found by import_fuzz). At a
+// fixed 64^2 the answer is a density at which it is 60 texels long, but
+// generate.cpp's first probe takes the density from the area (52 texels per
+// unit) with no limit on the automatic atlas side, so it asks the packer for
+// a ~178,000^2-bit mask: 4 GB, std::bad_alloc or the OOM killer. Disabled
+// (it allocates gigabytes) until the probe is bounded.
+TEST(UvGenerateInput, DISABLED_LongSliverAtAFixedResolution) {
+  scene::Mesh m;
+  add_triangle(m, add_vertex(m, {0, 3426.12f, 0}, {1, 0, 0}), add_vertex(m, {0, 0, 0}, {1, 0, 0}),
+               add_vertex(m, {0.000619492f, 12.2078f, 0}, {1, 0, 0}));
+  generate_checked(scene_of({m}), at_resolution(64));
+}
+
 // The same triangle twice over the same vertices, twice over coincident
 // copies of them, and back to back: each copy needs its own texels.
 TEST(UvGenerateInput, DuplicateAndBackToBackTriangles) {
