@@ -65,14 +65,14 @@ LayoutCheck check_layout(const scene::Scene& scene, const atlas::Atlas& atlas) {
         for (int c = 0; c < 3; ++c)
           q[k][c] = m.at(c, 0) * x.x + m.at(c, 1) * x.y + m.at(c, 2) * x.z + m.at(c, 3);
       }
-      if (outside) {
-        ++r.outside_triangles;
-        continue;
-      }
       // Stretch of the map from atlas texels to world space (Sander et al.
       // 2001, eq. 2), accumulated unnormalised.
       const double twice_uv =
           (p[1].x - p[0].x) * (p[2].y - p[0].y) - (p[2].x - p[0].x) * (p[1].y - p[0].y);
+      if (outside) {
+        ++(twice_uv == 0 ? r.outside_points : r.outside_triangles);
+        continue;
+      }
       double e1[3], e2[3], n[3];
       for (int c = 0; c < 3; ++c) e1[c] = q[1][c] - q[0][c], e2[c] = q[2][c] - q[0][c];
       n[0] = e1[1] * e2[2] - e1[2] * e2[1];

@@ -21,7 +21,8 @@ struct LayoutCheck {
   // world-space area.
   long long collapsed_triangles = 0;
   double collapsed_area = 0;
-  long long outside_triangles = 0;  // a corner outside [0,1]^2 or not finite
+  long long outside_triangles = 0;  // with UV area: a corner outside [0,1]^2 or not finite
+  long long outside_points = 0;     // zero UV area (covering nothing), outside [0,1]^2
   // Stretch of atlas UV against world positions over every triangle with 3D
   // area, normalised once for the whole atlas (one density): L2 is the
   // area-weighted RMS, Linf the largest; 1 is an isometry up to that scale.

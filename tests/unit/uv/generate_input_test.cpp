@@ -206,6 +206,27 @@ TEST(UvGenerateInput, DISABLED_LongSliverAtAFixedResolution) {
   generate_checked(scene_of({m}), at_resolution(64));
 }
 
+// A mesh used by two instances with a triangle whose smallest angle is below
+// the chart builder's zero-area test (found by import_fuzz): generate.cpp
+// collapses it onto uv1 = (0, 0) of the mesh's own layout, which the second
+// instance's scale and offset put outside the atlas (it covers no texel, but
+// the atlas UVs leave [0, 1]). Disabled until the collapsed point is inside
+// the instance's rectangle.
+TEST(UvGenerateInput, DISABLED_DegenerateTriangleOfAnInstancedMeshStaysInTheAtlas) {
+  scene::Mesh m = sphere(1, 6, 8);
+  add_triangle(m, add_vertex(m, {0, 0, 2}, {0, 0, 1}), add_vertex(m, {1, 0, 2}, {0, 0, 1}),
+               add_vertex(m, {2, 1e-10f, 2}, {0, 0, 1}));
+  scene::Scene s = scene_of({m});
+  scene::Instance other = s.instances[0];
+  other.object_to_world.at(0, 3) = 8;
+  for (int a = 0; a < 3; ++a) other.object_to_world.at(a, a) = 2;
+  s.instances.push_back(other);
+  const GeneratedUvs g = generate_checked(s, at_resolution(64));
+  EXPECT_GT(g.report.unplaced_triangles, 0u);
+  const luxel::testing::LayoutCheck check = luxel::testing::check_layout(g.scene, g.atlas);
+  EXPECT_EQ(check.outside_points, 0);
+}
+
 // The same triangle twice over the same vertices, twice over coincident
 // copies of them, and back to back: each copy needs its own texels.
 TEST(UvGenerateInput, DuplicateAndBackToBackTriangles) {
