@@ -177,6 +177,21 @@ def main():
     d.node({"mesh": d.mesh([p])})
     files["sparse_only.glb"] = d.glb()
 
+    # Lightmap UV generation seeds (no TEXCOORD_1): a closed octahedron with
+    # shared vertices and one with a non-manifold fin, used once and
+    # instanced twice at different scales.
+    d = Doc()
+    pos = [1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 1, 0, 0, -1, 0, 0.5, 2]
+    idx = [0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5, 0, 2, 6]
+    prim = {"attributes": {"POSITION": d.acc(struct.pack("<21f", *pos), 5126, 7, "VEC3")},
+            "indices": d.acc(struct.pack("<27H", *idx), 5123, 27, "SCALAR")}
+    closed = {"attributes": prim["attributes"], "indices": d.acc(struct.pack("<24H", *idx[:24]), 5123, 24, "SCALAR")}
+    d.node({"mesh": d.mesh([prim], "fin")})
+    solid = d.mesh([closed], "octahedron")
+    d.node({"mesh": solid, "translation": [4, 0, 0]})
+    d.node({"mesh": solid, "translation": [8, 0, 0], "scale": [3, 1, 2]})
+    files["uv_generate.glb"] = d.glb()
+
     for name, data in files.items():
         with open(os.path.join(OUT, name), "wb") as f:
             f.write(data)

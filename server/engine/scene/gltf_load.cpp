@@ -395,6 +395,10 @@ Status check_accessors(const json& doc) {
 //    and its data is removed again after parsing.
 struct Rewrites {
   std::vector<std::tuple<size_t, size_t, int>> hidden_indices;  // mesh, primitive, accessor
+  // Per hidden index, the mesh's primitive count in the JSON: tinygltf skips
+  // a primitive it cannot read (no "attributes"), after which (mesh,
+  // primitive) no longer names the same primitive.
+  std::vector<size_t> primitive_counts;
   std::vector<size_t> uriless_buffers;
   bool any() const { return !hidden_indices.empty() || !uriless_buffers.empty(); }
 };
@@ -418,6 +422,7 @@ void hide_unviewed_indices(json* doc, Rewrites* rw) {
           (*accessors)[*idx].contains("bufferView"))
         continue;
       rw->hidden_indices.emplace_back(m, p, static_cast<int>(*idx));
+      rw->primitive_counts.push_back(prims.size());
       prim.erase("indices");
     }
   }
@@ -582,8 +587,15 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
     }
     return invalid_argument(strprintf("'%s': %s", name.c_str(), err.c_str()));
   }
-  for (const auto& [m, p, accessor] : rw.hidden_indices)
+  for (size_t k = 0; k < rw.hidden_indices.size(); ++k) {
+    const auto& [m, p, accessor] = rw.hidden_indices[k];
+    if (m >= model->meshes.size() || model->meshes[m].primitives.size() != rw.primitive_counts[k])
+      return invalid_argument(
+          strprintf("'%s': malformed glTF: mesh %zu has a primitive that could not be read (a "
+                    "required property such as \"attributes\" is missing or has the wrong type)",
+                    name.c_str(), m));
     model->meshes[m].primitives[p].indices = accessor;
+  }
   for (size_t b : rw.uriless_buffers) {
     model->buffers[b].uri.clear();
     model->buffers[b].data.clear();
