@@ -76,7 +76,16 @@ struct MeshCharts {
   // instance (the mesh's mean).
   std::vector<double> chart_scale;
   std::vector<double> instance_scale;
-  double min_instance_scale = 0;
+  // The instance scale the mesh's own layout is packed at: the smallest
+  // instance's, raised to a kMaxGrow-th of the largest's. Each instance is
+  // the layout grown by grow(k) >= 1, so padding never shrinks below
+  // padding_texels; the layout's fixed costs (padding, whole texels per
+  // chart) grow with it, and bounding the growth bounds that waste. Smaller
+  // instances than layout_scale get more texels per unit than asked for
+  // (UvReport::density_spread says how much).
+  double layout_scale = 0;
+  static constexpr double kMaxGrow = 4;
+  double grow(size_t k) const { return std::max(instance_scale[k], layout_scale) / layout_scale; }
 };
 
 // A shape handed to the packer: a chart of a mesh used once, or one
@@ -132,7 +141,7 @@ Status build_shapes(const std::vector<MeshCharts>& meshes, double density, const
     }
     // The mesh's own layout at its smallest instance's scale.
     MeshLayout& layout = a.layouts[m];
-    layout.scale = density * mc.min_instance_scale;
+    layout.scale = density * mc.layout_scale;
     std::vector<PackShape> own;
     for (const Chart& c : mc.charts) own.push_back(chart_shape(c, layout.scale, true));
     PackOptions own_options;
@@ -146,7 +155,7 @@ Status build_shapes(const std::vector<MeshCharts>& meshes, double density, const
     // Each instance: the whole layout, scaled up to its own size, unturned
     // (a placement is a scale and an offset only).
     for (uint32_t k = 0; k < mc.instances.size(); ++k) {
-      const double grow = mc.instance_scale[k] / mc.min_instance_scale;
+      const double grow = mc.grow(k);
       PackShape s;
       s.allow_rotation = false;
       for (uint32_t c = 0; c < mc.charts.size(); ++c) {
@@ -334,10 +343,36 @@ double total_world_area(const std::vector<MeshCharts>& meshes) {
     } else {
       double mesh_area = 0;
       for (const Chart& c : mc.charts) mesh_area += c.area_3d;
-      for (double s : mc.instance_scale) area += mesh_area * s * s;
+      for (double s : mc.instance_scale) {
+        const double placed = std::max(s, mc.layout_scale);
+        area += mesh_area * placed * placed;
+      }
     }
   }
   return area;
+}
+
+// The longest side, in texels at density 1, of any shape the packer will
+// get (a chart's UV bounding box, or an instance's whole layout, roughly).
+double longest_shape_extent(const std::vector<MeshCharts>& meshes) {
+  double longest = 0;
+  for (const MeshCharts& mc : meshes) {
+    if (mc.instances.empty()) continue;
+    double largest_instance = 0;
+    for (size_t k = 0; k < mc.instance_scale.size(); ++k)
+      largest_instance = std::max(largest_instance, mc.layout_scale * mc.grow(k));
+    for (size_t c = 0; c < mc.charts.size(); ++c) {
+      const Chart& chart = mc.charts[c];
+      float lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
+      for (const Vec2& p : chart.uv) {
+        lo[0] = std::min(lo[0], p.x), hi[0] = std::max(hi[0], p.x);
+        lo[1] = std::min(lo[1], p.y), hi[1] = std::max(hi[1], p.y);
+      }
+      const double scale = mc.instances.size() == 1 ? mc.chart_scale[c] : largest_instance;
+      longest = std::max(longest, std::max(hi[0] - lo[0], hi[1] - lo[1]) * scale);
+    }
+  }
+  return longest;
 }
 
 // The largest density whose packing fits `side` (within about 3 %).
@@ -348,11 +383,22 @@ Result<std::pair<double, PackAttempt>> fit_resolution(const std::vector<MeshChar
   if (!(area > 0)) return invalid_argument("scene has no triangle that can be laid out");
   // First guess: the packer's automatic square at a density that fills the
   // side at 70 % efficiency, then scaled by how far off it came out.
+  // No shape may be longer than the side: long slivers bound the density
+  // where area alone would ask the probe for an atlas of gigabytes.
   double density = side * std::sqrt(0.7 / area);
+  const double longest = longest_shape_extent(meshes);
+  if (longest > 0) density = std::min(density, 0.9 * side / longest);
+  // The probe's automatic square is bounded too; past it, a quarter of the
+  // density and again.
   PackOptions automatic = base;
-  automatic.max_resolution = std::numeric_limits<int>::max() / 4;
-  ++*attempts;
-  auto probe = pack_at(meshes, density, automatic);
+  automatic.max_resolution = static_cast<int>(std::min<int64_t>(int64_t{side} * 16, 1 << 20));
+  Result<PackAttempt> probe = resource_exhausted("no probe");
+  for (int tries = 0; tries < 8; ++tries) {
+    ++*attempts;
+    probe = pack_at(meshes, density, automatic);
+    if (probe || probe.status().code() != StatusCode::kResourceExhausted) break;
+    density *= 0.25;
+  }
   if (!probe) return probe.status();
   const int probe_side = std::max(probe.value().pack.width, probe.value().pack.height);
   density *= 0.995 * side / probe_side;
@@ -421,7 +467,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       std::vector<uint32_t> all;
       for (const Chart& c : mc.charts)
         all.insert(all.end(), c.triangles.begin(), c.triangles.end());
-      mc.min_instance_scale = std::numeric_limits<double>::infinity();
+      double smallest = std::numeric_limits<double>::infinity(), largest = 0;
       for (uint32_t inst : mc.instances) {
         const double w = world_area(mesh, scene.instances[inst].object_to_world, all);
         const double s = std::sqrt(w / mesh_area);
@@ -430,8 +476,10 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
               strprintf("instance '%s' of mesh '%s' has a zero or non-finite world area",
                         scene.instances[inst].name.c_str(), mesh.name.c_str()));
         mc.instance_scale.push_back(s);
-        mc.min_instance_scale = std::min(mc.min_instance_scale, s);
+        smallest = std::min(smallest, s);
+        largest = std::max(largest, s);
       }
+      mc.layout_scale = std::max(smallest, largest / MeshCharts::kMaxGrow);
     }
     for (size_t c = 0; c < mc.charts.size(); ++c)
       if (!(std::isfinite(mc.chart_scale.empty() ? 1.0 : mc.chart_scale[c])))
@@ -527,7 +575,9 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
       }
     }
     // A triangle in no chart (degenerate) collapses onto one UV point, so it
-    // covers no texel.
+    // covers no texel: a point of the first chart, which every placement of
+    // the mesh keeps inside the atlas.
+    const Vec2 anchor = chart_uv(0, mc.charts[0].uv[0]);
     for (uint32_t t = 0; t < placed.size(); ++t) {
       if (placed[t]) continue;
       ++report.unplaced_triangles;
@@ -540,7 +590,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         mesh.uv0.push_back(in.uv0[v]);
         if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
         if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
-        mesh.uv1.push_back(Vec2{0, 0});
+        mesh.uv1.push_back(anchor);
         mesh.indices[3 * t + static_cast<size_t>(j)] = copy;
       }
     }
@@ -571,7 +621,23 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
 
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     const MeshCharts& mc = meshes[m];
-    if (mc.instances.empty() || mc.charts.empty()) continue;
+    if (mc.instances.empty()) continue;
+    if (mc.charts.empty()) {
+      // Nothing but degenerate triangles: every UV collapses onto the atlas
+      // corner, so the file's TEXCOORD_1 (if any) cannot cover texels that
+      // charts own; material textures keep reading it.
+      const scene::Mesh& in = scene.meshes[m];
+      scene::Mesh& mesh = out.scene.meshes[m];
+      if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
+      mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
+      mesh.has_lightmap_uvs = true;
+      std::vector<uint32_t>& origin = out.vertex_origin[m];
+      origin.resize(in.positions.size());
+      for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
+      report.unplaced_triangles += in.triangle_count();
+      report.triangles += in.triangle_count();
+      continue;
+    }
     if (mc.instances.size() == 1) {
       // Atlas UVs directly.
       assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
@@ -598,7 +664,7 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     for (size_t k = 0; k < mc.instances.size(); ++k) {
       const size_t shape = shape_of_instance[m][k];
       const ShapePlacement& sp = attempt.pack.placements[shape];
-      const double grow = mc.instance_scale[k] / mc.min_instance_scale;
+      const double grow = mc.grow(k);
       atlas::InstancePlacement& p = at.placements[mc.instances[k]];
       // atlas texel = layout texel * grow + offset (no turn: allow_rotation
       // was false), so atlas_uv = uv1 * (l * grow / a) + offset / a.

@@ -159,12 +159,10 @@ TEST(UvGenerateInput, OnlyDegenerateTriangles) {
   generate_checked(scene_of({grid(3), empty}), at_resolution(64));
 }
 
-// A mesh whose triangles are all zero-area keeps the TEXCOORD_1 it came
-// with: generate.cpp lays out only meshes with a chart, so these UVs are not
-// collapsed, and with area in UV they cover texels that generated charts
-// also cover. Disabled until generate.cpp collapses such meshes (or gives
-// them no texels); run with --gtest_also_run_disabled_tests.
-TEST(UvGenerateInput, DISABLED_AllDegenerateMeshWithFileUvsCoversNoTexel) {
+// A mesh whose triangles are all zero-area, with a TEXCOORD_1 that has UV
+// area: generation collapses its UVs (found when such a mesh kept the file's
+// UVs over texels that generated charts own).
+TEST(UvGenerateInput, AllDegenerateMeshWithFileUvsCoversNoTexel) {
   scene::Mesh m;
   m.name = "degenerate_with_uvs";
   const uint32_t a = add_vertex(m, {0, 0, 0}, {0, 0, 1}), b = add_vertex(m, {1, 0, 0}, {0, 0, 1}),
@@ -174,15 +172,14 @@ TEST(UvGenerateInput, DISABLED_AllDegenerateMeshWithFileUvsCoversNoTexel) {
   generate_checked(scene_of({grid(3), m}), at_resolution(64));
 }
 
-// One mesh used by two instances whose sizes differ by `ratio`. The mesh is
-// packed once at the smallest instance's size and that layout, padding and
-// mask rounding included, is scaled up for the larger one (generate.h), so:
-// at 100 the 256^2 atlas is RESOURCE_EXHAUSTED at every density tried, at
-// 1e6 the automatic size of the first probe throws std::bad_alloc, and at
-// 1e18 (found by import_fuzz) the layout's UVs collapse to one point and the
-// large instance is placed outside the atlas. Disabled until generate.cpp
-// handles it; run with --gtest_also_run_disabled_tests.
-TEST(UvGenerateInput, DISABLED_InstancesOfVeryDifferentSizes) {
+// One mesh used by two instances whose sizes differ by `ratio`. When the
+// mesh's layout was packed at the smallest instance's size and scaled up
+// for the larger one, padding and mask rounding included: at 100 the 256^2
+// atlas was RESOURCE_EXHAUSTED at every density tried, at 1e6 the first
+// probe threw std::bad_alloc, and at 1e18 (found by import_fuzz) the UVs
+// collapsed to one point outside the atlas. The layout is now packed at no
+// less than a quarter of the largest instance's size (MeshCharts::kMaxGrow).
+TEST(UvGenerateInput, InstancesOfVeryDifferentSizes) {
   for (double ratio : {100.0, 1e6, 1e18}) {
     SCOPED_TRACE(ratio);
     scene::Scene s = scene_of({sphere(1, 6, 8)});
@@ -194,12 +191,12 @@ TEST(UvGenerateInput, DISABLED_InstancesOfVeryDifferentSizes) {
 }
 
 // One sliver 3426 units long and 0.0006 wide (found by import_fuzz). At a
-// fixed 64^2 the answer is a density at which it is 60 texels long, but
-// generate.cpp's first probe takes the density from the area (52 texels per
-// unit) with no limit on the automatic atlas side, so it asks the packer for
-// a ~178,000^2-bit mask: 4 GB, std::bad_alloc or the OOM killer. Disabled
-// (it allocates gigabytes) until the probe is bounded.
-TEST(UvGenerateInput, DISABLED_LongSliverAtAFixedResolution) {
+// fixed 64^2 the answer is a density at which it is ~58 texels long; a first
+// probe whose density came from the area alone (52 texels per unit) with no
+// limit on the automatic atlas side asked the packer for a ~178,000^2-bit
+// mask (4 GB). The probe's density is now bounded by the longest shape and
+// its atlas side by 16x the requested one.
+TEST(UvGenerateInput, LongSliverAtAFixedResolution) {
   scene::Mesh m;
   add_triangle(m, add_vertex(m, {0, 3426.12f, 0}, {1, 0, 0}), add_vertex(m, {0, 0, 0}, {1, 0, 0}),
                add_vertex(m, {0.000619492f, 12.2078f, 0}, {1, 0, 0}));
@@ -207,12 +204,11 @@ TEST(UvGenerateInput, DISABLED_LongSliverAtAFixedResolution) {
 }
 
 // A mesh used by two instances with a triangle whose smallest angle is below
-// the chart builder's zero-area test (found by import_fuzz): generate.cpp
-// collapses it onto uv1 = (0, 0) of the mesh's own layout, which the second
-// instance's scale and offset put outside the atlas (it covers no texel, but
-// the atlas UVs leave [0, 1]). Disabled until the collapsed point is inside
-// the instance's rectangle.
-TEST(UvGenerateInput, DISABLED_DegenerateTriangleOfAnInstancedMeshStaysInTheAtlas) {
+// the chart builder's zero-area test (found by import_fuzz): it once
+// collapsed onto uv1 = (0, 0) of the mesh's own layout, which the second
+// instance's scale and offset put outside the atlas; it now collapses onto
+// a point of the first chart.
+TEST(UvGenerateInput, DegenerateTriangleOfAnInstancedMeshStaysInTheAtlas) {
   scene::Mesh m = sphere(1, 6, 8);
   add_triangle(m, add_vertex(m, {0, 0, 2}, {0, 0, 1}), add_vertex(m, {1, 0, 2}, {0, 0, 1}),
                add_vertex(m, {2, 1e-10f, 2}, {0, 0, 1}));
