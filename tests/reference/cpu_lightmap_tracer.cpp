@@ -9,6 +9,7 @@
 
 #include "atlas/sample_info.h"
 #include "reference/pcg32.h"
+#include "reference/reference_bsdf.h"
 #include "reference/reference_scene.h"
 
 namespace luxel::reference {
@@ -49,8 +50,9 @@ struct Job {
 // Emitted radiance arriving at x from one area-sampled emitter point, times
 // cos(n_s, wi), divided by the solid-angle pdf: an unbiased estimate of
 // integral L_e(first hit along wi) cos(n_s, wi) dwi over directions above
-// both the shading and the geometric surface.
-Rgb direct_light(const ReferenceScene& rs, const SurfacePoint& x, Pcg32& rng) {
+// both the shading and the geometric surface. *wi_out: the sampled direction
+// (set when the result is not black).
+Rgb direct_light(const ReferenceScene& rs, const SurfacePoint& x, Pcg32& rng, Vec3* wi_out) {
   if (!rs.has_emitters()) return {};
   const double u_select = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
   const EmitterSample e = rs.sample_emitter(u_select, u1, u2);
@@ -73,8 +75,25 @@ Rgb direct_light(const ReferenceScene& rs, const SurfacePoint& x, Pcg32& rng) {
   // just short of it (the light's own triangle must not count).
   const Vec3 org = rs.offset_origin(x, wi);
   if (rs.occluded(org, e.p - org, 1.0f - 1e-4f)) return {};
+  *wi_out = wi;
   return m.emission * (cos_x * cos_l / (dist2 * e.pdf_area));
 }
+
+// The local shading frame of a vertex (z = shading normal), in double.
+struct Frame {
+  Vec3 t, b, n;
+  explicit Frame(Vec3 ns) : n(ns) { basis(ns, &t, &b); }
+  Dir3 to_local(Vec3 w) const {
+    auto d = [](Vec3 a, Vec3 c) {
+      return double{a.x} * c.x + double{a.y} * c.y + double{a.z} * c.z;
+    };
+    return {d(w, t), d(w, b), d(w, n)};
+  }
+  Vec3 to_world(const Dir3& w) const {
+    return normalize(t * static_cast<float>(w.x) + b * static_cast<float>(w.y) +
+                     n * static_cast<float>(w.z));
+  }
+};
 
 // One path from texel point x0: E(x0) estimate (see the header).
 Rgb trace_path(const Job& job, SurfacePoint x, Pcg32& rng) {
@@ -82,17 +101,43 @@ Rgb trace_path(const Job& job, SurfacePoint x, Pcg32& rng) {
   const int max_bounces = job.settings.max_bounces;
   Rgb irradiance;
   Rgb throughput = Rgb::gray(1.0);
+  Vec3 wo{0, 0, 0};  // towards the previous vertex (vertices k >= 1)
   for (int k = 0;; ++k) {
-    // Vertex 0 is the sensor (E = integral L cos: "f" = 1); later vertices
-    // reflect with the Lambert BRDF albedo / pi.
-    const Rgb f = k == 0 ? Rgb::gray(1.0) : rs.material(x.material).albedo * (1.0 / kPi);
-    irradiance += throughput * f * direct_light(rs, x, rng);
-    if (k == max_bounces) break;
-    const Vec3 wi = cosine_direction(x.ns, rng);
-    if (dot(wi, x.ng) <= 0) break;  // under the geometric surface: contributes 0
-    // Weight of a cosine-sampled direction: sensor pi (= cos / pdf); Lambert
-    // albedo (= f cos / pdf with f = albedo / pi).
-    throughput = k == 0 ? throughput * kPi : throughput * rs.material(x.material).albedo;
+    const ReferenceMaterial& mat = rs.material(x.material);
+    Vec3 wi;
+    if (k > 0 && mat.ggx) {
+      // The glTF BRDF: NEE with f(wo, wi), then an extension ray from the
+      // BRDF's own sampling mixture, weighted by f cos / pdf.
+      const GgxBrdf brdf = mat.brdf(job.settings.brdf);
+      const Frame frame(x.ns);
+      const Dir3 wo_local = frame.to_local(wo);
+      Vec3 wl;
+      const Rgb light = direct_light(rs, x, rng, &wl);
+      if (!light.is_black())
+        irradiance += throughput * brdf.eval(wo_local, frame.to_local(wl)) * light;
+      if (k == max_bounces) break;
+      const double u_choice = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+      const Dir3 sampled = brdf.sample(wo_local, u_choice, u1, u2);
+      if (sampled.z <= 0) break;  // below the shading surface: contributes 0
+      wi = frame.to_world(sampled);
+      if (dot(wi, x.ng) <= 0) break;  // under the geometric surface: contributes 0
+      const Dir3 wi_local = frame.to_local(wi);
+      const double pdf = brdf.pdf(wo_local, wi_local);
+      if (!(pdf > 0)) break;
+      throughput = throughput * brdf.eval(wo_local, wi_local) * (wi_local.z / pdf);
+    } else {
+      // Vertex 0 is the sensor (E = integral L cos: "f" = 1); later vertices
+      // reflect with the Lambert BRDF albedo / pi.
+      const Rgb f = k == 0 ? Rgb::gray(1.0) : mat.albedo * (1.0 / kPi);
+      Vec3 wl;
+      irradiance += throughput * f * direct_light(rs, x, rng, &wl);
+      if (k == max_bounces) break;
+      wi = cosine_direction(x.ns, rng);
+      if (dot(wi, x.ng) <= 0) break;  // under the geometric surface: contributes 0
+      // Weight of a cosine-sampled direction: sensor pi (= cos / pdf); Lambert
+      // albedo (= f cos / pdf with f = albedo / pi).
+      throughput = k == 0 ? throughput * kPi : throughput * mat.albedo;
+    }
     SurfacePoint hit;
     if (!rs.intersect(rs.offset_origin(x, wi), wi, &hit)) break;
     // Shade a surface hit from behind like its front: the frame faces the ray.
@@ -100,6 +145,7 @@ Rgb trace_path(const Job& job, SurfacePoint x, Pcg32& rng) {
       hit.ng = hit.ng * -1.0f;
       hit.ns = hit.ns * -1.0f;
     }
+    wo = wi * -1.0f;
     x = hit;
   }
   return irradiance;

@@ -11,17 +11,21 @@
 //   normalised shading normal n_s; directions below the geometric surface
 //   contribute 0. Units are radiometric, glTF values used 1:1.
 // Light transport, with B = max_bounces indirect bounces after the texel
-// point: emission is collected at hit vertices 1..B+1, Lambert scattering
-// (f = base_color / pi, surfaces hit from behind shaded like the front)
-// happens at vertices 1..B. Emission = emissive_factor * emissive_strength,
-// from the winding's front face only unless the material is double sided.
+// point: emission is collected at hit vertices 1..B+1, scattering happens at
+// vertices 1..B (surfaces hit from behind shaded like the front): Lambert
+// (f = base_color / pi) in scenes of rough dielectrics only, otherwise the
+// glTF BRDF with multiple-scattering compensation (reference_bsdf.h).
+// Emission = emissive_factor * emissive_strength, from the winding's front
+// face only unless the material is double sided.
 //
 // Estimator: next-event estimation only (thesis §6.1). At every vertex
 // k = 0..B one point is sampled uniformly by area on the emitters and its
 // unoccluded contribution added; emission that an extension ray happens to
 // hit is never added (it is the light the previous vertex's NEE accounts
-// for). Extension rays at vertices 0..B-1 are cosine-sampled about the
-// shading normal. No Russian roulette, no MIS, no clamping: every sample is
+// for). Extension rays at vertex 0 and at Lambertian vertices are
+// cosine-sampled about the shading normal; at glTF-BRDF vertices they are
+// drawn from GgxBrdf::sample (a cosine / GGX mixture) and weighted by
+// f cos / pdf. No Russian roulette, no MIS, no clamping: every sample is
 // an independent, unbiased estimate, so the per-texel sample variance is a
 // valid error estimate. Each texel has its own PCG32 stream (seeded by the
 // bake seed and the texel), so results do not depend on threading.
@@ -32,6 +36,7 @@
 
 #include "atlas/atlas.h"
 #include "common/status.h"
+#include "reference/reference_bsdf.h"
 #include "scene/scene.h"
 
 namespace luxel::reference {
@@ -41,6 +46,9 @@ struct ReferenceSettings {
   int max_bounces = 3;                // indirect bounces after the texel point
   uint64_t seed = 1;
   unsigned threads = 2;
+  // The BRDF of glTF-BRDF scenes. Anything but kGltf is a deliberate error,
+  // for tests that show the agreement check detects it.
+  BrdfModel brdf = BrdfModel::kGltf;
 };
 
 // Channels of ReferenceLightmap::mean / variance.

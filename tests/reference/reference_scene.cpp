@@ -20,17 +20,25 @@ double triangle_area(Vec3 a, Vec3 b, Vec3 c) {
 Status check_material(const scene::Material& m) {
   auto refuse = [&](const char* why) {
     return invalid_argument(
-        strprintf("material '%s': %s; the reference tracer models only "
-                  "untextured opaque rough dielectrics (Lambert)",
-                  m.name.c_str(), why));
+        strprintf("material '%s': %s; the reference tracer models only untextured opaque "
+                  "glTF metallic-roughness materials (ior 1.5, roughness >= %.2g)",
+                  m.name.c_str(), why, ReferenceScene::kMinRoughness));
   };
-  if (m.metallic_factor > 0.0f) return refuse("metallic > 0");
-  if (m.roughness_factor < 1.0f) return refuse("roughness < 1");
+  if (m.roughness_factor < ReferenceScene::kMinRoughness) return refuse("roughness too low");
+  if (m.ior != 1.5f) return refuse("KHR_materials_ior other than 1.5");
+  if (m.specular_factor != 1.0f || m.specular_color_factor.x != 1.0f ||
+      m.specular_color_factor.y != 1.0f || m.specular_color_factor.z != 1.0f)
+    return refuse("has KHR_materials_specular");
   if (m.base_color_texture.texture >= 0 || m.metallic_roughness_texture.texture >= 0 ||
       m.emissive_texture.texture >= 0 || m.normal_texture.texture >= 0)
     return refuse("has a texture");
   if (m.alpha_mode != scene::AlphaMode::kOpaque) return refuse("alpha mode is not OPAQUE");
   return Status::ok();
+}
+
+// Lambert in the reference (and the engine) when every used material is one.
+bool is_rough_dielectric(const scene::Material& m) {
+  return m.metallic_factor <= 0.0f && m.roughness_factor >= 1.0f;
 }
 
 ReferenceMaterial to_reference(const scene::Material& m) {
@@ -42,6 +50,8 @@ ReferenceMaterial to_reference(const scene::Material& m) {
   if (r.emissive)
     r.emission = Rgb{m.emissive_factor.x, m.emissive_factor.y, m.emissive_factor.z} * s;
   r.double_sided = m.double_sided;
+  r.metallic = std::clamp(double{m.metallic_factor}, 0.0, 1.0);
+  r.roughness = std::clamp(double{m.roughness_factor}, 0.0, 1.0);
   return r;
 }
 
@@ -85,8 +95,17 @@ Result<std::unique_ptr<ReferenceScene>> ReferenceScene::create(const scene::Scen
     if (rs->instance_first_[soup.instance[t]] + soup.mesh_triangle[t] != t)
       return internal_error(strprintf("triangle soup entry %zu is out of instance order", t));
   for (size_t m = 0; m < scene.materials.size(); ++m) {
-    if (used[m]) LUXEL_RETURN_IF_ERROR(check_material(scene.materials[m]));
-    rs->materials_.push_back(to_reference(scene.materials[m]));
+    if (!used[m]) continue;
+    LUXEL_RETURN_IF_ERROR(check_material(scene.materials[m]));
+    if (!is_rough_dielectric(scene.materials[m])) rs->uses_ggx_ = true;
+  }
+  for (size_t m = 0; m < scene.materials.size(); ++m) {
+    ReferenceMaterial r = to_reference(scene.materials[m]);
+    if (rs->uses_ggx_ && used[m]) {
+      r.ggx = true;
+      r.albedo_table = GgxAlbedo::get(r.roughness);
+    }
+    rs->materials_.push_back(std::move(r));
   }
 
   // Emitters, chosen by area: every point of the emitting surface equally.

@@ -18,18 +18,30 @@
 
 #include "common/math.h"
 #include "common/status.h"
+#include "reference/reference_bsdf.h"
 #include "reference/rgb.h"
 #include "scene/scene.h"
 
 namespace luxel::reference {
 
-// A Lambertian material with optional emission (glTF metallic-roughness
-// restricted to metallic 0, roughness 1: the engine's pure-Lambert case).
+// A glTF metallic-roughness material with optional emission. In a scene
+// whose materials are all rough dielectrics (metallic 0, roughness 1) every
+// material is Lambertian (f = albedo / pi), as the engine leaves the GGX
+// layer out of such scenes (docs/accuracy.md, "Material model"); otherwise
+// every material is the glTF BRDF of reference_bsdf.h (`ggx`).
 struct ReferenceMaterial {
   Rgb albedo;    // baseColorFactor.rgb
   Rgb emission;  // emissiveFactor * emissive_strength (W/(m^2 sr))
   bool emissive = false;
   bool double_sided = false;
+  bool ggx = false;  // shaded by the glTF BRDF (else Lambert)
+  double metallic = 0, roughness = 1;
+  std::shared_ptr<const GgxAlbedo> albedo_table;  // E for `roughness` when ggx
+
+  // The BRDF of a `ggx` material under `model`.
+  GgxBrdf brdf(BrdfModel model) const {
+    return {albedo, metallic, roughness, albedo_table.get(), model};
+  }
 };
 
 // A point on a world triangle with its frame.
@@ -54,8 +66,10 @@ struct EmitterSample {
 class ReferenceScene {
  public:
   // Fails with INVALID_ARGUMENT for what the reference does not model:
-  // punctual lights, textures, alpha-masked materials, materials other than
-  // rough dielectrics (metallic 0, roughness 1).
+  // punctual lights, textures, alpha-masked materials, KHR_materials_ior
+  // other than 1.5, KHR_materials_specular, roughness below kMinRoughness
+  // (its sampling is not built for near-mirror lobes).
+  static constexpr double kMinRoughness = 0.2;
   static Result<std::unique_ptr<ReferenceScene>> create(const scene::Scene& scene);
   ~ReferenceScene();
   ReferenceScene(const ReferenceScene&) = delete;
@@ -80,6 +94,8 @@ class ReferenceScene {
   Vec3 offset_origin(const SurfacePoint& s, Vec3 dir) const;
 
   bool has_emitters() const { return !emitters_.empty(); }
+  // Some material is shaded by the glTF BRDF (then all are).
+  bool uses_ggx() const { return uses_ggx_; }
   double emissive_area() const { return emissive_area_; }
   // u_select, u1, u2 uniform in [0, 1).
   EmitterSample sample_emitter(double u_select, double u1, double u2) const;
@@ -101,6 +117,7 @@ class ReferenceScene {
   std::vector<uint32_t> emitters_;        // emissive world triangles
   std::vector<double> emitter_cdf_;       // running area / total, last = 1
   double emissive_area_ = 0;
+  bool uses_ggx_ = false;
   float offset_scale_ = 0;  // absolute ray offset
   RTCDevice device_ = nullptr;
   RTCScene rtc_scene_ = nullptr;

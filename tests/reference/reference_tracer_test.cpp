@@ -6,9 +6,15 @@
 //   - direct light from a parallel rectangle above a black floor (the
 //     point-to-rectangle form factor, Howell's catalogue C-11), single- and
 //     double-sided;
-//   - the statistics helpers against tabulated Student-t quantiles.
+//   - the statistics helpers against tabulated Student-t quantiles;
+//   - the glTF BRDF (reference_bsdf.h): its E(mu) table and its directional
+//     albedo against a brute-force integral over the hemisphere, its
+//     sampling against that albedo, and a white-metal furnace (F = 1: with
+//     the compensation every direction reflects exactly 1, so E = pi L_e
+//     (B + 1)).
 // Each comparison is a per-texel z-test (Šidák over texels) plus a test
-// that a deliberate error (one bounce too few, 3 % too bright) is detected.
+// that a deliberate error (one bounce too few, 3 % too bright, no
+// compensation) is detected.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -21,6 +27,8 @@
 #include "atlas/sample_info.h"
 #include "reference/agreement_stats.h"
 #include "reference/cpu_lightmap_tracer.h"
+#include "reference/pcg32.h"
+#include "reference/reference_bsdf.h"
 
 namespace luxel::reference {
 namespace {
@@ -41,12 +49,13 @@ struct FacetSceneBuilder {
     inst.mesh = 0;
     s.instances.push_back(inst);
   }
-  int material(Vec3 albedo, Vec3 emission, bool double_sided = false) {
+  int material(Vec3 albedo, Vec3 emission, bool double_sided = false, float metallic = 0,
+               float roughness = 1) {
     scene::Material m;
     m.name = "m" + std::to_string(s.materials.size());
     m.base_color_factor = {albedo.x, albedo.y, albedo.z, 1};
-    m.metallic_factor = 0;
-    m.roughness_factor = 1;
+    m.metallic_factor = metallic;
+    m.roughness_factor = roughness;
     m.emissive_factor = emission;
     m.double_sided = double_sided;
     s.materials.push_back(m);
@@ -97,9 +106,9 @@ struct FacetSceneBuilder {
 // one facet to its near-coplanar neighbours stays well-behaved, whereas a
 // box's right-angled edges give samples near an edge a variance heavy-tailed
 // enough to spoil a per-texel z-test of 256 samples.
-scene::Scene furnace(Vec3 albedo, Vec3 emission) {
+scene::Scene furnace(Vec3 albedo, Vec3 emission, float metallic = 0, float roughness = 1) {
   FacetSceneBuilder b;
-  const int mat = b.material(albedo, emission);
+  const int mat = b.material(albedo, emission, false, metallic, roughness);
   constexpr int kLat = 12, kLon = 24;
   // Vertices shared by neighbouring facets must be bit-identical (no cracks):
   // the poles and the seam at phi = 2 pi are special-cased.
@@ -320,15 +329,200 @@ TEST(ReferenceTracer, RefusesWhatItDoesNotModel) {
   scene::Scene s = furnace({0.5f, 0.5f, 0.5f}, {1, 1, 1});
   auto atlas = atlas::build_atlas(s, {.resolution = 8});
   ASSERT_TRUE(atlas.is_ok());
-  s.materials[0].metallic_factor = 1;
-  auto r = bake_reference(s, atlas.value(), {});
-  ASSERT_FALSE(r.is_ok());
-  EXPECT_NE(r.status().message().find("'m0'"), std::string::npos) << r.status().to_string();
-  s.materials[0].metallic_factor = 0;
+  auto refused = [&](const char* what) {
+    auto r = bake_reference(s, atlas.value(), {});
+    ASSERT_FALSE(r.is_ok()) << what;
+    EXPECT_NE(r.status().message().find(what), std::string::npos) << r.status().to_string();
+  };
+  s.materials[0].roughness_factor = 0.1f;  // below ReferenceScene::kMinRoughness
+  refused("'m0'");
+  s.materials[0].roughness_factor = 1;
+  s.materials[0].ior = 1.33f;
+  refused("'m0'");
+  s.materials[0].ior = 1.5f;
   s.lights.push_back(scene::Light{.name = "bulb"});
-  r = bake_reference(s, atlas.value(), {});
-  ASSERT_FALSE(r.is_ok());
-  EXPECT_NE(r.status().message().find("'bulb'"), std::string::npos) << r.status().to_string();
+  refused("'bulb'");
+}
+
+// ---- The glTF BRDF (reference_bsdf.h) -------------------------------------
+
+Dir3 direction(double mu) {
+  return {std::sqrt(std::max(0.0, 1.0 - mu * mu)), 0.0, mu};
+}
+
+// Directional albedo int f(wo, wi) cos(wi) dwi by the midpoint rule on an
+// (theta_i, phi_i) grid: a different parameterisation from the table's
+// half-vector quadrature. wo lies in the xz plane: phi in [0, pi], twice.
+Rgb brute_force_albedo(const GgxBrdf& f, double mu_o, int n_theta = 1024, int n_phi = 512) {
+  const Dir3 wo = direction(mu_o);
+  const double dt = 0.5 * kPi / n_theta, dp = kPi / n_phi;
+  Rgb sum;
+  for (int i = 0; i < n_theta; ++i) {
+    const double theta = (i + 0.5) * dt, ct = std::cos(theta), st = std::sin(theta);
+    Rgb row;
+    for (int j = 0; j < n_phi; ++j) {
+      const double phi = (j + 0.5) * dp;
+      row += f.eval(wo, {st * std::cos(phi), st * std::sin(phi), ct});
+    }
+    sum += row * (ct * st);
+  }
+  return sum * (2.0 * dt * dp);
+}
+
+// The estimate the tracer's extension rays make: mean of f cos / pdf over
+// GgxBrdf::sample (directions below the horizon count 0), with its
+// standard error per channel.
+void sampled_albedo(const GgxBrdf& f, double mu_o, int n, uint64_t seed, Rgb* mean, Rgb* se) {
+  const Dir3 wo = direction(mu_o);
+  Pcg32 rng(seed, 3);
+  double s1[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
+  for (int k = 0; k < n; ++k) {
+    const double uc = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    const Dir3 wi = f.sample(wo, uc, u1, u2);
+    if (wi.z <= 0) continue;
+    const double pdf = f.pdf(wo, wi);
+    ASSERT_GT(pdf, 0.0);
+    const Rgb w = f.eval(wo, wi) * (wi.z / pdf);
+    for (int c = 0; c < 3; ++c) {
+      s1[c] += w[c];
+      s2[c] += w[c] * w[c];
+    }
+  }
+  double m[3], e[3];
+  for (int c = 0; c < 3; ++c) {
+    m[c] = s1[c] / n;
+    e[c] = std::sqrt(std::max(0.0, s2[c] / n - m[c] * m[c]) / (n - 1));
+  }
+  *mean = {m[0], m[1], m[2]};
+  *se = {e[0], e[1], e[2]};
+}
+
+GgxBrdf white_metal(const GgxAlbedo& table, BrdfModel model) {
+  return {Rgb::gray(1.0), 1.0, table.roughness(), &table, model};
+}
+
+// E(mu): the table (its quadrature, interpolated in sqrt(mu)) against the
+// brute-force albedo of single-scattering GGX with F = 1. The midpoint rule
+// needs a finer grid towards grazing wo (the lobe hugs the horizon there).
+TEST(ReferenceBsdf, AlbedoTableMatchesBruteForceIntegral) {
+  double worst = 0;
+  for (double roughness : {0.3, 0.4, 0.5, 0.8, 1.0}) {
+    const GgxAlbedo table(roughness);
+    const GgxBrdf f = white_metal(table, BrdfModel::kNoCompensation);
+    for (double mu : {0.03, 0.1, 0.3, 0.55, 0.9, 1.0}) {
+      const double brute =
+          mu < 0.1 ? brute_force_albedo(f, mu, 4096, 2048)[0] : brute_force_albedo(f, mu)[0];
+      const double quad = GgxAlbedo::quadrature(mu, roughness * roughness);
+      worst = std::max({worst, std::abs(table(mu) - brute), std::abs(quad - brute)});
+      EXPECT_NEAR(quad, brute, 2e-4) << "roughness " << roughness << " mu " << mu;
+      EXPECT_NEAR(table(mu), brute, 2e-4) << "roughness " << roughness << " mu " << mu;
+    }
+    // E_avg = 2 int E mu dmu = 4 int E(x^2) x^3 dx, here by a 24-point
+    // Gauss-Legendre rule on the quadrature itself (not the table).
+    double avg = 0;
+    constexpr int kN = 24;
+    for (int i = 0; i < kN; ++i) {
+      // Gauss-Legendre on [0, 1] by Newton on P_n, as in any textbook.
+      double z = std::cos(kPi * (i + 0.75) / (kN + 0.5)), dp = 0;
+      for (int it = 0; it < 100; ++it) {
+        double p0 = 1, p1 = 0;
+        for (int k = 1; k <= kN; ++k) {
+          const double p2 = p1;
+          p1 = p0;
+          p0 = ((2.0 * k - 1) * z * p1 - (k - 1.0) * p2) / k;
+        }
+        dp = kN * (z * p0 - p1) / (z * z - 1);
+        z -= p0 / dp;
+      }
+      const double x = 0.5 * (1 - z), w = 1.0 / ((1 - z * z) * dp * dp);
+      avg += w * 4.0 * GgxAlbedo::quadrature(x * x, roughness * roughness) * x * x * x;
+    }
+    EXPECT_NEAR(table.average(), avg, 2e-4) << "roughness " << roughness;
+    EXPECT_LT(table.average(), 1.0);
+    std::printf("roughness %.1f: E_avg %.5f (Gauss-Legendre %.5f), E(1) %.5f, E(0.1) %.5f\n",
+                roughness, table.average(), avg, table(1.0), table(0.1));
+  }
+  std::printf("largest |table or quadrature - brute force|: %.2e\n", worst);
+}
+
+// With the compensation, a white metal (F = 1) reflects exactly 1 in every
+// direction; without it, E(mu).
+TEST(ReferenceBsdf, WhiteMetalAlbedoIsOneWithCompensation) {
+  for (double roughness : {0.3, 0.5, 1.0}) {
+    const GgxAlbedo table(roughness);
+    for (double mu : {0.1, 0.3, 0.7, 1.0}) {
+      const Rgb with = brute_force_albedo(white_metal(table, BrdfModel::kGltf), mu);
+      const Rgb without = brute_force_albedo(white_metal(table, BrdfModel::kNoCompensation), mu);
+      EXPECT_NEAR(with[0], 1.0, 5e-4) << "roughness " << roughness << " mu " << mu;
+      EXPECT_NEAR(without[0], table(mu), 2e-4) << "roughness " << roughness << " mu " << mu;
+    }
+  }
+}
+
+// The sampled estimate (what the tracer's extension rays do) against the
+// brute-force albedo of the same BRDF, for the materials of the agreement
+// test and the injected-error models.
+TEST(ReferenceBsdf, SampledAlbedoMatchesBruteForceIntegral) {
+  struct Case {
+    Rgb base;
+    double metallic, roughness;
+    BrdfModel model;
+  };
+  const Rgb gold{1.0, 0.71, 0.29}, red{0.63, 0.065, 0.05};
+  const Case cases[] = {{gold, 1.0, 0.4, BrdfModel::kGltf},
+                        {red, 0.0, 0.5, BrdfModel::kGltf},
+                        {Rgb::gray(0.725), 0.0, 0.8, BrdfModel::kGltf},
+                        {Rgb::gray(0.8), 0.0, 0.3, BrdfModel::kGltf},
+                        {gold, 0.5, 0.6, BrdfModel::kGltf},
+                        {gold, 1.0, 0.4, BrdfModel::kNoCompensation},
+                        {red, 0.0, 0.5, BrdfModel::kPreviousDiffuseWeight}};
+  uint64_t seed = 1;
+  for (const Case& k : cases) {
+    const GgxAlbedo table(k.roughness);
+    const GgxBrdf f{k.base, k.metallic, k.roughness, &table, k.model};
+    for (double mu : {0.9, 0.4, 0.1}) {
+      const Rgb brute = brute_force_albedo(f, mu);
+      Rgb mean, se;
+      sampled_albedo(f, mu, 1 << 18, seed++, &mean, &se);
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(mean[c], brute[c], 5 * se[c] + 1e-4)
+            << "base " << k.base[c] << " metallic " << k.metallic << " roughness " << k.roughness
+            << " model " << static_cast<int>(k.model) << " mu " << mu << " channel " << c;
+    }
+  }
+}
+
+// The white-metal furnace: every facet emits L_e and is a white metal
+// (base 1, metallic 1: F = 1), so with the compensation E = pi L_e (B + 1)
+// exactly; the reference without compensation (single scattering) must be
+// rejected, as must one bounce too few.
+TEST(ReferenceTracer, WhiteMetalFurnaceMatchesClosedForm) {
+  const Vec3 emission{1.0f, 0.5f, 0.25f};
+  constexpr int kBounces = 3;
+  for (float roughness : {0.5f, 1.0f}) {
+    const scene::Scene s = furnace({1, 1, 1}, emission, 1.0f, roughness);
+    ReferenceSettings settings{.samples_per_texel = 256, .max_bounces = kBounces, .seed = 5};
+    const ReferenceLightmap ref = bake(s, 24, settings);
+    auto expected_for = [&](int bounces) {
+      std::vector<double> e(ref.coverage.size() * 3, 0.0);
+      for (size_t t = 0; t < ref.coverage.size(); ++t)
+        for (int c = 0; c < 3; ++c)
+          e[t * 3 + static_cast<size_t>(c)] = kPi * emission[c] * (bounces + 1);
+      return e;
+    };
+    const Agreement ok = check(ref, expected_for(kBounces));
+    settings.brdf = BrdfModel::kNoCompensation;
+    const Agreement single = check(bake(s, 24, settings), expected_for(kBounces));
+    std::printf(
+        "white metal furnace, roughness %.1f: %zu tests, max |t| %.2f, ratio %.5f (z %.2f); "
+        "without compensation ratio %.5f (z %.1f); %.2f M paths/s\n",
+        static_cast<double>(roughness), ok.tests, ok.max_abs_t, ok.pooled_ratio, ok.pooled_z,
+        single.pooled_ratio, single.pooled_z, static_cast<double>(ref.paths) / ref.seconds * 1e-6);
+    EXPECT_GT(ok.tests, 300u);
+    EXPECT_FALSE(ok.detected()) << "max |t| " << ok.max_abs_t << ", pooled z " << ok.pooled_z;
+    EXPECT_TRUE(check(ref, expected_for(kBounces - 1)).detected());
+    EXPECT_TRUE(single.detected());
+  }
 }
 
 }  // namespace
