@@ -12,6 +12,7 @@
 
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <thread>
 
@@ -19,6 +20,7 @@
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
 #include "service/daemon_config.h"
+#include "service/data_dir_lock.h"
 #include "service/files.h"
 #include "service/job_queue.h"
 #include "service/log.h"
@@ -49,6 +51,13 @@ bool is_loopback(const std::string& address) {
 }
 
 int run(const DaemonConfig& config) {
+  // Before the stores open: they clean up what they take for this daemon's
+  // own leftovers (staged uploads, RUNNING bakes to resume).
+  auto lock = DataDirLock::acquire(config.data_dir);
+  if (!lock) {
+    log_event("fatal", {{"error", lock.status().to_string()}});
+    return 1;
+  }
   auto scenes = SceneStore::open(config.data_dir);
   if (!scenes) {
     log_event("fatal", {{"error", scenes.status().to_string()}});
@@ -98,12 +107,17 @@ int run(const DaemonConfig& config) {
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
+  // No SO_REUSEPORT: with it a second daemon binds the same port and the
+  // kernel spreads connections between the two.
+  builder.AddChannelArgument(GRPC_ARG_ALLOW_REUSEPORT, 0);
   builder.AddListeningPort(config.listen, creds, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
-    log_event("fatal", {{"error", "cannot listen on " + config.listen}});
+    log_event("fatal", {{"error", "cannot listen on " + config.listen +
+                                      " (address in use, e.g. by another luxeld, or not an "
+                                      "address of this machine)"}});
     runner.shutdown();
     return 1;
   }
@@ -149,7 +163,8 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
 
-  auto config = parse_daemon_args(std::vector<std::string>(argv + 1, argv + argc));
+  auto config = parse_daemon_args(std::vector<std::string>(argv + 1, argv + argc),
+                                  std::getenv("LUXELD_TOKEN"));
   if (!config) {
     std::fprintf(stderr, "luxeld: %s\n%s", config.status().message().c_str(), kDaemonUsage);
     return 2;

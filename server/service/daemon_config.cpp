@@ -14,8 +14,10 @@ const char* kDaemonUsage =
     "  --data-dir DIR            scenes, bake records, checkpoints and results (required)\n"
     "  --max-concurrent-bakes N  bakes running at once (default 1)\n"
     "  --device SPEC             OpenCL device: gpu, cpu, P:D or a name substring\n"
-    "  --token TOKEN             require \"authorization: Bearer TOKEN\" on every call\n"
-    "  --token-file FILE         the same, token read from FILE (trailing newline ignored)\n"
+    "  --token-file FILE         require \"authorization: Bearer TOKEN\" on every call, TOKEN\n"
+    "                            read from FILE (trailing newline ignored); or set the\n"
+    "                            LUXELD_TOKEN environment variable. Never on the command\n"
+    "                            line, where every user sees it in ps\n"
     "  --tls-cert PEM --tls-key PEM   serve TLS instead of plaintext\n"
     "  --max-upload-bytes N      largest scene upload, main file + resources (default 1 GiB)\n"
     "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
@@ -23,7 +25,8 @@ const char* kDaemonUsage =
     "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
     "  --max-message-bytes N     largest request message (default 16 MiB)\n";
 
-Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args) {
+Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
+                                       const char* token_env) {
   DaemonConfig c;
   std::string token_file;
   for (size_t i = 0; i < args.size(); ++i) {
@@ -58,8 +61,10 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args) {
       LUXEL_RETURN_IF_ERROR(value());
       c.device = v;
     } else if (k == "--token") {
-      LUXEL_RETURN_IF_ERROR(value());
-      c.token = v;
+      // A token in argv shows in ps and /proc/PID/cmdline to every user.
+      return invalid_argument(
+          "--token: not accepted on the command line (it would show in ps); put the token in "
+          "a file for --token-file or in the LUXELD_TOKEN environment variable");
     } else if (k == "--token-file") {
       LUXEL_RETURN_IF_ERROR(value());
       token_file = v;
@@ -94,6 +99,15 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args) {
   if (c.data_dir.empty()) return invalid_argument("--data-dir: required");
   if (c.tls_cert.empty() != c.tls_key.empty())
     return invalid_argument("--tls-cert and --tls-key go together");
+  if (token_env != nullptr) {
+    // Set but empty is a mistake, not a request to run without auth.
+    if (!token_file.empty())
+      return invalid_argument("--token-file and LUXELD_TOKEN both give a token; use one");
+    c.token = token_env;
+    if (c.token.empty())
+      return invalid_argument(
+          "LUXELD_TOKEN is set but empty; unset it to run without auth, or give a token");
+  }
   if (!token_file.empty()) {
     auto t = read_whole_file(token_file);
     if (!t) return invalid_argument("--token-file: " + t.status().message());

@@ -27,7 +27,10 @@ struct DaemonConfig {
 
 extern const char* kDaemonUsage;
 
-// INVALID_ARGUMENT naming the flag. Reads --token-file.
-Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args);
+// INVALID_ARGUMENT naming the flag. The token comes from --token-file or
+// `token_env` (the LUXELD_TOKEN environment variable; nullptr when unset),
+// never from argv, where every user of the machine can read it.
+Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
+                                       const char* token_env = nullptr);
 
 }  // namespace luxel::service

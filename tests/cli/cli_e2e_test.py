@@ -79,14 +79,14 @@ def json_lines(text):
 class Daemon:
     """One luxeld process started by this test (and only it is stopped)."""
 
-    def __init__(self, name, extra=()):
+    def __init__(self, name, extra=(), env=None):
         self.port = free_port()
         self.server = f"127.0.0.1:{self.port}"
         data = os.path.join(ARGS.work, name)
         self.log = open(os.path.join(ARGS.work, name + ".log"), "w")
         self.proc = subprocess.Popen(
             [ARGS.luxeld, "--listen", self.server, "--data-dir", data] + list(extra),
-            stdout=self.log, stderr=subprocess.STDOUT)
+            stdout=self.log, stderr=subprocess.STDOUT, env=dict(os.environ, **(env or {})))
 
     def wait_ready(self, *client_args):
         deadline = time.time() + 60
@@ -255,7 +255,15 @@ def test_errors(d):
 
 
 def test_token():
-    d = Daemon("token", ["--token", "s3cret"])
+    # The daemon's token never goes on its command line (ps shows argv to
+    # every user): --token is refused, an empty LUXELD_TOKEN too.
+    for args, env, why in ((["--token", "s3cret"], {}, "--token: not accepted on the command line"),
+                           ([], {"LUXELD_TOKEN": ""}, "LUXELD_TOKEN is set but empty")):
+        p = subprocess.run([ARGS.luxeld, "--data-dir", os.path.join(ARGS.work, "token-refused")]
+                           + args, capture_output=True, text=True, env=dict(os.environ, **env),
+                           timeout=30)
+        check(p.returncode == 2 and why in p.stderr, f"luxeld {args} {env}: {p.returncode} {p.stderr}")
+    d = Daemon("token", env={"LUXELD_TOKEN": "s3cret"})
     try:
         d.wait_ready("--token", "s3cret")
         _, err = luxel("list", "--server", d.server, rc=1)

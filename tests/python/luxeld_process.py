@@ -22,22 +22,23 @@ class Luxeld:
     """One daemon on 127.0.0.1:<free port> with a temporary --data-dir; its
     output goes to <data dir>/../luxeld.log (printed when start-up fails)."""
 
-    def __init__(self, binary, extra_args=()):
+    def __init__(self, binary, extra_args=(), env=None, data_dir=None):
         self.binary = binary
         self.extra_args = list(extra_args)
+        self.env = dict(os.environ, **(env or {}))
         self.tmp = tempfile.TemporaryDirectory(prefix="luxel_py_e2e_")
-        self.data_dir = pathlib.Path(self.tmp.name) / "data"
+        self.data_dir = pathlib.Path(data_dir) if data_dir else pathlib.Path(self.tmp.name) / "data"
         self.log_path = pathlib.Path(self.tmp.name) / "luxeld.log"
         self.address = None
         self.process = None
 
-    def start(self, ready_timeout=60.0):
-        self.address = f"127.0.0.1:{free_loopback_port()}"
+    def start(self, ready_timeout=60.0, address=None):
+        self.address = address or f"127.0.0.1:{free_loopback_port()}"
         args = [self.binary, "--listen", self.address, "--data-dir", str(self.data_dir),
                 *self.extra_args]
         self._log = open(self.log_path, "wb")
         self.process = subprocess.Popen(args, stdout=self._log, stderr=subprocess.STDOUT,
-                                        env=dict(os.environ))
+                                        env=self.env)
         deadline = time.monotonic() + ready_timeout
         with Client(self.address) as probe:
             while True:

@@ -12,13 +12,14 @@ import json
 import os
 import pathlib
 import shutil
+import subprocess
 import tempfile
 import threading
 import time
 import unittest
 
 from luxel_client import Client, LuxelError, luxel_pb2, scene_id, state_name
-from luxeld_process import Luxeld
+from luxeld_process import Luxeld, free_loopback_port
 
 SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
                                      pathlib.Path(__file__).resolve().parents[2] / "scenes"))
@@ -356,14 +357,15 @@ class ServiceEndToEndTest(unittest.TestCase):
 
 
 class TokenTest(unittest.TestCase):
-    """With --token, calls without the bearer token (or with a wrong one) get
-    UNAUTHENTICATED; the client's token= sends it."""
+    """With a token (LUXELD_TOKEN or --token-file), calls without the bearer
+    token (or with a wrong one) get UNAUTHENTICATED; the client's token=
+    sends it."""
 
     def test_bearer_token(self):
         binary = os.environ.get("LUXELD")
         if not binary or not os.access(binary, os.X_OK):
             self.skipTest("LUXELD does not name the luxeld binary")
-        daemon = Luxeld(binary, ["--token", "py-e2e-secret"])
+        daemon = Luxeld(binary, env={"LUXELD_TOKEN": "py-e2e-secret"})
         try:
             daemon.start()
             for token in (None, "wrong"):
@@ -376,6 +378,44 @@ class TokenTest(unittest.TestCase):
             self.assertEqual(daemon.stop(), 0, daemon.log())
         finally:
             daemon.cleanup()
+
+
+class OneDaemonTest(unittest.TestCase):
+    """A second luxeld on the same --data-dir, or on the same port, refuses to
+    start with a message saying why; the first one keeps serving."""
+
+    def setUp(self):
+        self.binary = os.environ.get("LUXELD")
+        if not self.binary or not os.access(self.binary, os.X_OK):
+            self.skipTest("LUXELD does not name the luxeld binary")
+        self.first = Luxeld(self.binary)
+        self.first.start()
+        self.addCleanup(self.first.cleanup)
+
+    def refused(self, address, data_dir):
+        """Runs a second daemon to its exit (a readiness probe would reach the
+        first one on a shared port); returns its output."""
+        p = subprocess.run([self.binary, "--listen", address, "--data-dir", str(data_dir)],
+                           capture_output=True, text=True, timeout=60)
+        self.assertEqual(p.returncode, 1, p.stderr)
+        return p.stderr
+
+    def assert_first_serves(self):
+        with Client(self.first.address) as client:
+            scene = client.upload_scene(FOLIAGE)
+            self.assertIn(scene.scene_id, [s.scene_id for s in client.list_scenes()])
+
+    def test_second_daemon_on_the_same_data_dir(self):
+        message = self.refused(f"127.0.0.1:{free_loopback_port()}", self.first.data_dir)
+        self.assertIn("is in use by another luxeld (pid %d" % self.first.process.pid, message)
+        self.assert_first_serves()
+
+    def test_second_daemon_on_the_same_port(self):
+        other = tempfile.TemporaryDirectory(prefix="luxel_py_e2e_")
+        self.addCleanup(other.cleanup)
+        message = self.refused(self.first.address, pathlib.Path(other.name) / "data")
+        self.assertIn("cannot listen on " + self.first.address, message)
+        self.assert_first_serves()
 
 
 if __name__ == "__main__":

@@ -48,10 +48,11 @@ Daemon::Daemon(std::string data_dir, std::vector<std::string> extra_args, std::s
   address_ = "127.0.0.1:" + std::to_string(free_loopback_port());
   log_path_ = data_dir_ + ".luxeld.log";
   std::vector<std::string> args = {LUXELD_PATH, "--listen", address_, "--data-dir", data_dir_};
-  if (!token_.empty()) args.insert(args.end(), {"--token", token_});
   args.insert(args.end(), extra_args.begin(), extra_args.end());
   pid_ = fork();
   if (pid_ == 0) {
+    // The daemon takes its token from the environment (never from argv).
+    if (!token_.empty()) setenv("LUXELD_TOKEN", token_.c_str(), 1);
     const int fd = open(log_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     if (fd >= 0) dup2(fd, 2);
     std::vector<char*> argv;
