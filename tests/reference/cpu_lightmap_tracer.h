@@ -14,7 +14,8 @@
 // point: emission is collected at hit vertices 1..B+1, Lambert scattering
 // (f = base_color / pi, surfaces hit from behind shaded like the front)
 // happens at vertices 1..B. Emission = emissive_factor * emissive_strength,
-// from the winding's front face only unless the material is double sided.
+// from the front face only unless the material is double sided (the
+// winding's, the clockwise one under a mirroring instance: glTF 2.0 §3.7.4).
 //
 // Estimator: next-event estimation only (thesis §6.1). At every vertex
 // k = 0..B one point is sampled uniformly by area on the emitters and its
