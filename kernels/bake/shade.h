@@ -52,7 +52,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
 
 #if LUX_LIGHT_EMISSIVE
   if ((m.flags & LUX_MATERIAL_EMISSIVE) &&
-      (dot(wo, s.ng_winding) > 0.0f || (m.flags & LUX_MATERIAL_DOUBLE_SIDED))) {
+      (dot(wo, s.ng_front) > 0.0f || (m.flags & LUX_MATERIAL_DOUBLE_SIDED))) {
     float3 le = m.emission.xyz;
 #if LUX_EMISSIVE_TEXTURE
     if (m.emissive_tex.texture >= 0)
@@ -60,9 +60,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
 #endif
     float w = 1.0f;
     if (prev_pdf > 0.0f && s.light >= 0)
-      w = lux_power_heuristic(
-          prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light, path.prev_pos.xyz, s.p,
-                                           s.ng_winding));
+      w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light,
+                                                               path.prev_pos.xyz, s.p, s.ng_front));
     path.radiance.xyz += throughput * le * w;
   }
 #endif

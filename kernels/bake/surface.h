@@ -9,13 +9,13 @@
 #include "shared/ray_offset.h"
 
 typedef struct LuxSurface {
-  float3 p;          /* world position */
-  float3 ng;         /* unit geometric normal, on the shading normal's side */
-  float3 ng_winding; /* unit geometric normal from the winding (emitter front side) */
-  float3 ns;         /* unit shading normal, on the same side as ng (normal-mapped
-                        after lux_surface_normal_map) */
-  float2 uv;         /* material UV set 0 (TEXCOORD_0) */
-  float2 uv1;        /* material UV set 1 (TEXCOORD_1) with LUX_TEXCOORD1, else uv */
+  float3 p;        /* world position */
+  float3 ng;       /* unit geometric normal, on the shading normal's side */
+  float3 ng_front; /* unit geometric normal of the front face (emitter front side) */
+  float3 ns;       /* unit shading normal, on the same side as ng (normal-mapped
+                      after lux_surface_normal_map) */
+  float2 uv;       /* material UV set 0 (TEXCOORD_0) */
+  float2 uv1;      /* material UV set 1 (TEXCOORD_1) with LUX_TEXCOORD1, else uv */
   int material;
   int light; /* emissive light index or -1 */
 } LuxSurface;
@@ -29,7 +29,10 @@ inline LuxSurface lux_surface_at(const __global LuxSurfaceTri* tris, int tri, fl
   const float3 cross_e = cross(t.p1.xyz - t.p0.xyz, t.p2.xyz - t.p0.xyz);
   const float len = length(cross_e);
   s.ng = len > 0.0f ? cross_e / len : (float3)(0.0f, 1.0f, 0.0f);
-  s.ng_winding = s.ng;
+  /* glTF 2.0 §3.7.4: the front face is the counter-clockwise one, unless
+   * the instance transform mirrors (negative determinant): then it is the
+   * clockwise one, and t.front = -1 (kernels/shared/bake.h). */
+  s.ng_front = t.front < 0.0f ? -s.ng : s.ng;
   float3 ns = b0 * t.n0.xyz + b1 * t.n1.xyz + b2 * t.n2.xyz;
   const float ns_len = length(ns);
   ns = ns_len > 1e-20f ? ns / ns_len : s.ng;

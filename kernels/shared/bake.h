@@ -21,7 +21,12 @@ namespace luxel::cl {
 /* Surface data of one world triangle (TriangleSoup order), 128 bytes.
  *   p0.w (int) material index;  p1.w (int) emissive light index or -1;
  *   p2.w (int) instance index. n*: world-space shading normals (w unused).
- *   uv*: material UVs (TEXCOORD_0). */
+ *   uv*: material UVs (TEXCOORD_0).
+ *   front: +1, or -1 for a triangle of a mirroring instance, whose front face
+ *   is the clockwise one (glTF 2.0 §3.7.4; front_face_sign in
+ *   server/engine/common/math.h): front * cross(p1 - p0, p2 - p0) is the
+ *   front normal. Vertices stay in the file's order, so barycentrics, UVs
+ *   and the sample-info records need no remapping. */
 typedef struct LuxSurfaceTri {
   float4 p0;
   float4 p1;
@@ -32,7 +37,8 @@ typedef struct LuxSurfaceTri {
   float2 uv0;
   float2 uv1;
   float2 uv2;
-  float2 pad;
+  float front;
+  float pad;
 } LuxSurfaceTri;
 
 /* Per-vertex tangents of one world triangle (TriangleSoup order), 48 bytes,

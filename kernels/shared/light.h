@@ -37,7 +37,8 @@
  * "-" lanes are 0. Triangle barycentrics (LuxLightSample.bary) weigh v1 and
  * v2, like LuxHit.u/v. The triangle's front normal follows its world winding
  * (cross(edge1, edge2)), flipped for instances whose transform mirrors
- * (glTF: a negative determinant reverses the winding). A directional light
+ * (glTF 2.0 §3.7.4: a negative determinant reverses the winding; the same
+ * rule as LuxSurfaceTri.front, which BSDF-sampled hits use). A directional light
  * with angular radius a > 0 is a disc of uniform radiance (the sun) sampled
  * over its cone of directions.
  *

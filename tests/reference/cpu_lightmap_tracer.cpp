@@ -66,7 +66,7 @@ Rgb direct_light(const ReferenceScene& rs, const SurfacePoint& x, Pcg32& rng, Ve
   const double cos_x = dot(wi, x.ns);
   if (cos_x <= 0) return {};
   const ReferenceMaterial& m = rs.material(e.material);
-  double cos_l = -dot(wi, e.ng_winding);
+  double cos_l = -dot(wi, e.ng_front);
   if (cos_l <= 0) {
     if (!m.double_sided) return {};
     cos_l = -cos_l;

@@ -15,8 +15,9 @@
 // vertices 1..B (surfaces hit from behind shaded like the front): Lambert
 // (f = base_color / pi) in scenes of rough dielectrics only, otherwise the
 // glTF BRDF with multiple-scattering compensation (reference_bsdf.h).
-// Emission = emissive_factor * emissive_strength, from the winding's front
-// face only unless the material is double sided.
+// Emission = emissive_factor * emissive_strength, from the front face only
+// unless the material is double sided (the winding's, the clockwise one
+// under a mirroring instance: glTF 2.0 §3.7.4).
 //
 // Estimator: next-event estimation only (thesis §6.1). At every vertex
 // k = 0..B one point is sampled uniformly by area on the emitters and its

@@ -84,7 +84,10 @@ Result<std::unique_ptr<ReferenceScene>> ReferenceScene::create(const scene::Scen
       const uint32_t vi = mesh.indices[mt * 3 + static_cast<size_t>(k)];
       tri.n[k] = normalize(transform_normal(instance.object_to_world, mesh.normals[vi]));
     }
-    tri.ng_winding = normalize(cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0]));
+    // glTF 2.0 §3.7.4: under a mirroring instance the front face is the
+    // clockwise one (front_face_sign).
+    tri.ng_front = normalize(cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0])) *
+                   front_face_sign(instance.object_to_world);
     tri.area = triangle_area(tri.p[0], tri.p[1], tri.p[2]);
     tri.material = mesh.triangle_material[mt];
     used[static_cast<size_t>(tri.material)] = true;
@@ -181,12 +184,12 @@ SurfacePoint ReferenceScene::surface_at(uint32_t triangle, double w0, double w1,
                 static_cast<float>(w0 * v[0].z + w1 * v[1].z + w2 * v[2].z)};
   };
   s.p = mix(t.p);
-  s.ng_winding = t.ng_winding;
+  s.ng_front = t.ng_front;
   const Vec3 n = mix(t.n);
-  s.ns = length(n) > 1e-20f ? normalize(n) : t.ng_winding;
+  s.ns = length(n) > 1e-20f ? normalize(n) : t.ng_front;
   // The geometric normal is taken on the shading normal's side: the vertex
   // normals say which side of the surface is "outside".
-  s.ng = dot(s.ns, t.ng_winding) < 0 ? t.ng_winding * -1.0f : t.ng_winding;
+  s.ng = dot(s.ns, t.ng_front) < 0 ? t.ng_front * -1.0f : t.ng_front;
   return s;
 }
 
@@ -246,7 +249,7 @@ EmitterSample ReferenceScene::sample_emitter(double u_select, double u1, double 
   const SurfacePoint s = surface_at(t, 1.0 - su, u2 * su, (1.0 - u2) * su);
   EmitterSample e;
   e.p = s.p;
-  e.ng_winding = s.ng_winding;
+  e.ng_front = s.ng_front;
   e.triangle = t;
   e.material = s.material;
   e.pdf_area = 1.0 / emissive_area_;

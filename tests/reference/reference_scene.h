@@ -49,7 +49,7 @@ struct SurfacePoint {
   Vec3 p;                 // world position
   Vec3 ng;                // unit geometric normal, on the side of ns
   Vec3 ns;                // unit interpolated shading normal
-  Vec3 ng_winding;        // unit geometric normal of the winding (emitting side)
+  Vec3 ng_front;          // unit geometric normal of the front face (emitting side)
   uint32_t triangle = 0;  // world triangle
   int material = 0;
 };
@@ -57,7 +57,7 @@ struct SurfacePoint {
 // One point sampled on the emitters, uniformly by area over all of them.
 struct EmitterSample {
   Vec3 p;
-  Vec3 ng_winding;
+  Vec3 ng_front;
   uint32_t triangle = 0;
   int material = 0;
   double pdf_area = 0;  // 1 / total emissive area
@@ -103,8 +103,8 @@ class ReferenceScene {
  private:
   struct Triangle {
     Vec3 p[3];
-    Vec3 n[3];        // world vertex normals
-    Vec3 ng_winding;  // unit
+    Vec3 n[3];      // world vertex normals
+    Vec3 ng_front;  // unit; the winding's, reversed under a mirroring instance
     double area = 0;
     int material = 0;
   };

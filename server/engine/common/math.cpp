@@ -33,9 +33,16 @@ double determinant3x3(const Mat4& m) {
          m.at(0, 2) * (m.at(1, 0) * m.at(2, 1) - m.at(1, 1) * m.at(2, 0));
 }
 
+float front_face_sign(const Mat4& m) {
+  return determinant3x3(m) < 0 ? -1.0f : 1.0f;
+}
+
 Vec3 transform_normal(const Mat4& m, Vec3 n) {
-  // Cofactor matrix = det * inverse-transpose; the scale drops out on normalize
-  // and the cofactor form stays valid for singular (flattening) transforms.
+  // Cofactor matrix = det * inverse-transpose; the scale drops out on
+  // normalize and the cofactor form stays valid for singular (flattening)
+  // transforms. The sign of det does not drop out: a mirroring transform
+  // (det < 0) would turn every normal to the back face, so it is divided out.
+  const double sign = front_face_sign(m);
   double c[3][3];
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
@@ -44,7 +51,7 @@ Vec3 transform_normal(const Mat4& m, Vec3 n) {
     }
   Vec3 r;
   for (int i = 0; i < 3; ++i)
-    r[i] = static_cast<float>(c[i][0] * n.x + c[i][1] * n.y + c[i][2] * n.z);
+    r[i] = static_cast<float>(sign * (c[i][0] * n.x + c[i][1] * n.y + c[i][2] * n.z));
   return normalize(r);
 }
 

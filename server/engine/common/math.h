@@ -82,11 +82,20 @@ struct Mat4 {
 
 Mat4 operator*(const Mat4& a, const Mat4& b);
 Vec3 transform_point(const Mat4& m, Vec3 p);
-// Normals transform by the inverse transpose; returns a normalized vector.
+// Normals transform by the inverse transpose (so they stay on the front face
+// under a mirroring transform too); returns a normalized vector.
 Vec3 transform_normal(const Mat4& m, Vec3 n);
 Vec3 transform_vector(const Mat4& m, Vec3 v);
 Mat4 inverse(const Mat4& m);
 double determinant3x3(const Mat4& m);
+// The winding rule of instances (glTF 2.0 §3.7.4): the front face of a
+// triangle is counter-clockwise in object space, and a node transform whose
+// 3x3 part has a negative determinant (a mirroring one) makes it the
+// clockwise face in world space. Returns the sign that turns the world
+// winding normal cross(v1 - v0, v2 - v0) into the front normal: +1, or -1
+// under a mirroring transform. Everything that needs a triangle's front side
+// (vertex normals, emitter sides, bitangent signs) follows this one rule.
+float front_face_sign(const Mat4& m);
 // glTF TRS: translation, rotation quaternion (x, y, z, w), scale.
 Mat4 mat4_from_trs(const double t[3], const double q[4], const double s[3]);
 

@@ -6,6 +6,7 @@
 namespace luxel::cl {
 static_assert(sizeof(LuxSurfaceTri) == 128 && alignof(LuxSurfaceTri) == 16);
 static_assert(offsetof(LuxSurfaceTri, uv0) == 96);
+static_assert(offsetof(LuxSurfaceTri, front) == 120);
 static_assert(sizeof(LuxTriangleTangents) == 48 && alignof(LuxTriangleTangents) == 16);
 static_assert(sizeof(LuxMaterial) == 208 && alignof(LuxMaterial) == 16);
 static_assert(offsetof(LuxMaterial, specular) == 32 && offsetof(LuxMaterial, metallic) == 48);

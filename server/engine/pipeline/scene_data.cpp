@@ -165,13 +165,17 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
       *atlas_uv[k] = {a.x, a.y};
     }
     out.atlas_uvs[t].pad = {0, 0};
-    s.pad = {0, 0};
+    // The triangle keeps the file's vertex order; under a mirroring instance
+    // its front face is the clockwise one (LuxSurfaceTri.front).
+    s.front = front_face_sign(instance.object_to_world);
+    s.pad = 0;
     const auto& normal_map = scene.materials[static_cast<size_t>(material)].normal_texture;
     if (!out.tangents.empty() && normal_map.texture >= 0) {
       const std::vector<Vec4>& tangents =
           mesh_tangents(scene, instance.mesh, normal_map.texcoord, &generated);
-      // A mirroring transform flips the frame's handedness (bitangent sign).
-      const float sign = determinant3x3(instance.object_to_world) < 0 ? -1.0f : 1.0f;
+      // A mirroring transform flips the frame's handedness (bitangent sign):
+      // cross(M n, M t) = det(M) M^-T cross(n, t) for the transformed normal.
+      const float sign = front_face_sign(instance.object_to_world);
       cl::float4* tw[3] = {&out.tangents[t].t0, &out.tangents[t].t1, &out.tangents[t].t2};
       for (int k = 0; k < 3; ++k) {
         const Vec4 to = tangents[mesh.indices[mt * 3 + static_cast<size_t>(k)]];

@@ -37,9 +37,10 @@ struct Verdict {
 };
 
 // z-tests every fully covered texel's mean (channel 0..2) against
-// expected(texel, channel). The engine's standard error is rel_error * mean
-// luminance; a floor of 1e-5 relative covers fp32 accumulation rounding when
-// the sampling variance is ~0 (e.g. stratified direct light).
+// expected(texel, channel); texels whose expected value is NaN are left
+// out. The engine's standard error is rel_error * mean luminance; a floor of
+// 1e-5 relative covers fp32 accumulation rounding when the sampling variance
+// is ~0 (e.g. stratified direct light).
 Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t, int)>& expected,
               double family_alpha = 1e-3) {
   Verdict v;
@@ -47,6 +48,7 @@ Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t
   std::vector<std::array<double, 3>> zs;
   for (size_t t = 0; t < size_t(r.width) * r.height; ++t) {
     if (r.irradiance[t * 4 + 3] < 1.0f || r.samples[t] < 2) continue;
+    if (std::isnan(expected(static_cast<uint32_t>(t), 0))) continue;
     const double lum = 0.2126 * r.irradiance[t * 4] + 0.7152 * r.irradiance[t * 4 + 1] +
                        0.0722 * r.irradiance[t * 4 + 2];
     std::array<double, 3> z{};
@@ -192,6 +194,74 @@ TEST_F(ClosedFormTest, UniformSkyOverOpenPlane) {
   for (size_t t = 0; t < r.rel_error.size(); ++t)
     if (r.irradiance[t * 4 + 3] > 0) worst = std::max(worst, r.rel_error[t]);
   EXPECT_LT(worst, 1e-5f) << "the sky-lit plane should converge with zero variance";
+}
+
+// The open plane under an instance transform that mirrors x (determinant
+// -1; glTF 2.0 §3.7.4: its front face is the clockwise one). Its front still
+// faces +y, so the closed forms of the open plane hold, with atlas (u, v) ->
+// world (x, z) = (1 - 2 v, -1 + 2 u).
+scene::Scene mirrored_open_plane() {
+  scene::Scene s = testing::open_plane();
+  s.instances[0].object_to_world.at(0, 0) = -1;
+  return s;
+}
+
+// Under a uniform sky either side of a lone plane sees pi L, so the mirrored
+// plane (lightmap rows 0 .. h/2) floats above a black ground (rows h/2 .. h,
+// not tested) much wider than it: its front sees E = pi L, its back nearly
+// nothing.
+TEST_F(ClosedFormTest, UniformSkyOverMirroredPlane) {
+  scene::Scene s;
+  s.source_name = "mirrored_plane_over_black_ground";
+  s.materials.push_back(testing::diffuse_material(0.5f));
+  s.materials.push_back(testing::diffuse_material(0.0f));
+  testing::add_quad(s, {-1, 0, -1}, {0, 0, 2}, {2, 0, 0}, 0, 0, 1, 0.5f, 0);
+  s.instances[0].object_to_world.at(0, 0) = -1;
+  testing::add_quad(s, {-20, -0.05f, -20}, {0, 0, 40}, {40, 0, 0}, 0, 0.5f, 1, 1, 1);
+  const int res = 16;
+  auto st = settings(res, 256, 2);
+  st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+  st.lights.sky.color = {0.25f, 0.5f, 1.0f};
+  st.lights.sky.intensity = 2.0f;
+  auto r = bake(s, st);
+  ASSERT_GT(r.covered_texels, 200u);
+  const double l[3] = {0.5, 1.0, 2.0};
+  auto expected = [&](double scale) {
+    return [&, scale](uint32_t t, int c) {
+      return t / res < res / 2 ? scale * M_PI * l[c] : std::nan("");
+    };
+  };
+  EXPECT_EQ(check(r, expected(1.0)).texels, size_t(res * res / 2));
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
+TEST_F(ClosedFormTest, PointLightOverMirroredPlane) {
+  scene::Scene s = mirrored_open_plane();
+  scene::Light light;
+  light.type = scene::LightType::kPoint;
+  light.intensity = 3.0f;
+  light.position = {0.1f, 0.75f, -0.2f};
+  s.lights.push_back(light);
+  auto st = settings(32, 64, 0);
+  auto r = bake(s, st);
+  ASSERT_GT(r.covered_texels, 1000u);
+  auto atlas = atlas::build_atlas(s, st.atlas);
+  ASSERT_TRUE(atlas);
+  auto info = atlas::build_sample_info(s, atlas.value());
+  ASSERT_TRUE(info);
+  auto expected = [&](double scale) {
+    return [&, scale](uint32_t t, int) {
+      return scale * texel_mean(info.value(), t, [&](double u, double v) {
+               const double x = 1 - 2 * v - light.position.x, z = -1 + 2 * u - light.position.z;
+               const double h = light.position.y;
+               const double r2 = x * x + z * z + h * h;
+               return light.intensity * h / (r2 * std::sqrt(r2));
+             });
+    };
+  };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
 }
 
 TEST_F(ClosedFormTest, EquirectSkyOverOpenPlane) {

@@ -68,11 +68,13 @@ Status add_emissive_triangles(const scene::Scene& scene, const accel::TriangleSo
   }
   if (emitters.empty()) return Status::ok();
 
-  // glTF: a transform with a negative determinant reverses the winding, so
-  // the front face of a mirrored instance's triangle is the other side.
+  // glTF 2.0 §3.7.4: a transform with a negative determinant reverses the
+  // winding, so the front face of a mirrored instance's triangle is the
+  // other side. The same rule gives the side that BSDF-sampled hits see
+  // emit (LuxSurfaceTri.front), so both estimators agree.
   std::vector<float> side(scene.instances.size());
   for (size_t i = 0; i < scene.instances.size(); ++i)
-    side[i] = determinant3x3(scene.instances[i].object_to_world) < 0 ? -1.0f : 1.0f;
+    side[i] = front_face_sign(scene.instances[i].object_to_world);
 
   for (size_t t = 0; t < soup.size(); ++t) {
     const scene::Instance& inst = scene.instances[soup.instance[t]];
