@@ -6,18 +6,36 @@
 #include <ctime>
 #include <mutex>
 
+#include "common/status.h"
+
 namespace luxel::service {
 namespace {
 
-std::string quote_if_needed(const std::string& v) {
+// A value longer than this is cut (with its length said), so one request
+// cannot write megabytes into the log.
+constexpr size_t kMaxLoggedValue = 1024;
+
+// One line per event whatever a value holds: control bytes (NUL, CR, LF,
+// ESC, ...) are escaped as \xHH inside quotes, quotes and backslashes too.
+std::string quote_if_needed(const std::string& in) {
+  std::string v = in.size() > kMaxLoggedValue
+                      ? in.substr(0, kMaxLoggedValue) + strprintf("...(%zu bytes)", in.size())
+                      : in;
   bool plain = !v.empty();
-  for (char c : v)
-    if (c == ' ' || c == '"' || c == '=' || c == '\n' || c == '\t') plain = false;
+  for (char c : v) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == ' ' || c == '"' || c == '=' || c == '\\' || u < 0x20 || u == 0x7f) plain = false;
+  }
   if (plain) return v;
   std::string q = "\"";
   for (char c : v) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7f) {
+      q += strprintf("\\x%02x", u);
+      continue;
+    }
     if (c == '"' || c == '\\') q += '\\';
-    q += (c == '\n') ? ' ' : c;
+    q += c;
   }
   return q + "\"";
 }

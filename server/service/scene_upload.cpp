@@ -37,9 +37,61 @@ Status check_resource_uri(const std::string& uri) {
   return Status::ok();
 }
 
+namespace {
+
+// RFC 3629: no overlong forms, no surrogates, nothing past U+10FFFF.
+bool is_valid_utf8(const std::string& s) {
+  size_t i = 0;
+  while (i < s.size()) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    int n = 0;
+    uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c & 0xe0) == 0xc0) {
+      n = 1, cp = c & 0x1f;
+    } else if ((c & 0xf0) == 0xe0) {
+      n = 2, cp = c & 0x0f;
+    } else if ((c & 0xf8) == 0xf0) {
+      n = 3, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    if (i + static_cast<size_t>(n) >= s.size()) return false;  // truncated sequence
+    for (int k = 1; k <= n; ++k) {
+      const auto d = static_cast<unsigned char>(s[i + static_cast<size_t>(k)]);
+      if ((d & 0xc0) != 0x80) return false;
+      cp = (cp << 6) | (d & 0x3f);
+    }
+    const uint32_t min[4] = {0, 0x80, 0x800, 0x10000};
+    if (cp < min[n] || cp > 0x10ffff || (cp >= 0xd800 && cp <= 0xdfff)) return false;
+    i += static_cast<size_t>(n) + 1;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status check_scene_name(const std::string& name) {
+  if (name.size() > kMaxSceneNameBytes)
+    return invalid_argument(
+        strprintf("header.name: %zu bytes; at most %zu", name.size(), kMaxSceneNameBytes));
+  for (size_t i = 0; i < name.size(); ++i) {
+    const auto c = static_cast<unsigned char>(name[i]);
+    if (c < 0x20 || c == 0x7f)
+      return invalid_argument(strprintf(
+          "header.name: control character 0x%02x at byte %zu (names are one printable line)", c,
+          i));
+  }
+  if (!is_valid_utf8(name)) return invalid_argument("header.name: not valid UTF-8");
+  return Status::ok();
+}
+
 Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
                                                         const v1::SceneUploadHeader& header,
                                                         const UploadLimits& limits) {
+  LUXEL_RETURN_IF_ERROR(check_scene_name(header.name()));
   if (header.format() != v1::SCENE_FORMAT_GLTF && header.format() != v1::SCENE_FORMAT_GLB)
     return invalid_argument("header.format: must be SCENE_FORMAT_GLTF or SCENE_FORMAT_GLB");
   if (!is_sha256_hex(header.sha256()))
@@ -70,6 +122,16 @@ Result<std::unique_ptr<SceneUpload>> SceneUpload::begin(SceneStore& store,
       total = limits.max_upload_bytes + 1;
     else
       total += r.size();
+  }
+  // A path that is another's folder ("a" and "a/b") cannot be both a file
+  // and a folder on disk.
+  for (const std::string& p : paths) {
+    const auto lo = uris.lower_bound(p + "/");
+    if (lo != uris.end() && lo->compare(0, p.size() + 1, p + "/") == 0)
+      return invalid_argument(strprintf(
+          "header.resources.uri '%s': also the folder of '%s'; a path cannot be a file and a "
+          "folder",
+          p.c_str(), lo->c_str()));
   }
   if (total > limits.max_upload_bytes || header.total_size() > limits.max_upload_bytes)
     return resource_exhausted(

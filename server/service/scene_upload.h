@@ -28,6 +28,12 @@ struct UploadLimits {
 // inside the scene folder (no '..', no absolute path, no scheme, no '\').
 Status check_resource_uri(const std::string& uri);
 
+// Scene display names: at most kMaxSceneNameBytes of valid UTF-8 without
+// control characters (a name is shown in lists and logs as one line);
+// INVALID_ARGUMENT naming header.name otherwise.
+constexpr size_t kMaxSceneNameBytes = 256;
+Status check_scene_name(const std::string& name);
+
 class SceneUpload {
  public:
   // Validates the header (INVALID_ARGUMENT naming the field; RESOURCE_EXHAUSTED

@@ -135,6 +135,59 @@ TEST_F(ServiceErrors, ResourceUrisMayNotEscapeTheSceneFolder) {
   EXPECT_TRUE(staging_empty());
 }
 
+// "a" and "a/b" in one upload: a path cannot be a file and a folder (this
+// was INTERNAL, from the failed file creation).
+TEST_F(ServiceErrors, AResourcePathThatIsAnothersFolderIsInvalid) {
+  v1::SceneInfo info;
+  for (const auto& pair : {std::pair<std::string, std::string>{"a", "a/b"}, {"t/x/y", "t/x"}}) {
+    auto st = upload_scene(*daemon_, "x.gltf", v1::SCENE_FORMAT_GLTF, kGltf,
+                           {{pair.first, kBin}, {pair.second, kBin}}, &info);
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
+    EXPECT_NE(st.error_message().find("a path cannot be a file and a folder"), std::string::npos)
+        << st.error_message();
+  }
+  EXPECT_TRUE(staging_empty());
+}
+
+// Scene names are one printable line of at most 256 bytes of UTF-8: a 15 MiB
+// name once went into every log line and made ListScenes exceed a client's
+// 4 MiB limit; NUL and CR split log lines. The log escapes what it prints.
+TEST_F(ServiceErrors, SceneNamesAreBoundedAndPrintable) {
+  v1::SceneInfo info;
+  struct Case {
+    std::string name, why;
+  };
+  const std::vector<Case> cases = {{std::string(257, 'n'), "257 bytes; at most 256"},
+                                   {std::string("a\0b", 3), "control character 0x00"},
+                                   {"a\rb", "control character 0x0d"},
+                                   {"tab\tname", "control character 0x09"}};
+  // (Invalid UTF-8 never gets this far: proto3 string fields refuse it when
+  // the request is parsed.)
+  for (const Case& c : cases) {
+    auto st = upload_scene(*daemon_, c.name, v1::SCENE_FORMAT_GLTF, kGltf, {}, &info);
+    EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << c.why;
+    EXPECT_NE(st.error_message().find("header.name: " + c.why), std::string::npos)
+        << st.error_message();
+  }
+  // At the limit, and non-ASCII, is fine.
+  auto fine = upload_scene(*daemon_, std::string(254, 'n') + "\xc3\xa9", v1::SCENE_FORMAT_GLTF,
+                           kGltf, {{"cornell_box.bin", kBin}}, &info);
+  EXPECT_TRUE(fine.ok()) << fine.error_message();
+  // Every log line is one event, whatever the refused names held.
+  const std::string log = daemon_->log();
+  size_t start = 0;
+  while (start < log.size()) {
+    const size_t end = log.find('\n', start);
+    const std::string line = log.substr(start, end - start);
+    EXPECT_TRUE(line.empty() || line.rfind("ts=", 0) == 0 || line[0] == 'E' || line[0] == 'I' ||
+                line[0] == 'W')
+        << "a log line that is not an event: " << line.substr(0, 80);
+    EXPECT_EQ(line.find('\r'), std::string::npos);
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+}
+
 TEST_F(ServiceErrors, FirstMessageMustBeAHeader) {
   auto ctx = daemon_->context();
   v1::SceneInfo info;
