@@ -1,5 +1,6 @@
 #include "pipeline/bake_settings.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "pipeline/settings_schema.h"
@@ -128,6 +129,23 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",
                strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
+  // Products of settings that are each in range but overflow together
+  // (3e38 x 10): caught here, at submit, not when the light table is built.
+  auto product_finite = [](Vec3 c, float k) {
+    for (float v : {c.x, c.y, c.z})
+      if (!std::isfinite(static_cast<float>(v * k))) return false;
+    return true;
+  };
+  const auto& sky = s.lights.sky;
+  if (sky.kind != SkySettings::Kind::kNone && !product_finite(sky.color, sky.intensity))
+    return bad("sky.intensity",
+               strprintf("sky.color x sky.intensity overflows a float (%g x %g)",
+                         std::max({sky.color.x, sky.color.y, sky.color.z}), sky.intensity));
+  const auto& sun = s.lights.sun;
+  if (sun.enabled && !product_finite(sun.color, sun.illuminance))
+    return bad("sun.illuminance",
+               strprintf("sun.color x sun.illuminance overflows a float (%g x %g)",
+                         std::max({sun.color.x, sun.color.y, sun.color.z}), sun.illuminance));
   for (size_t i = 0; i < s.node_placements.size(); ++i) {
     const NodePlacement& np = s.node_placements[i];
     const std::string field = strprintf("placements[%zu]", i);

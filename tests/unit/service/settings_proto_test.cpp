@@ -280,5 +280,26 @@ TEST(SettingsProto, PlacementsRoundTripAndErrors) {
   EXPECT_EQ(service_error(bad), "settings.placements[0].page: must be in [0, 1024)");
 }
 
+// Settings each in range whose product overflows a float are refused at
+// submit, naming the field (they passed SubmitBake and failed the bake).
+TEST(SettingsProto, ProductsThatOverflowAreRefusedAtSubmit) {
+  v1::BakeSettings sky = base();
+  sky.mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
+  for (float c : {3e38f, 1.0f, 1.0f}) sky.mutable_sky()->add_color(c);
+  sky.mutable_sky()->set_intensity(10);
+  EXPECT_EQ(
+      service_error(sky).rfind("settings.sky.intensity: sky.color x sky.intensity overflows", 0),
+      0u)
+      << service_error(sky);
+  sky.mutable_sky()->set_intensity(1);
+  EXPECT_EQ(service_error(sky), "ok");
+  v1::BakeSettings sun = base();
+  sun.mutable_sun()->set_illuminance(1e30f);
+  for (float c : {1e10f, 1.0f, 1.0f}) sun.mutable_sun()->add_color(c);
+  EXPECT_EQ(service_error(sun).rfind("settings.sun.illuminance: sun.color x sun.illuminance", 0),
+            0u)
+      << service_error(sun);
+}
+
 }  // namespace
 }  // namespace luxel::service
