@@ -6,6 +6,7 @@ Run inside Blender (Debian 12: blender 3.4.1):
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
       --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
       [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
+      [--diffuse-weight nv|vh-average]
 
 What it does (README.md next to this file explains the conversions):
 
@@ -19,7 +20,9 @@ What it does (README.md next to this file explains the conversions):
      node tree whose strength is glTF's falloff over Cycles' own (below);
   3. makes the materials match Luxel's BSDF (default `--materials matched`):
      Lambert when no material of the scene needs the GGX layer (Luxel then
-     compiles it out), else Lambert x (1 - F) + GGX with Schlick F, from the
+     compiles it out), else glTF 2.0 Appendix B's mix by metallic of a metal
+     (Multiscatter GGX, Schlick F(base)) and a dielectric (Lambert x (1 - F)
+     + Multiscatter GGX, Schlick F(0.04)), F at the shading normal, from the
      importer's base colour, metallic and roughness sockets (textures kept),
      plus an Emission shader (emission colour x strength, zeroed on back faces
      unless the glTF material is doubleSided: Cycles emits from both sides,
