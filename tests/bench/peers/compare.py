@@ -226,9 +226,10 @@ def split_by_geometry(st, mask, matched, ref, bhi, bvar, lab):
     out = {"by_material": {}, "crease": {}}
     for key, m in (("interior", mask), ("matched", matched)):
         rows = []
+        dark = 1e-3 * float((ref.rgb[m] @ LUM).mean())   # unlit receivers: ratios of noise
         for k in np.unique(mat_id[m]):
             mm = m & (mat_id == k)
-            if mm.sum() < 4:
+            if mm.sum() < 4 or float((ref.rgb[mm] @ LUM).mean()) < dark:
                 continue
             g = agreement(ref.rgb[mm], bhi[mm], ref.var[mm], bvar[mm], lab[mm], lab)
             g["material"] = names[k] if 0 <= k < len(names) else "(none)"
