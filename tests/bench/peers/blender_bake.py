@@ -6,6 +6,7 @@ Run inside Blender (Debian 12: blender 3.4.1):
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
       --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
       [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
+      [--diffuse-weight nv|vh-average]
 
 What it does (README.md next to this file explains the conversions):
 
@@ -19,7 +20,9 @@ What it does (README.md next to this file explains the conversions):
      node tree whose strength is glTF's falloff over Cycles' own (below);
   3. makes the materials match Luxel's BSDF (default `--materials matched`):
      Lambert when no material of the scene needs the GGX layer (Luxel then
-     compiles it out), else Lambert x (1 - F) + GGX with Schlick F, from the
+     compiles it out), else glTF 2.0 Appendix B's mix by metallic of a metal
+     (Multiscatter GGX, Schlick F(base)) and a dielectric (Lambert x (1 - F)
+     + Multiscatter GGX, Schlick F(0.04)), F at the shading normal, from the
      importer's base colour, metallic and roughness sockets (textures kept),
      plus an Emission shader (emission colour x strength, zeroed on back faces
      unless the glTF material is doubleSided: Cycles emits from both sides,
@@ -78,6 +81,9 @@ def parse_args():
     ap.add_argument("--directional-radius", type=float, default=0.0,
                     help="angular radius of the glTF's directional lights, degrees (Luxel's option)")
     ap.add_argument("--materials", choices=["matched", "principled"], default="matched")
+    ap.add_argument("--diffuse-weight", choices=["nv", "vh-average"], default="nv",
+                    help="matched graph: the dielectric's diffuse weight 1 - F(0.04, n.wo) (default) "
+                         "or 1 - (Appendix B's F(V.H) averaged over wi)")
     ap.add_argument("--uv-map", default=None, help="UV map name (default: the second one)")
     ap.add_argument("--warmup", action="store_true",
                     help="one 1-spp bake before the runs, timed apart (first-bake costs)")
@@ -110,18 +116,55 @@ def is_rough_dielectric(bsdf):
     return not (m.is_linked or r.is_linked) and m.default_value <= 0.0 and r.default_value >= 1.0
 
 
-def luxel_bsdf(nt, bsdf, specular):
-    """Cycles nodes for Luxel's BSDF (kernels/shading/bsdf.h) of the glTF
-    material behind the importer's Principled node; returns the shader socket.
+def schlick(nt, f0, c5):
+    """Schlick F = f0 + (1 - f0) c5 = mix(f0, 1, c5) as a colour socket;
+    f0 = (socket, value)"""
+    fres = nt.nodes.new("ShaderNodeMixRGB")
+    fres.blend_type = "MIX"
+    nt.links.new(c5, fres.inputs["Fac"])
+    feed(nt, f0, fres.inputs["Color1"])
+    fres.inputs["Color2"].default_value = (1.0, 1.0, 1.0, 1.0)
+    return fres.outputs["Color"]
+
+
+def multiscatter_ggx(nt, colour, rough):
+    """Cycles' Glossy BSDF with the Multiscatter GGX distribution (Heitz et
+    al. 2016, "Multiple-Scattering Microfacet BSDFs with the Smith Model": a
+    random walk on the microsurface, energy conserving for a white colour).
+    Its single-scattering term uses the height-correlated Smith G2 as Luxel
+    does; alpha = roughness^2 as Luxel. The colour weights the first
+    scattering and multiplies again at every further one (order k: colour^k),
+    where Kulla & Conty 2017 (Luxel) use F_ms from the Schlick average F_avg."""
+    glossy = nt.nodes.new("ShaderNodeBsdfGlossy")
+    glossy.distribution = "MULTI_GGX"
+    nt.links.new(colour, glossy.inputs["Color"])
+    feed(nt, rough, glossy.inputs["Roughness"])
+    return glossy.outputs["BSDF"]
+
+
+def luxel_bsdf(nt, bsdf, specular, diffuse_weight):
+    """Cycles nodes for Luxel's BSDF (kernels/shading/bsdf.h: glTF 2.0
+    Appendix B.3 plus Kulla & Conty 2017 multiple-scattering compensation) of
+    the glTF material behind the importer's Principled node; returns the
+    shader socket.
 
     specular False (no material of the scene needs the GGX layer, so Luxel
     compiles it out): Lambert of the base colour.
-    specular True: Lambert of base (1 - metallic) (1 - F(n.wo)) + GGX glossy of
-    roughness r (Cycles: alpha = r^2, as Luxel) and colour F(n.wo), Schlick F
-    with f0 = mix(0.04, base, metallic). Differences that remain (README):
-    Luxel takes F at the microfacet normal (wo.h), this graph at the shading
-    normal; Cycles 3.4's GGX uses separable Smith masking, Luxel the
-    height-correlated form."""
+    specular True, Appendix B's mix(dielectric, metal, metallic) as a Mix
+    Shader by metallic, of
+      metal      = Multiscatter GGX of colour F(base, n.wo),
+      dielectric = Lambert of base (1 - Fd) + Multiscatter GGX of colour
+                   F(0.04, n.wo),
+    F Schlick. A node graph cannot see the microfacet normal, so F is taken
+    at the shading normal (n.wo) where Appendix B takes it at V.H, for the
+    glossy colour and for the diffuse weight alike. diffuse_weight "nv":
+    Fd = F(0.04, n.wo), the same F as the glossy layer, so the dielectric's
+    two layers sum to at most 1 like Luxel's (the closest directional
+    albedo; README.md: where the two differ). "vh-average": Fd = the
+    cosine-weighted mean over wi of Appendix B's F(0.04, V.H) for this wo,
+    0.04 + 0.96 x 0.0285 (1 - n.wo)^2.6 (a fit, within 1e-3 of the
+    quadrature), i.e. Appendix B's diffuse albedo, beside a glossy layer
+    that is brighter than Appendix B's towards grazing."""
     base = socket_or_value(bsdf.inputs["Base Color"])
     diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
     diffuse.inputs["Roughness"].default_value = 0.0  # Oren-Nayar sigma 0 = Lambert
@@ -130,12 +173,6 @@ def luxel_bsdf(nt, bsdf, specular):
         return diffuse.outputs["BSDF"]
     metal = socket_or_value(bsdf.inputs["Metallic"])
     rough = socket_or_value(bsdf.inputs["Roughness"])
-    # f0 = mix(0.04, base, metallic)
-    f0 = nt.nodes.new("ShaderNodeMixRGB")
-    f0.blend_type = "MIX"
-    feed(nt, metal, f0.inputs["Fac"])
-    f0.inputs["Color1"].default_value = (0.04, 0.04, 0.04, 1.0)
-    feed(nt, base, f0.inputs["Color2"])
     # c5 = (1 - clamp(n.wo))^5; Incoming points from the surface towards the
     # viewer, Normal is flipped to the viewer's side on back faces (as Luxel's frame)
     geo = nt.nodes.new("ShaderNodeNewGeometry")
@@ -152,38 +189,51 @@ def luxel_bsdf(nt, bsdf, specular):
     c5.operation = "POWER"
     nt.links.new(one_minus.outputs["Value"], c5.inputs[0])
     c5.inputs[1].default_value = 5.0
-    # F = f0 + (1 - f0) c5 = mix(f0, 1, c5)
-    fres = nt.nodes.new("ShaderNodeMixRGB")
-    fres.blend_type = "MIX"
-    nt.links.new(c5.outputs["Value"], fres.inputs["Fac"])
-    nt.links.new(f0.outputs["Color"], fres.inputs["Color1"])
-    fres.inputs["Color2"].default_value = (1.0, 1.0, 1.0, 1.0)
-    # diffuse colour = base (1 - metallic) (1 - F)
+    f_metal = schlick(nt, base, c5.outputs["Value"])
+    f_diel = schlick(nt, (None, (0.04, 0.04, 0.04, 1.0)), c5.outputs["Value"])
+    # diffuse colour = base (1 - Fd)
+    if diffuse_weight == "nv":
+        fd = f_diel
+    else:
+        p = nt.nodes.new("ShaderNodeMath")
+        p.operation = "POWER"
+        nt.links.new(one_minus.outputs["Value"], p.inputs[0])
+        p.inputs[1].default_value = 2.6
+        fdv = nt.nodes.new("ShaderNodeMath")   # 0.04 + 0.96 x 0.0285 x (1 - mu)^2.6
+        fdv.operation = "MULTIPLY_ADD"
+        nt.links.new(p.outputs["Value"], fdv.inputs[0])
+        fdv.inputs[1].default_value = 0.96 * 0.0285
+        fdv.inputs[2].default_value = 0.04
+        fd = fdv.outputs["Value"]
     inv = nt.nodes.new("ShaderNodeInvert")
     inv.inputs["Fac"].default_value = 1.0
-    nt.links.new(fres.outputs["Color"], inv.inputs["Color"])
-    dmetal = nt.nodes.new("ShaderNodeMixRGB")   # mix(base, black, metallic)
-    dmetal.blend_type = "MIX"
-    feed(nt, metal, dmetal.inputs["Fac"])
-    feed(nt, base, dmetal.inputs["Color1"])
-    dmetal.inputs["Color2"].default_value = (0.0, 0.0, 0.0, 1.0)
+    if diffuse_weight == "nv":
+        nt.links.new(fd, inv.inputs["Color"])
+    else:
+        gray = nt.nodes.new("ShaderNodeCombineColor")
+        for ch in ("Red", "Green", "Blue"):
+            nt.links.new(fd, gray.inputs[ch])
+        nt.links.new(gray.outputs["Color"], inv.inputs["Color"])
     dcol = nt.nodes.new("ShaderNodeMixRGB")
     dcol.blend_type = "MULTIPLY"
     dcol.inputs["Fac"].default_value = 1.0
-    nt.links.new(dmetal.outputs["Color"], dcol.inputs["Color1"])
+    feed(nt, base, dcol.inputs["Color1"])
     nt.links.new(inv.outputs["Color"], dcol.inputs["Color2"])
     nt.links.new(dcol.outputs["Color"], diffuse.inputs["Color"])
-    glossy = nt.nodes.new("ShaderNodeBsdfGlossy")
-    glossy.distribution = "GGX"          # single scattering, as Luxel's
-    nt.links.new(fres.outputs["Color"], glossy.inputs["Color"])
-    feed(nt, rough, glossy.inputs["Roughness"])
-    add = nt.nodes.new("ShaderNodeAddShader")
-    nt.links.new(diffuse.outputs["BSDF"], add.inputs[0])
-    nt.links.new(glossy.outputs["BSDF"], add.inputs[1])
-    return add.outputs["Shader"]
+    dielectric = nt.nodes.new("ShaderNodeAddShader")
+    nt.links.new(diffuse.outputs["BSDF"], dielectric.inputs[0])
+    nt.links.new(multiscatter_ggx(nt, f_diel, rough), dielectric.inputs[1])
+    # mix(dielectric, metal, metallic): two glossy closures, not one of the
+    # mixed colour, because the multiple scattering of each goes as its own
+    # colour^k (Luxel mixes the two compensation lobes the same way)
+    mix = nt.nodes.new("ShaderNodeMixShader")
+    feed(nt, metal, mix.inputs["Fac"])
+    nt.links.new(dielectric.outputs["Shader"], mix.inputs[1])
+    nt.links.new(multiscatter_ggx(nt, f_metal, rough), mix.inputs[2])
+    return mix.outputs["Shader"]
 
 
-def convert_material(mat, mode, specular):
+def convert_material(mat, mode, specular, diffuse_weight="nv"):
     """Material as Luxel shades it (mode 'matched') or the importer's
     Principled BSDF ('principled'), with one-sided emission, and a white
     Lambert receiver at the baked point."""
@@ -206,7 +256,7 @@ def convert_material(mat, mode, specular):
     if emis.is_linked:
         raise SystemExit(f"material {mat.name}: emissive textures are not supported here")
     if mode == "matched":
-        shader = luxel_bsdf(nt, bsdf, specular)
+        shader = luxel_bsdf(nt, bsdf, specular, diffuse_weight)
     else:
         # the importer's Principled BSDF without its emission (added below)
         bsdf.inputs["Emission Strength"].default_value = 0.0
@@ -438,7 +488,7 @@ def main():
     specular = not all(is_rough_dielectric(next(n for n in m.node_tree.nodes
                                                   if n.type == "BSDF_PRINCIPLED")) for m in used)
     for m in used:
-        materials[m.name] = convert_material(m, a.materials, specular)
+        materials[m.name] = convert_material(m, a.materials, specular, a.diffuse_weight)
         tex = m.node_tree.nodes.new("ShaderNodeTexImage")
         tex.image = img
         for n in m.node_tree.nodes:
@@ -518,7 +568,7 @@ def main():
     info = {
         "blender_version": bpy.app.version_string,
         "scene": a.scene, "resolution": a.resolution, "bounces": a.bounces,
-        "sky": sky, "materials": a.materials, "uv_map": uv_name,
+        "sky": sky, "materials": a.materials, "diffuse_weight": a.diffuse_weight, "uv_map": uv_name,
         "objects": len(meshes), "objects_joined": n_objects, "threads": scene.render.threads, "triangles": triangles,
         "sampling_pattern": c.sampling_pattern,
         "startup_s": (T_SCRIPT - a.t0) if a.t0 else None,

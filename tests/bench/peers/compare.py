@@ -20,6 +20,12 @@ Conventions (README.md next to this file):
     sub-texel jitter does not average the texel's area like Luxel's box
     filter does (shown by the 256^2 bakes in hires/, box-filtered to the
     comparison resolution);
+  * the agreement is also split by the receiver's glTF material and into
+    texels near a crease (world point within 5 % of the scene's extent of a
+    turned surface rising above it: a wall meeting the ground, a box side)
+    and the rest, with the ratio of the two ratios (texel_geometry.py
+    rasterises TEXCOORD_1 for both; scenes of up to ~4e7 texel x triangle
+    pairs get the crease split);
   * errors are over RGB (every channel of every compared texel):
         RMSE   = sqrt(mean((x - ref)^2))                    (W/m^2)
         relMSE = mean((x - ref)^2 / (ref^2 + 1e-2))
@@ -48,6 +54,8 @@ import os
 import sys
 
 import numpy as np
+
+import texel_geometry
 
 try:
     import OpenImageIO as oiio
@@ -192,9 +200,56 @@ def agreement(R, B, vR, vB, lab_mask, lab):
     return {"texels": int(len(R)), "mean_E_luxel": R.mean(0).tolist(), "mean_E_blender": B.mean(0).tolist(),
             "ratio_rgb": (B.sum(0) / R.sum(0)).tolist(),
             "ratio_se_rgb": (np.sqrt(vR.sum(0) + vB.sum(0)) / R.sum(0)).tolist(),
+            "ratio_lum": float((B @ LUM).sum() / max((R @ LUM).sum(), 1e-30)),
+            "ratio_lum_se": (math.sqrt((vR @ LUM ** 2).sum() + (vB @ LUM ** 2).sum())
+                             / max((R @ LUM).sum(), 1e-30)),
+            "noise_rms_rel": math.sqrt(noise) / float(R.mean()),
             "mse_over_noise": float((d * d).mean() / noise) if noise > 0 else None,
             "diff_rms_rel": math.sqrt(max((d * d).mean() - noise, 0.0)) / float(R.mean()),
             "charts": charts}
+
+
+def ratio_of_ratios(a, b):
+    """(a's Cycles / Luxel) / (b's), luminance, with its 1-sigma from noise"""
+    ra, rb = a["ratio_lum"], b["ratio_lum"]
+    r = ra / rb
+    return {"ratio": r, "se": r * math.hypot(a["ratio_lum_se"] / ra, b["ratio_lum_se"] / rb)}
+
+
+def split_by_geometry(st, mask, matched, ref, bhi, bvar, lab):
+    """agreement per receiver material and near creases vs the rest
+    (texel_geometry.py), over interior and matched texels"""
+    scene = st.get("scene")
+    if not scene or not os.path.isfile(scene):
+        return {}
+    mat_id, pos, nrm, names, tris, norms = texel_geometry.rasterise(scene, st["resolution"])
+    out = {"by_material": {}, "crease": {}}
+    for key, m in (("interior", mask), ("matched", matched)):
+        rows = []
+        dark = 1e-3 * float((ref.rgb[m] @ LUM).mean())   # unlit receivers: ratios of noise
+        for k in np.unique(mat_id[m]):
+            mm = m & (mat_id == k)
+            if mm.sum() < 4 or float((ref.rgb[mm] @ LUM).mean()) < dark:
+                continue
+            g = agreement(ref.rgb[mm], bhi[mm], ref.var[mm], bvar[mm], lab[mm], lab)
+            g["material"] = names[k] if 0 <= k < len(names) else "(none)"
+            g.pop("charts")
+            rows.append(g)
+        out["by_material"][key] = sorted(rows, key=lambda g: -g["texels"])
+        near, d0 = texel_geometry.near_crease(pos, nrm, m, tris, norms)
+        if near is None or not near.any() or near.all():
+            continue
+        sel = np.zeros_like(m)
+        sel[m] = near
+        parts = {}
+        for part, mm in (("near", sel), ("rest", m & ~sel)):
+            g = agreement(ref.rgb[mm], bhi[mm], ref.var[mm], bvar[mm], lab[mm], lab)
+            g.pop("charts")
+            parts[part] = g
+        parts["distance"] = d0
+        parts["near_over_rest"] = ratio_of_ratios(parts["near"], parts["rest"])
+        out["crease"][key] = parts
+    return out
 
 
 def hires_check(sdir, res, ref_rgb, bhi, flagged):
@@ -253,6 +308,7 @@ def analyse(sdir):
     for key, m in (("interior", mask), ("matched", matched)):
         agree[key] = agreement(ref.rgb[m], bhi[m], ref.var[m], bvar[m], lab[m], lab)
     agree["hires"] = hires_check(sdir, st["resolution"], ref.rgb, bhi, flagged)
+    agree.update(split_by_geometry(st, mask, matched, ref, bhi, bvar, lab))
 
     # ---- ladders ----------------------------------------------------------
     lux = []
@@ -446,6 +502,29 @@ def report(res):
                                 [[c["chart"], c["texels"], c["rows"], c["cols"], c["luxel_E"],
                                   c["blender_E"], f"{c['ratio']:.4f} ± {c['ratio_se']:.4f}"]
                                  for c in charts]))
+        for sel, rows in a.get("by_material", {}).items():
+            if len(rows) < 2:
+                continue
+            out.append(f"\nPer receiver material ({sel} texels, luminance; RMS difference beyond "
+                       "noise and the RMS noise of the difference, both relative to Luxel's mean):\n")
+            out.append(md_table(["material", "texels", "E Luxel", "E Cycles", "Cycles / Luxel ± 1σ",
+                                 "MSD / noise var.", "RMS diff. beyond noise", "RMS noise"],
+                                [[g["material"], g["texels"], float(np.array(g["mean_E_luxel"]) @ LUM),
+                                  float(np.array(g["mean_E_blender"]) @ LUM),
+                                  f"{g['ratio_lum']:.4f} ± {g['ratio_lum_se']:.4f}",
+                                  f"{g['mse_over_noise']:.2f}", f"{100 * g['diff_rms_rel']:.2f} %",
+                                  f"{100 * g['noise_rms_rel']:.2f} %"] for g in rows[:24]]))
+        for sel, c in a.get("crease", {}).items():
+            out.append(f"\nNear creases ({sel} texels whose world point is within {fmt(c['distance'])} "
+                       "(5 % of the scene's extent) of a turned surface rising above it: walls meeting "
+                       "the ground, box sides) against the rest:\n")
+            out.append(md_table(["texels", "count", "Cycles / Luxel ± 1σ", "MSD / noise var.",
+                                 "RMS diff. beyond noise"],
+                                [[part, c[part]["texels"], f"{c[part]['ratio_lum']:.4f} ± "
+                                  f"{c[part]['ratio_lum_se']:.4f}", f"{c[part]['mse_over_noise']:.2f}",
+                                  f"{100 * c[part]['diff_rms_rel']:.2f} %"] for part in ("near", "rest")]
+                                + [["near / rest", "", f"{c['near_over_rest']['ratio']:.4f} ± "
+                                    f"{c['near_over_rest']['se']:.4f}", "", ""]]))
         h = a.get("hires")
         if h:
             out.append(f"\nFlagged texels ({h['texels']}) against both renderers baked at "
