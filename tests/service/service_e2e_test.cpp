@@ -500,6 +500,12 @@ TEST(ServiceUv, GeneratedUvsAndPagesAreArtifacts) {
     EXPECT_EQ(manifest.value("pages", 1), c.pages);
     EXPECT_EQ(manifest["uv_layout"]["pages"], c.pages);
     EXPECT_EQ(manifest["uv_layout"]["overlapping_texels"], 0);
+    // Artifacts name the scene as uploaded, never by its path on the server.
+    EXPECT_EQ(manifest["scene_name"], "quads.glb") << manifest.dump();
+    for (const std::string& artifact : names) {
+      ASSERT_TRUE(download(daemon, bake.bake_id(), artifact, &bytes, &sha, &total).ok());
+      EXPECT_EQ(bytes.find(daemon.data_dir()), std::string::npos) << artifact;
+    }
   }
   EXPECT_EQ(daemon.stop(SIGTERM), 0) << daemon.log();
 }

@@ -167,11 +167,15 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     files.push_back(f);
     paths.files.push_back(file);
   };
+  // The name the user knows the scene by: the daemon passes the upload's
+  // name, so no server path ends up in artifacts (and identical bakes of
+  // one upload are identical files).
+  const std::string shown_name = scene_name.empty() ? scene.source_name : scene_name;
   const std::map<std::string, std::string> meta = {
       {"luxel/encoding", "irradiance"},
       {"luxel/units", "W/m^2"},
       {"luxel/alpha", "fraction of the texel covered by geometry"},
-      {"luxel/scene", scene.source_name}};
+      {"luxel/scene", shown_name}};
   for (int page = 0; page < pages; ++page) {
     const std::string page_note = pages == 1 ? "" : strprintf(" (page %d)", page);
     output::Image lightmap = to_image(result.width, page_h, 4, rows(result.irradiance, 4, page));
@@ -220,7 +224,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), img, names,
                                               {{"luxel/encoding", e.name},
                                                {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
-                                               {"luxel/scene", scene.source_name}}));
+                                               {"luxel/scene", shown_name}}));
       paths.encodings.push_back(at(file.c_str()));
       add_file(e.name, file, "exr",
                strprintf("float32, %d coefficients x RGB of the %s basis (see encodings in this "
@@ -235,11 +239,11 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   LUXEL_RETURN_IF_ERROR(write_file_atomic(paths.series_csv, csv.data(), csv.size()));
 
   output::Manifest m = make_manifest(scene, settings, result, scene_sha256);
+  m.scene_name = shown_name;
   add_file("error_series", "error_series.csv", "csv", "error estimate against time", -1);
   m.files = std::move(files);
   if (result.uv_layout && !source_path.empty()) {
-    const std::string glb =
-        lightmapped_glb_name(scene_name.empty() ? scene.source_name : scene_name);
+    const std::string glb = lightmapped_glb_name(shown_name);
     auto written = write_lightmapped_glb(source_path, scene, result, at(glb.c_str()));
     if (!written) return written.status();
     for (const std::string& w : written.value().warnings) m.import_warnings.push_back(w);
