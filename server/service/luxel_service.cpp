@@ -1,5 +1,6 @@
 #include "service/luxel_service.h"
 
+#include <google/protobuf/util/message_differencer.h>
 #include <openssl/crypto.h>
 
 #include <algorithm>
@@ -170,9 +171,16 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
 
   std::lock_guard<std::mutex> lock(submit_mu_);
   if (auto existing = bakes_.find_by_key(req->idempotency_key())) {
+    // A retry is the same request; the same key with another scene or other
+    // settings is a client bug, and returning the first job would hide it.
     if (existing->scene_id() != req->scene_id())
-      return invalid(strprintf("idempotency_key '%s' was used for bake %s of another scene",
-                               req->idempotency_key().c_str(), existing->bake_id().c_str()));
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              strprintf("idempotency_key '%s' was used for bake %s of another scene",
+                        req->idempotency_key().c_str(), existing->bake_id().c_str())};
+    if (!google::protobuf::util::MessageDifferencer::Equals(existing->settings(), req->settings()))
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              strprintf("idempotency_key '%s' was used for bake %s with other settings",
+                        req->idempotency_key().c_str(), existing->bake_id().c_str())};
     *response = *existing;
     log_event("bake_submit_retried",
               {{"bake", existing->bake_id()}, {"key", req->idempotency_key()}});

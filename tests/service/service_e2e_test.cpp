@@ -396,6 +396,16 @@ TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {
   int with_key = 0;
   for (const auto& x : list.bakes()) with_key += x.idempotency_key() == submit.idempotency_key();
   EXPECT_EQ(with_key, 1);
+  // The same key with other settings is not a retry: FAILED_PRECONDITION,
+  // not the first job.
+  v1::SubmitBakeRequest other = submit;
+  other.mutable_settings()->set_samples_per_texel(17);
+  v1::BakeInfo c;
+  ctx = daemon_->context();
+  const grpc::Status st = stub->SubmitBake(ctx.get(), other, &c);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << st.error_message();
+  EXPECT_NE(st.error_message().find("with other settings"), std::string::npos);
+  EXPECT_TRUE(c.bake_id().empty());
   auto done = wait_for_bake(*daemon_, a.bake_id(), is_finished);
   EXPECT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
 
