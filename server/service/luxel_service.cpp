@@ -191,7 +191,11 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
     return {grpc::StatusCode::NOT_FOUND,
             strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
   if (const std::string& ref = req->settings().reference_bake_id(); !ref.empty()) {
-    if (auto st = check_id(ref, "settings.reference_bake_id", 32); !st.ok()) return st;
+    // One rule for ids inside the settings: malformed or unknown, the
+    // settings are invalid (INVALID_ARGUMENT naming the field); NOT_FOUND is
+    // for the request's own ids (scene_id, bake_id).
+    if (auto st = check_id(ref, "settings.reference_bake_id", 32); !st.ok())
+      return invalid(st.error_message());
     auto ref_info = bakes_.get(ref);
     if (!ref_info)
       return invalid(strprintf("settings.reference_bake_id: no bake '%s'", ref.c_str()));

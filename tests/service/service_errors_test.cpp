@@ -257,6 +257,8 @@ TEST_F(ServiceErrors, InvalidSettingsNameTheField) {
        }},
       {"settings.reference_bake_id",
        [](v1::BakeSettings& s) { s.set_reference_bake_id(std::string(32, 'a')); }},
+      // Malformed, by the same rule as unknown (was NOT_FOUND).
+      {"settings.reference_bake_id", [](v1::BakeSettings& s) { s.set_reference_bake_id("zz"); }},
       {"settings.target_metric",
        [](v1::BakeSettings& s) { s.set_target_metric(v1::TARGET_METRIC_RMSE); }},
       {"settings.solver",
