@@ -123,7 +123,11 @@ void BakeRunner::worker_loop() {
 }
 
 void BakeRunner::finish_failed(const std::string& bake_id, const Status& why) {
-  (void)bakes_.update(
+  log_event("bake_failed", {{"bake", bake_id}, {"error", why.to_string()}});
+  // Results half written (a full disk, say) go first: nothing reads them, and
+  // the space they free lets the FAILED record below reach the disk.
+  remove_tree(bakes_.bake_dir(bake_id) + "/results.partial");
+  const Status recorded = bakes_.update(
       bake_id,
       [&](v1::BakeInfo& b) {
         b.set_state(v1::BAKE_STATE_FAILED);
@@ -131,7 +135,13 @@ void BakeRunner::finish_failed(const std::string& bake_id, const Status& why) {
         b.set_finished_at(unix_now());
       },
       true);
-  log_event("bake_failed", {{"bake", bake_id}, {"error", why.to_string()}});
+  // Clients already see FAILED; if the record could not say so durably, the
+  // next start finds it RUNNING and resumes it (with a note), on purpose.
+  if (!recorded.is_ok())
+    log_event("record_write_failed", {{"bake", bake_id},
+                                      {"state", "BAKE_STATE_FAILED"},
+                                      {"error", recorded.to_string()},
+                                      {"next_start", "resumes the bake from its checkpoint"}});
 }
 
 void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Context>& ctx,

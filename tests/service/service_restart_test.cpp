@@ -4,7 +4,10 @@
 // and leaves the bake INTERRUPTED, the next start finishes it; cancel of a
 // running and a queued bake; priorities; DeleteScene while a bake uses it.
 #include <gtest/gtest.h>
+#include <sys/mount.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -269,6 +272,52 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   ctx = daemon.context();
   EXPECT_EQ(stub->GetScene(ctx.get(), get, &info).error_code(), grpc::StatusCode::NOT_FOUND);
   EXPECT_FALSE(fs::exists(daemon.data_dir() + "/scenes/" + scene_id));
+}
+
+// Disk full while the results are written: the bake must end FAILED on
+// disk, not only in memory (the record stayed RUNNING and the bake resumed
+// after a restart), with the cause logged and results.partial removed. The
+// data dir is a 3 MiB tmpfs (needs the right to mount; skipped without it).
+TEST(ServiceRestart, DiskFullWhileWritingResultsFailsDurably) {
+  TempDir dir;
+  const std::string small = dir.path() + "/small";
+  fs::create_directories(small);
+  if (mount("tmpfs", small.c_str(), "tmpfs", 0, "size=3m") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (" << std::strerror(errno) << ")";
+  struct Unmount {
+    std::string path;
+    ~Unmount() { umount2(path.c_str(), MNT_DETACH); }
+  } unmount{small};
+  const std::string data = small + "/data";
+  std::string bake_id;
+  {
+    Daemon d(data, {"--checkpoint-interval", "0", "--max-resolution", "2048"});
+    const std::string scene = upload_cornell(d);
+    // A 2048^2 lightmap's EXRs (~40 MiB) cannot fit the 3 MiB disk.
+    v1::BakeSettings s;
+    s.set_resolution(2048);
+    s.set_samples_per_texel(1);
+    s.set_max_bounces(0);
+    s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
+    bake_id = submit(d, scene, s).bake_id();
+    const v1::BakeInfo done = wait_for_bake(d, bake_id, is_finished, 120s);
+    ASSERT_EQ(done.state(), v1::BAKE_STATE_FAILED) << done.error_message();
+    const std::string record = record_on_disk(d, bake_id);
+    EXPECT_NE(record.find("BAKE_STATE_FAILED"), std::string::npos) << record;
+    EXPECT_FALSE(fs::exists(data + "/bakes/" + bake_id + "/results.partial"));
+    EXPECT_NE(d.log().find("event=bake_failed bake=" + bake_id), std::string::npos) << d.log();
+    EXPECT_EQ(d.stop(SIGTERM), 0) << d.log();
+  }
+  // After a restart it stays FAILED: not resumed, not re-run.
+  Daemon again(data, {"--checkpoint-interval", "0", "--max-resolution", "2048"});
+  v1::GetBakeRequest get;
+  get.set_bake_id(bake_id);
+  v1::BakeInfo info;
+  auto ctx = again.context();
+  ASSERT_TRUE(again.stub()->GetBake(ctx.get(), get, &info).ok());
+  EXPECT_EQ(info.state(), v1::BAKE_STATE_FAILED);
+  EXPECT_EQ(info.resumed(), 0u);
+  EXPECT_EQ(again.stop(SIGTERM), 0) << again.log();
 }
 
 }  // namespace
