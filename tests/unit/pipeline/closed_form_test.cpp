@@ -120,6 +120,9 @@ class ClosedFormTest : public ::testing::Test {
     return s;
   }
 
+  // The point-light closed form; x_sign -1 for a mirrored plane.
+  void check_point_light_over_plane(scene::Scene s, double x_sign);
+
   static device::Context* ctx_;
 };
 device::Context* ClosedFormTest::ctx_ = nullptr;
@@ -143,9 +146,10 @@ double texel_mean(const atlas::SampleInfo& info, uint32_t texel,
   return sum / n;
 }
 
-TEST_F(ClosedFormTest, PointLightOverPlane) {
-  // E = I cos(theta) / r^2 = I h / r^3, direct light only.
-  scene::Scene s = testing::open_plane();
+// E = I cos(theta) / r^2 = I h / r^3, direct light only, over the open plane
+// (atlas (u, v) -> world (x, z) = (x_sign (-1 + 2 v), -1 + 2 u); a mirrored
+// instance flips x).
+void ClosedFormTest::check_point_light_over_plane(scene::Scene s, double x_sign) {
   scene::Light light;
   light.type = scene::LightType::kPoint;
   light.intensity = 3.0f;
@@ -161,7 +165,8 @@ TEST_F(ClosedFormTest, PointLightOverPlane) {
   auto expected = [&](double scale) {
     return [&, scale](uint32_t t, int) {
       return scale * texel_mean(info.value(), t, [&](double u, double v) {
-               const double x = -1 + 2 * v - light.position.x, z = -1 + 2 * u - light.position.z;
+               const double x = x_sign * (-1 + 2 * v) - light.position.x;
+               const double z = -1 + 2 * u - light.position.z;
                const double h = light.position.y;
                const double r2 = x * x + z * z + h * h;
                return light.intensity * h / (r2 * std::sqrt(r2));
@@ -170,6 +175,10 @@ TEST_F(ClosedFormTest, PointLightOverPlane) {
   };
   EXPECT_TRUE(check(r, expected(1.0)).ok());
   EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
+TEST_F(ClosedFormTest, PointLightOverPlane) {
+  check_point_light_over_plane(testing::open_plane(), 1.0);
 }
 
 TEST_F(ClosedFormTest, UniformSkyOverOpenPlane) {
@@ -237,31 +246,7 @@ TEST_F(ClosedFormTest, UniformSkyOverMirroredPlane) {
 }
 
 TEST_F(ClosedFormTest, PointLightOverMirroredPlane) {
-  scene::Scene s = mirrored_open_plane();
-  scene::Light light;
-  light.type = scene::LightType::kPoint;
-  light.intensity = 3.0f;
-  light.position = {0.1f, 0.75f, -0.2f};
-  s.lights.push_back(light);
-  auto st = settings(32, 64, 0);
-  auto r = bake(s, st);
-  ASSERT_GT(r.covered_texels, 1000u);
-  auto atlas = atlas::build_atlas(s, st.atlas);
-  ASSERT_TRUE(atlas);
-  auto info = atlas::build_sample_info(s, atlas.value());
-  ASSERT_TRUE(info);
-  auto expected = [&](double scale) {
-    return [&, scale](uint32_t t, int) {
-      return scale * texel_mean(info.value(), t, [&](double u, double v) {
-               const double x = 1 - 2 * v - light.position.x, z = -1 + 2 * u - light.position.z;
-               const double h = light.position.y;
-               const double r2 = x * x + z * z + h * h;
-               return light.intensity * h / (r2 * std::sqrt(r2));
-             });
-    };
-  };
-  EXPECT_TRUE(check(r, expected(1.0)).ok());
-  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  check_point_light_over_plane(mirrored_open_plane(), -1.0);
 }
 
 TEST_F(ClosedFormTest, EquirectSkyOverOpenPlane) {
