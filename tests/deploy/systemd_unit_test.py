@@ -66,8 +66,9 @@ def hardening_problems(text):
     families = " ".join(values(s, "Service", "RestrictAddressFamilies")).split()
     if not families or set(families) - {"AF_UNIX", "AF_INET", "AF_INET6"}:
         problems.append(f"RestrictAddressFamilies too wide or missing: {families}")
-    if values(s, "Service", "MemoryDenyWriteExecute"):
-        problems.append("MemoryDenyWriteExecute set: PoCL JIT-compiles kernels")
+    if values(s, "Service", "MemoryDenyWriteExecute") != ["yes"]:
+        problems.append("MemoryDenyWriteExecute=yes expected (PoCL's JIT works under it: "
+                        "tests/deploy/pocl_mdwe_test.py)")
     stop = values(s, "Service", "TimeoutStopSec")
     if not stop or not 30 <= int(stop[-1].rstrip("s")) <= 600:
         problems.append(f"TimeoutStopSec must leave time for a checkpoint: {stop}")
@@ -109,7 +110,7 @@ class SystemdUnitTest(unittest.TestCase):
         for old, new in [("ProtectSystem=strict", "ProtectSystem=full"),
                          ("CapabilityBoundingSet=\n", "CapabilityBoundingSet=CAP_NET_ADMIN\n"),
                          ("--token-file %d/token", "--token-file /etc/luxel/token"),
-                         ("SystemCallErrorNumber", "MemoryDenyWriteExecute=yes\nSystemCallErrorNumber")]:
+                         ("MemoryDenyWriteExecute=yes", "MemoryDenyWriteExecute=no")]:
             self.assertIn(old, self.text)
             self.assertNotEqual(hardening_problems(self.text.replace(old, new)), [], new)
 
@@ -161,6 +162,8 @@ class SystemdUnitTest(unittest.TestCase):
         unit = os.path.join(prefix, "lib", "systemd", "system", "luxeld.service")
         with open(unit) as f:
             self.assertEqual(f.read(), self.text)
+        # deploy/container/Containerfile copies the guide from here.
+        self.assertTrue(os.path.isfile(os.path.join(prefix, "share", "doc", "luxel", "operations.md")))
         out = subprocess.run([installed, "--help"], capture_output=True, text=True, timeout=30)
         self.assertIn("--data-dir", out.stdout)
 
