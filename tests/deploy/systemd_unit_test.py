@@ -68,7 +68,7 @@ def hardening_problems(text):
         problems.append(f"RestrictAddressFamilies too wide or missing: {families}")
     if values(s, "Service", "MemoryDenyWriteExecute") != ["yes"]:
         problems.append("MemoryDenyWriteExecute=yes expected (PoCL's JIT works under it: "
-                        "tests/deploy/pocl_mdwe_test.py)")
+                        "tests/deploy/sandbox_test.py)")
     stop = values(s, "Service", "TimeoutStopSec")
     if not stop or not 30 <= int(stop[-1].rstrip("s")) <= 600:
         problems.append(f"TimeoutStopSec must leave time for a checkpoint: {stop}")
