@@ -5,13 +5,17 @@ systemd 252 installs) since no systemd starts units here:
 - MemoryDenyWriteExecute=yes against PoCL's kernel JIT (it writes a shared
   object to POCL_CACHE_DIR and dlopen()s it);
 - RestrictAddressFamilies=AF_UNIX AF_INET AF_INET6 against gRPC and name
-  resolution (--listen localhost:PORT).
+  resolution (--listen localhost:PORT);
+- where mount namespaces are allowed (root), ProtectSystem=strict,
+  PrivateTmp and ProtectHome through protect_system.sh: luxeld writes
+  nothing outside its data dir and cache dirs.
 
 Controls first: under the filter a W+X mapping and a netlink socket must
 fail, else the filter proves nothing. Then luxeld runs under it with an
 empty POCL_CACHE_DIR and bakes the Cornell box through the CLI.
 
 usage: sandbox_test.py --sandbox-exec BIN --luxeld BIN --luxel BIN --scene GLTF --unit FILE
+                       --work DIR (not under /tmp: PrivateTmp hides it)
 """
 import argparse
 import os
@@ -25,6 +29,22 @@ import time
 import unittest
 
 ARGS = None
+PROTECT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "protect_system.sh")
+
+
+def mount_namespaces_work():
+    if not shutil.which("unshare"):
+        return False
+    r = subprocess.run(["unshare", "-m", "--propagation", "private", "true"],
+                       capture_output=True, timeout=30)
+    return r.returncode == 0
+
+
+def protected(writable, cmd):
+    """cmd under protect_system.sh when mount namespaces work, else as is."""
+    if not mount_namespaces_work():
+        return cmd
+    return ["unshare", "-m", "--propagation", "private", "sh", PROTECT, *writable, "--", *cmd]
 
 
 def free_port():
@@ -54,14 +74,30 @@ class Sandbox(unittest.TestCase):
         ok = "import socket; socket.socket(socket.AF_INET6); socket.socket(socket.AF_UNIX)"
         self.assertEqual(self.run_py(ok, True).returncode, 0)
 
+    @unittest.skipUnless(mount_namespaces_work(), "no mount namespaces (not root)")
+    def test_protect_system_leaves_only_the_given_dirs_writable(self):
+        work = tempfile.mkdtemp(prefix="protect-", dir=ARGS.work)
+        try:
+            ok, other = os.path.join(work, "state"), os.path.join(work, "elsewhere")
+            os.mkdir(other)
+            script = f"touch {ok}/f && ! touch {other}/f 2>/dev/null && ! touch /usr/.luxel-probe 2>/dev/null && touch /tmp/f && [ -z \"$(ls -A /root)\" ]"
+            r = subprocess.run(protected([ok], ["sh", "-c", script]), capture_output=True,
+                               text=True, timeout=30)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertTrue(os.path.exists(os.path.join(ok, "f")))
+            self.assertFalse(os.path.exists(os.path.join(other, "f")))
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
     def test_luxeld_bakes_under_the_filter(self):
-        tmp = tempfile.mkdtemp(prefix="luxeld-sandbox-")
+        tmp = tempfile.mkdtemp(prefix="luxeld-sandbox-", dir=ARGS.work)
         port = free_port()
-        env = dict(os.environ, POCL_CACHE_DIR=os.path.join(tmp, "pocl"))
-        proc = subprocess.Popen([ARGS.sandbox_exec, ARGS.luxeld, "--data-dir",
-                                 os.path.join(tmp, "data"), "--listen", f"localhost:{port}"],
-                                env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                text=True)
+        data, pocl = os.path.join(tmp, "data"), os.path.join(tmp, "pocl")
+        program_cache = os.environ.get("LUXEL_CACHE_DIR") or os.path.join(tmp, "programs")
+        env = dict(os.environ, POCL_CACHE_DIR=pocl, LUXEL_CACHE_DIR=program_cache)
+        cmd = [ARGS.sandbox_exec, ARGS.luxeld, "--data-dir", data, "--listen", f"localhost:{port}"]
+        proc = subprocess.Popen(protected([data, pocl, program_cache], cmd), env=env,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         try:
             server = ["--server", f"localhost:{port}"]
             deadline = time.monotonic() + 30
@@ -101,5 +137,6 @@ if __name__ == "__main__":
     p.add_argument("--luxel", required=True)
     p.add_argument("--scene", required=True)
     p.add_argument("--unit", required=True)
+    p.add_argument("--work", required=True)
     ARGS, rest = p.parse_known_args()
     unittest.main(argv=[sys.argv[0], "-v", *rest])
