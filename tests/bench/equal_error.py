@@ -42,7 +42,6 @@ For each scene:
 import argparse
 import json
 import math
-import os
 import pathlib
 import re
 import subprocess
