@@ -121,7 +121,6 @@ class RpcInterceptor : public grpc::experimental::Interceptor {
 
   ~RpcInterceptor() override {
     if (!finished_) finish(grpc::StatusCode::CANCELLED);  // no status sent: the client left
-    if (metrics_ && kind_) metrics_->stream_closed(kind_);
     std::lock_guard<std::mutex> lock(g_ids_mu);
     g_ids.erase(ctx_);
   }
@@ -159,6 +158,8 @@ class RpcInterceptor : public grpc::experimental::Interceptor {
 
   void finish(grpc::StatusCode code) {
     finished_ = true;
+    // Before the status leaves: a client that has it finds the call counted.
+    if (metrics_ && kind_) metrics_->stream_closed(kind_);
     const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
     if (metrics_) metrics_->rpc_finished(method_, code_name(code), seconds);
     log_event(level_of(code), "rpc",
