@@ -18,6 +18,7 @@ import sys
 import tempfile
 import time
 import unittest
+import urllib.request
 
 ARGS = None
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -289,6 +290,20 @@ class EntrypointRun(unittest.TestCase):
         self.assertIn("event=stopped", err)
         # Gone: health now fails (exit 1), as a probe would see it.
         self.assertEqual(self.luxel("health", "--timeout", "2").returncode, 1)
+
+    def test_metrics_port_from_the_environment(self):
+        help_text = subprocess.run([ARGS.luxeld, "--help"], capture_output=True, text=True).stdout
+        if "--metrics-listen" not in help_text:
+            self.skipTest("this luxeld has no --metrics-listen")
+        metrics = free_port()
+        self.start(LUXELD_METRICS_LISTEN=f"127.0.0.1:{metrics}")
+        self.wait_healthy()
+        with urllib.request.urlopen(f"http://127.0.0.1:{metrics}/metrics", timeout=10) as r:
+            body = r.read().decode()
+        self.assertIn("luxel_queue_depth", body)
+        self.proc.send_signal(signal.SIGTERM)
+        self.proc.communicate(timeout=30)
+        self.assertEqual(self.proc.returncode, 0)
 
     def test_refuses_to_start_without_a_token(self):
         self.start(LUXELD_TOKEN_FILE="")
