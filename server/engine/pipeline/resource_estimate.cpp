@@ -87,7 +87,7 @@ Status check_path_state(uint64_t paths, const PathStateBytes& bytes, size_t othe
         "budget of %zu bytes (%.0f MiB, settings.device_memory_budget_mib); lower "
         "paths_per_iteration or raise the budget",
         static_cast<unsigned long long>(paths), total, mib(total), bytes.per_path,
-        other_fixed > 0 ? strprintf(" beside %.0f MiB of scene", mib(other_fixed)).c_str() : "",
+        other_fixed > 0 ? strprintf(" beside %.1f MiB of scene", mib(other_fixed)).c_str() : "",
         budget, mib(static_cast<double>(budget))));
   return Status::ok();
 }
@@ -149,8 +149,16 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
   e.scene_bytes = scene_bytes(scene, triangles);
   e.per_texel_bytes = texel_state_bytes(plan.value().bytes_per_texel());
   e.budget = memory_budget(settings, device.global_mem_bytes);
-  LUXEL_RETURN_IF_ERROR(
-      check_path_state(e.batch_paths, e.per_path, e.scene_bytes, e.budget, device.max_alloc_bytes));
+  if (Status st = check_path_state(e.batch_paths, e.per_path, e.scene_bytes, e.budget,
+                                   device.max_alloc_bytes);
+      !st.is_ok()) {
+    if (e.batch_paths == settings.paths_per_iteration) return st;
+    return resource_exhausted(strprintf(
+        "%s (paths_per_iteration %u is trimmed to %llu paths by the device's iteration cap or "
+        "the samples the bake needs)",
+        st.message().c_str(), settings.paths_per_iteration,
+        static_cast<unsigned long long>(e.batch_paths)));
+  }
   // Per-texel state that cannot be tiled: the Gaussian filter (bake.cpp,
   // plan_memory) needs every covered texel at once.
   if (settings.filter == Filter::kGaussian && e.budget > 0 &&
