@@ -130,6 +130,9 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
           static_cast<unsigned long long>(e.max_texels), pages, as.max_resolution,
           as.max_resolution));
     e.min_texels = static_cast<uint64_t>(needed);
+    // Covered texels: the charts' texels, less what rasterisation at chart
+    // edges may leave out (half, to stay a lower bound).
+    e.min_covered = static_cast<uint64_t>(needed / 2);
   }
 
   // The batch (bake_setup.cpp): paths_per_iteration within the device's
@@ -162,14 +165,15 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
   // Per-texel state that cannot be tiled: the Gaussian filter (bake.cpp,
   // plan_memory) needs every covered texel at once.
   if (settings.filter == Filter::kGaussian && e.budget > 0 &&
-      static_cast<double>(e.device_bytes(e.min_texels)) > static_cast<double>(e.budget))
+      static_cast<double>(e.device_bytes(e.min_covered)) > static_cast<double>(e.budget))
     return resource_exhausted(strprintf(
         "settings.filter: 'gaussian' keeps the state of every texel on the device at once: at "
-        "least %llu texels x %zu bytes beside %.0f MiB of batch and scene need %.0f MiB, more "
+        "least %llu covered texels x %zu bytes beside %.0f MiB of batch and scene need %.0f MiB, "
+        "more "
         "than the budget of %.0f MiB (settings.device_memory_budget_mib); use the box filter",
-        static_cast<unsigned long long>(e.min_texels), e.per_texel_bytes,
+        static_cast<unsigned long long>(e.min_covered), e.per_texel_bytes,
         mib(static_cast<double>(e.scene_bytes + e.path_bytes)),
-        mib(static_cast<double>(e.device_bytes(e.min_texels))),
+        mib(static_cast<double>(e.device_bytes(e.min_covered))),
         mib(static_cast<double>(e.budget))));
   return e;
 }

@@ -64,6 +64,7 @@ Status check_path_state(uint64_t paths, const PathStateBytes& bytes, size_t othe
 struct ResourceEstimate {
   double surface_area = 0;     // world units^2 of the baked instances
   uint64_t min_texels = 0;     // the lightmap has at least these texels
+  uint64_t min_covered = 0;    // and at least these covered ones (0: not known before layout)
   uint64_t max_texels = 0;     // the most --max-resolution (and pages) allow
   uint64_t batch_paths = 0;    // path slots of the batch buffers (at most)
   PathStateBytes per_path;     // bytes per path slot

@@ -112,6 +112,34 @@ TEST(ResourceEstimate, BatchPastTheLargestAllocationNamesTheBytes) {
   EXPECT_EQ(trimmed->batch_paths, 16384u);
 }
 
+// The Gaussian filter cannot tile its per-texel state: at density 2048 the
+// plane has 4 x 2048^2 = 16.8 M texels, at least half of them covered, x 57
+// bytes = 478 MB against a 256 MiB budget. The box filter tiles it; with a
+// resolution the covered texels are not known before the layout, so the
+// bake's memory plan decides.
+TEST(ResourceEstimate, GaussianFilterStateThatCannotBeTiledIsRefused) {
+  const scene::Scene scene = testing::open_plane();
+  pipeline::BakeSettings s = plane_settings();
+  s.atlas.resolution = 0;
+  s.atlas.texel_density = 2048;
+  s.atlas.max_resolution = 8192;
+  s.device_memory_budget_mib = 256;
+  s.filter = pipeline::Filter::kGaussian;
+  const DeviceLimits device{16 * kGiB, 4 * kGiB, 2};
+  auto gaussian = pipeline::estimate_bake_resources(scene, s, device);
+  ASSERT_FALSE(gaussian);
+  EXPECT_EQ(gaussian.status().code(), StatusCode::kResourceExhausted);
+  EXPECT_TRUE(mentions(gaussian.status(), "settings.filter")) << gaussian.status().message();
+  EXPECT_TRUE(mentions(gaussian.status(), "least 8388608 covered texels x 57 bytes"))
+      << gaussian.status().message();
+  s.filter = pipeline::Filter::kBox;
+  EXPECT_TRUE(pipeline::estimate_bake_resources(scene, s, device));
+  s.filter = pipeline::Filter::kGaussian;
+  s.atlas.texel_density = 0;
+  s.atlas.resolution = 4096;
+  EXPECT_TRUE(pipeline::estimate_bake_resources(scene, s, device));
+}
+
 // The per-path bytes are what BakeBuffers and the radix sort allocate per
 // path slot (a buffer added to one and not the other fails here).
 TEST(ResourceEstimate, PerPathBytesMatchTheBakeBuffers) {
