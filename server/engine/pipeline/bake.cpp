@@ -84,12 +84,11 @@ class Baker {
   std::unique_ptr<OffsetBuffer> offset_buffer_;
   TilePlan plan_;
   size_t budget_ = 0;
-  uint64_t paths_done_ = 0;
+  uint64_t paths_done_ = 0;  // of the current tile (of the bake, untiled)
   const BakeHooks* hooks_ = nullptr;
   bool interruptible_ = false;           // the current iteration checks for stops between stages
   bool gave_up_for_checkpoint_ = false;  // the last iteration, for a checkpoint
-  bool rerun_after_checkpoint_ = false;  // this iteration re-runs one given up for a checkpoint  //
-                                         // of the current tile (of the bake, untiled)
+  bool rerun_after_checkpoint_ = false;  // this iteration re-runs one given up for a checkpoint
 
   // Tiled bakes: the finished tiles' share of the progress statistics.
   struct Done {
