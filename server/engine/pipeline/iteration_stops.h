@@ -10,13 +10,13 @@
 //  1. The batch cap. An iteration traces at most iteration_path_cap()
 //     paths: 2^17 per compute unit (at least 2^18, the default batch, so
 //     default bakes are unchanged), whatever paths_per_iteration asks for.
-//     At the 0.5-1 M paths/s a CPU core traces (docs/performance.md) an
-//     iteration then takes about 0.1-0.3 s on an idle machine, and a GPU's
-//     compute units are faster still. The cap is a property of the device,
-//     never of timing: the same settings, seed and device give the same
-//     batches and the same bits (a bake with a larger paths_per_iteration
-//     simply runs more, smaller iterations; its buffers are sized for the
-//     capped batch, pipeline/resource_estimate.h).
+//     At the ~0.35 M paths/s a CPU core traces at 4 bounces
+//     (docs/performance.md: 0.64-0.73 M paths/s on 2 cores) an iteration
+//     then takes about 0.4 s on an idle machine, a stage of it a few tens
+//     of milliseconds, and a GPU's compute units are faster still. The cap is a property of the
+//     device, never of timing: the same settings, seed and device give the same batches and the
+//     same bits (a bake with a larger paths_per_iteration simply runs more, smaller iterations; its
+//     buffers are sized for the capped batch, pipeline/resource_estimate.h).
 //  2. Stop points. On CPU devices, and on GPUs for batches of 2^22 paths
 //     and more, the host waits for the device after every stage and looks
 //     at the stop flags there; on a request the iteration is given up
