@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "pipeline/resource_estimate.h"
 #include "pipeline/sample_slice.h"
 #include "pipeline/shading/texture_pack.h"
 
@@ -176,9 +177,7 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 }
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
-  // covered, sample-info offset, offset buffer, mean, M2, weight, spp, a
-  // stats partial's share (rounded up), basis state.
-  return 4 + 4 + 4 + 16 + 16 + 8 + 4 + 1 + s.plan.bytes_per_texel();
+  return texel_state_bytes(s.plan.bytes_per_texel());  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {

@@ -120,6 +120,8 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.atlas.resolution > s.atlas.max_resolution)
     return bad("resolution", strprintf("%d exceeds %s=%d", s.atlas.resolution, resolution_limit,
                                        s.atlas.max_resolution));
+  if (!std::isfinite(s.atlas.texel_density))
+    return bad("texel_density", "does not fit a 32-bit float (at most 3.4e38)");
   if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))
     return bad("resolution", "give a resolution or a positive texel density");
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))

@@ -177,7 +177,8 @@ std::vector<Setting> make_schema() {
   t.push_back({.name = "paths_per_iteration",
                .type = Type::kInt,
                .units = "paths",
-               .help = "batch size: device memory scales with it",
+               .help = "batch size, at most the device's iteration cap (2^17 paths per compute "
+                       "unit, at least 2^18): device memory scales with it",
                .flag = "--paths-per-iteration",
                .metavar = "N",
                .default_value = SettingValue::of(1u << 18),
