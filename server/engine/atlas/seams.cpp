@@ -17,6 +17,7 @@ struct EdgeRecord {
   Key lo, hi;
   uint32_t triangle;
   Vec2 uv_lo, uv_hi;
+  Vec3 n_lo, n_hi;
 };
 
 bool same_edge(const EdgeRecord& x, const EdgeRecord& y) {
@@ -30,8 +31,21 @@ struct MeshSeam {
 
 struct MeshSeams {
   std::vector<MeshSeam> seams;
-  size_t non_manifold = 0;
+  size_t non_manifold = 0, hard = 0;
 };
+
+Vec3 unit_or_zero(Vec3 n) {
+  const float len = std::sqrt(dot(n, n));
+  return len > 0 && std::isfinite(len) ? n * (1.0f / len) : Vec3{};
+}
+
+// The shading normals of both triangles agree at both endpoints: the
+// surface is smooth across the edge. At a hard edge (split normals) the
+// lighting itself is discontinuous, and stitching would smear it.
+bool smooth(const EdgeRecord& x, const EdgeRecord& y) {
+  constexpr float kCosSmooth = 0.999f;  // about 2.6 degrees
+  return dot(x.n_lo, y.n_lo) >= kCosSmooth && dot(x.n_hi, y.n_hi) >= kCosSmooth;
+}
 
 MeshSeams mesh_seams(const scene::Mesh& mesh) {
   MeshSeams out;
@@ -56,12 +70,19 @@ MeshSeams mesh_seams(const scene::Mesh& mesh) {
   for (uint32_t t = 0; t < mesh.triangle_count(); ++t)
     for (int e = 0; e < 3; ++e) {
       const uint32_t i = mesh.indices[3 * t + e], j = mesh.indices[3 * t + (e + 1) % 3];
-      EdgeRecord r{quantise(mesh.positions[i]), quantise(mesh.positions[j]), t, mesh.uv1[i],
-                   mesh.uv1[j]};
+      const bool normals = mesh.normals.size() == mesh.positions.size();
+      EdgeRecord r{quantise(mesh.positions[i]),
+                   quantise(mesh.positions[j]),
+                   t,
+                   mesh.uv1[i],
+                   mesh.uv1[j],
+                   normals ? unit_or_zero(mesh.normals[i]) : Vec3{0, 0, 1},
+                   normals ? unit_or_zero(mesh.normals[j]) : Vec3{0, 0, 1}};
       if (r.lo == r.hi) continue;  // collapsed edge: no surface to join
       if (r.hi < r.lo) {
         std::swap(r.lo, r.hi);
         std::swap(r.uv_lo, r.uv_hi);
+        std::swap(r.n_lo, r.n_hi);
       }
       edges.push_back(r);
     }
@@ -71,8 +92,10 @@ MeshSeams mesh_seams(const scene::Mesh& mesh) {
   for (size_t i = 0; i < edges.size();) {
     size_t j = i + 1;
     while (j < edges.size() && same_edge(edges[i], edges[j])) ++j;
-    if (j - i == 2)
+    if (j - i == 2 && smooth(edges[i], edges[i + 1]))
       out.seams.push_back({edges[i].uv_lo, edges[i].uv_hi, edges[i + 1].uv_lo, edges[i + 1].uv_hi});
+    else if (j - i == 2)
+      ++out.hard;
     else if (j - i > 2)
       ++out.non_manifold;
     i = j;
@@ -109,6 +132,7 @@ SeamSet find_seams(const scene::Scene& scene, const Atlas& atlas) {
       done[m] = true;
     }
     set.non_manifold += per_mesh[m].non_manifold;
+    set.hard_edges += per_mesh[m].hard;
     for (const MeshSeam& s : per_mesh[m].seams) {
       SeamEdge e;
       e.instance = inst;

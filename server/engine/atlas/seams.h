@@ -8,9 +8,11 @@
 // Edges are matched within one mesh by their endpoints' object-space
 // positions, quantised to 2^-20 of the mesh's largest extent (split vertices
 // carry bit-identical or nearly identical copies of one position). An edge
-// is a seam when exactly two triangles share it and its two lightmap images
-// differ by more than 1e-3 texel at either endpoint; an edge shared by three
-// or more triangles (non-manifold) is skipped and counted. Every instance of
+// is a seam when exactly two triangles share it, their shading normals agree
+// at both endpoints (within about 2.6 degrees: at a hard edge the lighting is
+// discontinuous by nature, so it is counted, not stitched) and its two
+// lightmap images differ by more than 1e-3 texel at either endpoint; an edge
+// shared by three or more triangles (non-manifold) is skipped and counted. Every instance of
 // a mesh gets its own copies of the mesh's seams, placed by the atlas.
 #pragma once
 
@@ -37,6 +39,7 @@ struct SeamSet {
   std::vector<SeamEdge> edges;
   size_t cross_page = 0;    // seams whose two sides lie on different pages: skipped
   size_t non_manifold = 0;  // edges of more than two triangles (per instance): skipped
+  size_t hard_edges = 0;    // shared edges whose normals differ (per instance): not seams
   size_t degenerate = 0;    // seams with a zero-length side in the atlas: skipped
 };
 

@@ -68,6 +68,7 @@ std::string BakeSeamStitch::manifest_json() const {
   nlohmann::json j = {{"stitched_edges", edges_},
                       {"cross_page_edges_skipped", s.cross_page},
                       {"non_manifold_edges_skipped", s.non_manifold},
+                      {"hard_edges_skipped", s.hard_edges},
                       {"degenerate_edges_skipped", s.degenerate},
                       {"sample_points", before_.points},
                       {"texels_solved", unknowns_},

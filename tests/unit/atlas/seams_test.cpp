@@ -47,6 +47,21 @@ TEST(Seams, QuadCutIntoTwoChartsHasOneSeamWithMatchingEndpoints) {
   EXPECT_TRUE(p0_first || p2_first) << e.a0.x << "," << e.a0.y << " " << e.b0.x << "," << e.b0.y;
 }
 
+// The same cut, but the second triangle's vertices carry another normal
+// (a hard edge): the lighting may jump there, so it is no seam.
+TEST(Seams, HardEdgeIsCountedNotStitched) {
+  SceneBuilder b;
+  b.add_mesh({{0.1f, 0.1f}, {0.4f, 0.1f}, {0.4f, 0.4f}, {0.6f, 0.1f}, {0.9f, 0.4f}, {0.6f, 0.4f}},
+             {0, 1, 2, 3, 4, 5}, kQuad);
+  for (int v = 3; v < 6; ++v) b.scene.meshes[0].normals[v] = {0, 0.1f, 1};  // 5.7 degrees off
+  b.instance(0);
+  AtlasSettings s;
+  s.resolution = 20;
+  const SeamSet seams = find_seams(b.scene, testing::expect_atlas(b.scene, s));
+  EXPECT_TRUE(seams.edges.empty());
+  EXPECT_EQ(seams.hard_edges, 1u);
+}
+
 TEST(Seams, SplitVerticesWithEqualUvsAreNoSeam) {
   SceneBuilder b;
   b.add_mesh({{0.1f, 0.1f}, {0.4f, 0.1f}, {0.4f, 0.4f}, {0.1f, 0.1f}, {0.4f, 0.4f}, {0.1f, 0.4f}},
