@@ -33,7 +33,7 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
   edges_ += edges.size();
   unknowns_ += stitcher.unknowns();
   before_.add(stitcher.measure(irradiance.pixels, 4, 0, 3));
-  int it = stitcher.stitch(irradiance.pixels, 4, 0, 3);
+  int it = stitcher.stitch(irradiance.pixels, 4, 0, 3, true);  // irradiance >= 0
   after_.add(stitcher.measure(irradiance.pixels, 4, 0, 3));
   for (size_t k = 0; k < encodings.size() && k < encodings_before_.size(); ++k) {
     output::Image& img = *encodings[k];

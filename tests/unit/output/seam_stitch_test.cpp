@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -94,6 +95,29 @@ TEST(SeamStitch, BilinearValuesAgreeAlongTheSeamAfterStitching) {
         for (int ch = 0; ch < 2; ++ch) EXPECT_EQ(img.at(x, y, ch), before.at(x, y, ch));
   // A point one texel row away from both borders (x = 2.5, 9.5) is unchanged.
   EXPECT_DOUBLE_EQ(bilerp(img, 2.5, 4.5, 0), bilerp(before, 2.5, 4.5, 0));
+}
+
+// A black region (x <= 5) against a lit one (x >= 6), with a seam whose two
+// sides both read texel column 5 (x = 4.6 reads columns 4 and 5, x = 5.9
+// columns 5 and 6): raising side A's mean to side B's pulls column 5 down,
+// below 0. With clamp_negative those texels are pinned at 0 and re-solved:
+// nothing ends below 0 and the sides still agree.
+TEST(SeamStitch, ClampedStitchIsNonNegativeAndAgrees) {
+  const int w = 10, h = 10;
+  Img img{w, h, 1, std::vector<float>(size_t(w) * h)};
+  std::vector<float> coverage(size_t(w) * h, 1.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) img.px[size_t(y) * w + x] = x <= 5 ? 0.0f : 1.0f + y / 4.0f;
+  const std::vector<StitchEdge> edges = {{{4.6f, 1}, {4.6f, 9}, {5.9f, 1}, {5.9f, 9}}};
+  const SeamStitcher stitcher(w, h, edges, coverage);
+  Img unclamped = img;
+  stitcher.stitch(unclamped.px, 1, 0, 1);
+  stitcher.stitch(img.px, 1, 0, 1, true);
+  const float lowest_unclamped = *std::min_element(unclamped.px.begin(), unclamped.px.end());
+  EXPECT_LT(lowest_unclamped, -0.1f);  // the undershoot the clamp exists for
+  EXPECT_EQ(*std::min_element(img.px.begin(), img.px.end()), 0.0f);
+  EXPECT_LT(worst_relative_gap(unclamped, edges, 0), 0.01);
+  EXPECT_LT(worst_relative_gap(img, edges, 0), 0.01);
 }
 
 TEST(SeamStitch, ReversedSideFailsTheAgreementCheck) {
