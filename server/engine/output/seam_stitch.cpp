@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 namespace luxel::output {
 
@@ -147,23 +148,35 @@ void SeamStitcher::apply(const Component& c, const Weights& w, const std::vector
 int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int count,
                          bool clamp_negative) const {
   const size_t n = texels_.size();
-  if (n == 0) return 0;
-  std::vector<double> x0(n), delta(n), r(n), z(n), p(n), q(n);
-  const Weights plain{data_weight_, diagonal_, {}};
-  int most = 0;
-  for (int ch = first; ch < first + count; ++ch) {
-    for (size_t u = 0; u < n; ++u) x0[u] = pixels[size_t(texels_[u]) * size_t(stride) + ch];
-    std::fill(delta.begin(), delta.end(), 0.0);
-    for (const Component& c : components_)
-      most = std::max(most, solve(c, plain, x0, delta, r, z, p, q));
-    if (clamp_negative) most = std::max(most, pin_negatives(x0, delta, r, z, p, q));
-    for (size_t u = 0; u < n; ++u) {
-      const double v = x0[u] + delta[u];
-      pixels[size_t(texels_[u]) * size_t(stride) + ch] =
-          static_cast<float>(clamp_negative ? std::max(0.0, v) : v);
+  if (n == 0 || count <= 0) return 0;
+  // Channels are independent solves of the same matrix: one thread per
+  // group of channels. Each writes only its own channels, and a channel's
+  // arithmetic does not depend on the split, so the result is the same
+  // for any thread count.
+  const int threads =
+      std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(count, 16));
+  std::vector<int> most(threads, 0);
+  auto work = [&](int t) {
+    std::vector<double> x0(n), delta(n), r(n), z(n), p(n), q(n);
+    const Weights plain{data_weight_, diagonal_, {}};
+    for (int ch = first + t; ch < first + count; ch += threads) {
+      for (size_t u = 0; u < n; ++u) x0[u] = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+      std::fill(delta.begin(), delta.end(), 0.0);
+      for (const Component& c : components_)
+        most[t] = std::max(most[t], solve(c, plain, x0, delta, r, z, p, q));
+      if (clamp_negative) most[t] = std::max(most[t], pin_negatives(x0, delta, r, z, p, q));
+      for (size_t u = 0; u < n; ++u) {
+        const double v = x0[u] + delta[u];
+        pixels[size_t(texels_[u]) * size_t(stride) + ch] =
+            static_cast<float>(clamp_negative ? std::max(0.0, v) : v);
+      }
     }
-  }
-  return most;
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+  work(0);
+  for (auto& th : pool) th.join();
+  return *std::max_element(most.begin(), most.end());
 }
 
 // A small active-set step towards the non-negative least-squares solution:
