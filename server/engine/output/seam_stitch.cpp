@@ -12,6 +12,7 @@ SeamStitcher::SeamStitcher(int width, int height, const std::vector<StitchEdge>&
   for (const StitchEdge& e : edges) {
     const double len_a = std::hypot(e.a1.x - e.a0.x, e.a1.y - e.a0.y);
     const double len_b = std::hypot(e.b1.x - e.b0.x, e.b1.y - e.b0.y);
+    if (!std::isfinite(len_a) || !std::isfinite(len_b)) continue;  // no place to fetch from
     if (std::min(len_a, len_b) < options_.min_edge_texels) {
       ++short_edges_;
       continue;
