@@ -3,6 +3,9 @@
 // (dilated, unstitched) and stitches it, printing the discontinuity before
 // and after, the most negative value, and the solve's CPU seconds.
 //   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]
+//                     [--min-edge TEXELS] [--clamp 0|1]
+// The defaults are the bake's. SEAM_DEBUG=1 also prints every 20th-part
+// seam with its values and the seams around the lowest texel.
 #include "output/seam_stitch.h"
 
 #include <algorithm>
