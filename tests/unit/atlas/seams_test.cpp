@@ -128,5 +128,43 @@ TEST(Seams, EveryInstanceGetsItsOwnSeamInItsRectangle) {
   EXPECT_NE(seams.edges[0].instance, seams.edges[1].instance);
 }
 
+// Pages stacked from the top (atlas.h): a seam inside page 1 comes out in
+// page 1's own coordinates; one whose sides lie on two pages is skipped.
+TEST(Seams, SeamsArePageLocalAndCrossPageSeamsAreSkipped) {
+  Atlas atlas;
+  atlas.width = 20;
+  atlas.height = 40;
+  atlas.pages = 2;
+  atlas.mode = AtlasMode::kGenerated;
+  atlas.placements.resize(1);
+  for (bool across : {false, true}) {
+    SceneBuilder b;
+    // Side A on page 1 (v in [0.55, 0.7]); side B on page 1 too, or on page 0.
+    const float vb = across ? 0.05f : 0.55f;
+    b.add_mesh({{0.1f, 0.55f},
+                {0.4f, 0.55f},
+                {0.4f, 0.7f},
+                {0.6f, vb},
+                {0.9f, vb + 0.15f},
+                {0.6f, vb + 0.15f}},
+               {0, 1, 2, 3, 4, 5}, kQuad);
+    b.instance(0);
+    const SeamSet seams = find_seams(b.scene, atlas);
+    if (across) {
+      EXPECT_TRUE(seams.edges.empty());
+      EXPECT_EQ(seams.cross_page, 1u);
+      continue;
+    }
+    ASSERT_EQ(seams.edges.size(), 1u);
+    const SeamEdge& e = seams.edges[0];
+    EXPECT_EQ(e.page, 1);
+    // v 0.55 is row 22 of the stacked image, row 2 of page 1.
+    for (Vec2 v : {e.a0, e.a1, e.b0, e.b1}) {
+      EXPECT_GE(v.y, 2.0f - 1e-3f);
+      EXPECT_LE(v.y, 8.0f + 1e-3f);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace luxel::atlas
