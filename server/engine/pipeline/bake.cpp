@@ -586,6 +586,12 @@ Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
   auto result = baker.run(hooks);
   if (!result) return result;
   result.value().uv_layout = layout.value().generated;
+  if (settings.seam_stitch) {
+    const auto t_seams = Clock::now();
+    result.value().seams = std::make_shared<const atlas::SeamSet>(
+        atlas::find_seams(*layout.value().scene, result.value().atlas));
+    result.value().seam_find_s = seconds_since(t_seams);
+  }
   result.value().setup_s += layout_s;
   return result;
 }

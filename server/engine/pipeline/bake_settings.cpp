@@ -78,6 +78,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";
   m["dilation_texels"] = std::to_string(dilation_texels);
+  m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";
     for (const auto& n : encodings.names) list += "," + n;

@@ -497,6 +497,15 @@ std::vector<Setting> make_schema() {
                .max = 64,
                .api_note = "0 (unset) means 2",
                LUXEL_NUMBER(dilation_texels)});
+  t.push_back({.name = "seam_stitch",
+               .type = Type::kBool,
+               .units = "",
+               .help = "least-squares stitching of lightmap UV seams so bilinear fetches on both "
+                       "sides agree (--no-seam-stitch: off)",
+               .flag = "--no-seam-stitch",
+               .default_value = SettingValue::of(1),
+               .api_note = "unset means on",
+               LUXEL_BOOL(seam_stitch)});
   // ------------------------------------------------------------ the daemon's job
   t.push_back({.name = "priority",
                .type = Type::kInt,
