@@ -306,7 +306,9 @@ Result<bool> Baker::plan_allocation(uint32_t batch) {
   // (defensive sampling); one texel's error term is at most kCap x the
   // mean's. `unit` weight units stand for the mean error, halved until
   // paths x total weight stays below 2^63 (alloc_keys multiplies them).
-  constexpr double kDarkFloor = 0.1, kMix = 0.2, kCap = 32;
+  constexpr double kCap = 32;
+  const double kDarkFloor = getenv("LUX_EXP_FLOOR") ? atof(getenv("LUX_EXP_FLOOR")) : 0.1;
+  const double kMix = getenv("LUX_EXP_MIX") ? atof(getenv("LUX_EXP_MIX")) : 0.2;
   double unit = 128;
   while (unit > 1 && double(batch) * covered * (unit * (kCap + kMix) + 1) >= 9.2e18) unit /= 2;
   a.params.alloc_floor = static_cast<float>(kDarkFloor * std::max(mean_lum, 0.0));
