@@ -31,7 +31,14 @@ import subprocess
 import sys
 
 
+# As tests/bench/error_vs_time.py: scenes without lights of their own get a
+# constant sky and sun; Cornell boxes are lit by their emissive quad only.
+SKY_SUN = ["--sky", "0.4,0.5,0.7", "--sun", "0.3,-1,0.2", "--sun-illuminance", "5"]
+
+
 def bake(luxel, scene, out, res, spp, seed, ppi, extra):
+    if "cornell" not in scene.lower():
+        extra = extra + SKY_SUN
     cmd = [luxel, "bake", scene, "--local", "--out", str(out), "--resolution", str(res),
            "--samples", str(spp), "--seed", str(seed), "--paths-per-iteration", str(ppi),
            "--progress-interval", "1000"] + extra
@@ -73,7 +80,7 @@ def main():
     results = []
     for item in args.scenes:
         scene, res = item.rsplit(":", 1)
-        name = pathlib.Path(scene).stem
+        name = pathlib.Path(scene).parent.name + "_" + pathlib.Path(scene).stem
         ref = root / name / "reference"
         if not (ref / "irradiance.exr").exists():
             ref.mkdir(parents=True, exist_ok=True)
@@ -107,7 +114,7 @@ def main():
         key = r["scene"]
         if r["mode"] == "uniform":
             base[key] = r
-        ratio = r["rmse"] / base[key]["rmse"] if key in base else float("nan")
+        ratio = r["rmse"] / base[key]["rmse"] if base.get(key, {}).get("rmse") else float("nan")
         print(f"| {r['scene']} | {r['resolution']} | {r['mode']} | {r['paths']} | {r['min_spp']} | "
               f"{r['rmse']:.4g} | {r['rel_mse']:.4g} | {r['estimate']:.4g} | {r['F']:.3f} | "
               f"{ratio:.3f} | {r['alloc_ms'] + r['accum_stats_ms']:.1f} / {r['kernels_ms']:.0f} |")
