@@ -68,9 +68,8 @@ __kernel void accum_stats(LUX_STAGE_PARAMS(accum_stats)) {
                   (uint)get_group_id(0), l_err, l_lum, l_min, l_ref, LUX_STAGE_ARGS(accum_stats));
 }
 
-/* Adaptive sampling (bake/adaptive.h); empty without LUX_ADAPTIVE. The
- * per-slot ones are launched with work-groups of LUX_ALLOC_GROUP items,
- * alloc_scan with one work-item. */
+/* Adaptive sampling (bake/adaptive.h); empty without LUX_ADAPTIVE. Launched
+ * with work-groups of LUX_ALLOC_GROUP items, alloc_scan as one group. */
 __kernel void alloc_weights(LUX_STAGE_PARAMS(alloc_weights)) {
 #if LUX_ADAPTIVE
   __local uint l_q[LUX_ALLOC_GROUP];
@@ -81,7 +80,8 @@ __kernel void alloc_weights(LUX_STAGE_PARAMS(alloc_weights)) {
 
 __kernel void alloc_scan(LUX_STAGE_PARAMS(alloc_scan)) {
 #if LUX_ADAPTIVE
-  lux_alloc_scan(LUX_STAGE_ARGS(alloc_scan));
+  __local ulong l_s[LUX_ALLOC_GROUP];
+  lux_alloc_scan((uint)get_local_id(0), l_s, LUX_STAGE_ARGS(alloc_scan));
 #endif
 }
 

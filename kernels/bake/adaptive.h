@@ -6,7 +6,7 @@
  *
  *   alloc_weights  per slot: q_c = round(min(e_c * scale, cap) + mix), and
  *                  per block of LUX_ALLOC_GROUP slots the sum of q
- *   alloc_scan     one work-item: exclusive scan of the block sums (the
+ *   alloc_scan     one work-group: exclusive scan of the block sums (the
  *                  blocks' first CDF value), the total T after the last
  *   alloc_keys     per slot: its CDF value P_c (block offset + local scan),
  *                  and the keys of path slots [floor(B P_c / T),
@@ -70,17 +70,31 @@ inline void lux_alloc_weights(uint gid, uint lid, uint group, __local uint* l_q,
   if (lid == 0) alloc_blocks[group] = (ulong)l_q[0];
 }
 
-/* One work-item: the blocks are few (covered / 256), and a serial integer
- * scan is exact and needs no second level. */
-inline void lux_alloc_scan(LUX_STAGE_PARAMS(alloc_scan)) {
+/* One work-group of LUX_ALLOC_GROUP items (l_s: as many ulong): each item
+ * sums a contiguous run of block sums, a local scan gives the runs' offsets,
+ * and each item writes its blocks' exclusive offsets; the last writes the
+ * total after the last block. Integer: exact and order-independent. */
+inline void lux_alloc_scan(uint lid, __local ulong* l_s, LUX_STAGE_PARAMS(alloc_scan)) {
   const uint blocks = lux_alloc_blocks(params.covered_count);
-  ulong run = 0;
-  for (uint b = 0; b < blocks; ++b) {
+  const uint per = (blocks + LUX_ALLOC_GROUP - 1u) / LUX_ALLOC_GROUP;
+  const uint b0 = min(lid * per, blocks), b1 = min(b0 + per, blocks);
+  ulong sum = 0;
+  for (uint b = b0; b < b1; ++b) sum += alloc_blocks[b];
+  l_s[lid] = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (uint stride = 1; stride < LUX_ALLOC_GROUP; stride <<= 1) {
+    const ulong add = lid >= stride ? l_s[lid - stride] : 0ul;
+    barrier(CLK_LOCAL_MEM_FENCE);
+    l_s[lid] += add;
+    barrier(CLK_LOCAL_MEM_FENCE);
+  }
+  ulong run = l_s[lid] - sum;
+  for (uint b = b0; b < b1; ++b) {
     const ulong s = alloc_blocks[b];
     alloc_blocks[b] = run;
     run += s;
   }
-  alloc_blocks[blocks] = run;
+  if (lid == LUX_ALLOC_GROUP - 1u) alloc_blocks[blocks] = l_s[lid];
 }
 
 /* l_q: LUX_ALLOC_GROUP entries of local memory. The host bounds the weights

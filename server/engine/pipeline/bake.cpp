@@ -323,7 +323,7 @@ Status Baker::allocate_paths() {
   const size_t covered = b_.args().params.covered_count;
   const size_t grid = (covered + LUX_ALLOC_GROUP - 1) / LUX_ALLOC_GROUP * LUX_ALLOC_GROUP;
   LUXEL_RETURN_IF_ERROR(launch(BakeKernel::alloc_weights, grid, LUX_ALLOC_GROUP));
-  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::alloc_scan, 1, 1));
+  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::alloc_scan, LUX_ALLOC_GROUP, LUX_ALLOC_GROUP));
   return launch(BakeKernel::alloc_keys, grid, LUX_ALLOC_GROUP);
 }
 
