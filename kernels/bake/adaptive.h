@@ -31,8 +31,10 @@
  * (n ~ r^2) would pour samples into the few hardest texels; weighting by
  * variance alone (absolute error) would ignore that a lightmap is viewed
  * after tone mapping, where relative error is what shows. The dark floor
- * (a fraction of the map's mean luminance) stops near-black texels, whose
- * relative error is large but invisible, from soaking up samples; the cap
+ * (the host sets it to the tile's mean luminance: texels darker than the
+ * mean are weighed by absolute error in units of the mean, brighter ones by
+ * relative error) stops dark texels, whose relative error is large but
+ * whose absolute error is small, from soaking up samples; the cap
  * at 1 (100 %) bounds any one texel. The defensive term `mix` (a fraction of
  * the mean error) keeps every texel sampled each iteration: an estimate
  * that is wrongly low (all samples so far zero: e = 0) still gets samples,

@@ -80,7 +80,7 @@ def main():
     results = []
     for item in args.scenes:
         scene, res = item.rsplit(":", 1)
-        name = pathlib.Path(scene).parent.name + "_" + pathlib.Path(scene).stem
+        name = pathlib.Path(scene).name.replace(".", "_")  # cornell_box_gltf vs _glb
         ref = root / name / "reference"
         if not (ref / "irradiance.exr").exists():
             ref.mkdir(parents=True, exist_ok=True)
