@@ -120,11 +120,12 @@
 #define LUX_KERNEL_alloc_keys(G) G(out, paths) G(in, alloc)
 
 /* Every bake kernel, for the host's kernel table. */
-#define LUX_BAKE_KERNELS(K)                                                         \
-  K(texel_domain)                                                                   \
-  K(raygen)                                                                         \
-  K(shade) K(resolve_shadows) K(resolve_texel_shadows) K(accumulate) K(accum_stats) \
-      K(alloc_weights) K(alloc_scan) K(alloc_keys)
+#define LUX_BAKE_KERNELS(K) \
+  K(texel_domain)           \
+  K(raygen)                 \
+  K(shade)                  \
+  K(resolve_shadows)        \
+  K(resolve_texel_shadows) K(accumulate) K(accum_stats) K(alloc_weights) K(alloc_scan) K(alloc_keys)
 
 /* Work-group size of accum_stats (its local reduction arrays). */
 #define LUX_STATS_GROUP 256
