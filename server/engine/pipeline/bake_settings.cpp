@@ -74,6 +74,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["placements"] = list;
   }
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
+  m["adaptive"] = adaptive ? strprintf("on,min=%u", adaptive_min_samples) : "off";
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";

@@ -60,9 +60,11 @@ struct BakeSettings {
 
   // Stopping rules: whichever is reached first. 0 disables a rule; at least
   // one must be set.
-  uint32_t samples_per_texel = 256;  // every covered texel has at least this many
-  double time_budget_s = 0;          // wall-clock seconds of path tracing
-  double target_error = 0;           // stop when target_metric falls to this
+  // Paths per covered texel: with adaptive sampling the mean over covered
+  // texels (paths traced = this x covered texels), uniform: every texel's.
+  uint32_t samples_per_texel = 256;
+  double time_budget_s = 0;  // wall-clock seconds of path tracing
+  double target_error = 0;   // stop when target_metric falls to this
   ErrorMetric target_metric = ErrorMetric::kEstimate;
   // Benchmark mode: a reference lightmap of the bake's size, RGBA float per
   // texel, row 0 = top (as BakeResult::irradiance, e.g. a converged bake's
@@ -89,6 +91,12 @@ struct BakeSettings {
   float clamp_luminance = 0;   // firefly clamp on a path's luminance; 0 = off (unbiased)
   LightSettings lights;        // sky, sun, directional angular radius
   EncodingSettings encodings;  // directional encodings besides irradiance
+
+  // Adaptive sampling (thesis §3.3, kernels/bake/adaptive.h): after a
+  // uniform warm-up of adaptive_min_samples paths per texel, each
+  // iteration's paths go to texels in proportion to their relative error.
+  bool adaptive = true;
+  uint32_t adaptive_min_samples = 8;
 
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;

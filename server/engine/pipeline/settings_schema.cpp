@@ -52,7 +52,8 @@ std::vector<Setting> make_schema() {
   t.push_back({.name = "samples_per_texel",
                .type = Type::kInt,
                .units = "samples",
-               .help = "stop when every covered texel has this many samples (0: no sample rule)",
+               .help = "stop at this many paths per covered texel on average (adaptive "
+                       "sampling gives noisy texels more; 0: no sample rule)",
                .flag = "--samples",
                .metavar = "N",
                .default_value = SettingValue::of(256),
@@ -185,6 +186,27 @@ std::vector<Setting> make_schema() {
                .min = 1024,
                .max = 1u << 26,
                LUXEL_NUMBER(paths_per_iteration)});
+  t.push_back({.name = "adaptive",
+               .type = Type::kBool,
+               .units = "",
+               .help = "adaptive sampling: after a uniform warm-up, paths go where the relative "
+                       "error is highest (--no-adaptive: every texel alike)",
+               .flag = "--no-adaptive",
+               .default_value = SettingValue::of(1),
+               LUXEL_BOOL(adaptive)});
+  t.push_back({.name = "adaptive_min_samples",
+               .type = Type::kInt,
+               .units = "samples",
+               .help = "adaptive sampling's uniform warm-up: samples every texel has before "
+                       "paths follow the error",
+               .flag = "--adaptive-min-samples",
+               .metavar = "N",
+               .default_value = SettingValue::of(8),
+               .min = 2,
+               .max = 65536,
+               .api_note = "0 (unset) means 8",
+               LUXEL_NUMBER(adaptive_min_samples),
+               .active = [](const BakeSettings& s) { return s.adaptive; }});
   t.push_back({.name = "device_memory_budget_mib",
                .type = Type::kFloat,
                .units = "MiB",
