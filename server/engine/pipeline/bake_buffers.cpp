@@ -187,7 +187,8 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 }
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
-  return texel_state_bytes(s.plan.bytes_per_texel(), s.features.has("ADAPTIVE"));  // resource_estimate.h
+  return texel_state_bytes(s.plan.bytes_per_texel(),
+                           s.features.has("ADAPTIVE"));  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {
