@@ -14,6 +14,9 @@
  *                        without it every slot runs and dead ones return
  *   LUX_FILTER_GAUSSIAN  1.5-texel Gaussian accumulation filter (§3.2.2)
  *   LUX_SEQUENCE_RANDOM  independent random numbers instead of Sobol (ablation)
+ *   LUX_DIRECT_ANALYTIC  irradiance lightmaps with lights of closed-form
+ *                        irradiance: exact unshadowed direct light at the
+ *                        texel point, sampled visibility (bake/raygen.h)
  *   LUX_BASIS            directional encodings (SH, SG, Ambient Dice): the
  *                        first segment is sampled uniformly over the
  *                        hemisphere and each path leaves a LuxBasisSample

@@ -15,6 +15,7 @@
 
 #include "bake/path.h"
 #include "bake/surface.h"
+#include "shading/analytic_light.h"
 #include "shading/bsdf.h"
 #include "shading/lights.h"
 #include "shading/texture.h"
@@ -63,9 +64,11 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
                                LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
                            const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t, float3 b,
                            float3 n, float3 wo_local, float3 throughput, uint index, uint dim,
-                           uint seed, LuxRay* shadow_ray, float3* contribution) {
+                           uint seed, LuxRay* shadow_ray, float3* contribution,
+                           int* analytic_sample) {
   *shadow_ray = lux_no_ray();
   *contribution = (float3)(0.0f);
+  *analytic_sample = 0;
 #if LUX_NEE
   const float u_sel = lux_sample_1d(index, dim + LUX_DIM_LIGHT_SELECT, seed);
   const float2 u_pt = lux_sample_2d(index, dim + LUX_DIM_LIGHT_POINT, seed);
@@ -73,6 +76,14 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   if (!lux_sample_light(lights, light_select, params.light_count, sky, sky_texels, sky_block_cdfs,
                         sky_texel_cdfs, s->p, n, u_sel, u_pt, &ls))
     return;
+#if LUX_DIRECT_ANALYTIC
+  /* At the texel point an analytic light's sample only estimates its
+   * visibility ratio (raygen.h): no MIS, the first segment ignores it. */
+  if (sensor) {
+    const LuxLight chosen = lights[ls.light];
+    *analytic_sample = lux_light_is_analytic(&chosen);
+  }
+#endif
   if (!(ls.pdf > 0.0f) || dot(ls.wi, s->ng) <= 0.0f) return;
   float3 radiance = ls.radiance;
 #if LUX_EMISSIVE_TEXTURE
@@ -91,7 +102,7 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   if (cos_i <= 0.0f) return;
   /* MIS only for lights a BSDF ray can also reach (emissive triangles, the
    * sky); the sun disc and punctual lights are NEE-only with weight 1. */
-  const int mis = !ls.is_delta && ls.mis;
+  const int mis = !ls.is_delta && ls.mis && !*analytic_sample;
   float3 f_weighted;
   if (sensor) {
     const float w = mis ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;

@@ -23,6 +23,10 @@ const char* filter_name(Filter f) {
   return f == Filter::kGaussian ? "gaussian" : "box";
 }
 
+const char* direct_light_name(DirectLight d) {
+  return d == DirectLight::kSampled ? "sampled" : "analytic";
+}
+
 const char* error_metric_name(ErrorMetric m) {
   switch (m) {
     case ErrorMetric::kEstimate:
@@ -59,6 +63,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
+  m["direct"] = direct_light_name(direct);
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
   if (!node_placements.empty()) {
