@@ -79,9 +79,10 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   float3 contribution;
   LuxBsdf unused_bsdf;
   int analytic_sample;
+  float3 analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &s,
                  1, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index,
-                 dim, seed, &shadow, &contribution, &analytic_sample);
+                 dim, seed, &shadow, &contribution, &analytic_sample, &analytic_e);
 #if LUX_DIRECT_ANALYTIC
 #if LUX_BASIS
 #error "LUX_DIRECT_ANALYTIC is for irradiance lightmaps only"
@@ -105,10 +106,11 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
    * estimator that is biased at low counts. Lights that are not analytic
    * (sky, textured emitters, sun discs) keep the plain NEE term f V / p: the
    * sampled light decides which term its sample feeds, so both stay unbiased
-   * under the one light-selection pdf. The visible part f V / p is added by
-   * resolve_shadows as before. */
-  path.radiance.xyz = lux_analytic_irradiance(lights, params.light_count, s.p, s.ns, s.ng) -
-                      (analytic_sample ? contribution : (float3)(0.0f));
+   * under the one light-selection pdf. Analytic lights are sampled in
+   * proportion to their exact irradiance here (scatter.h), so f / p ~ E_u
+   * and umbrae are nearly noise-free too. The visible part f V / p is added
+   * by resolve_shadows as before. */
+  path.radiance.xyz = analytic_e - (analytic_sample ? contribution : (float3)(0.0f));
 #endif
   shadow_rays[gid] = shadow;
   shadow_contrib[gid] = (float4)(contribution, 0.0f);

@@ -118,9 +118,10 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   LuxRay shadow;
   float3 contribution;
   int unused_analytic;
+  float3 unused_analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
                  0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed,
-                 &shadow, &contribution, &unused_analytic);
+                 &shadow, &contribution, &unused_analytic, &unused_analytic_e);
   shadow_rays[slot] = shadow;
   shadow_contrib[slot] = (float4)(contribution, 0.0f);
 

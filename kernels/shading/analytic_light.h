@@ -139,15 +139,4 @@ inline float3 lux_light_irradiance(const LuxLight* l, float3 p, float3 ns, float
   return cos_i > 0.0f ? s.radiance * cos_i : (float3)(0.0f);
 }
 
-/* Sum over the light table of the analytic lights' unshadowed irradiance. */
-inline float3 lux_analytic_irradiance(const __global LuxLight* lights, uint light_count, float3 p,
-                                      float3 ns, float3 ng) {
-  float3 e = (float3)(0.0f);
-  for (uint i = 0; i < light_count; ++i) {
-    const LuxLight l = lights[i];
-    e += lux_light_irradiance(&l, p, ns, ng);
-  }
-  return e;
-}
-
 #endif /* LUXEL_SHADING_ANALYTIC_LIGHT_H */

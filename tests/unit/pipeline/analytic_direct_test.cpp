@@ -272,7 +272,7 @@ TEST_F(AnalyticDirectTest, AgreesWithSampledNextEventEstimation) {
 // printed for docs/accuracy.md.
 TEST_F(AnalyticDirectTest, LowSampleCountBiasAgainstClosedForm) {
   const auto s = emitter_scene(true, 0.0f);
-  const int seeds = 24;
+  const int seeds = 64;
   const auto e = expected_texels(s, settings(4, pipeline::DirectLight::kAnalytic), true);
   const auto e_open = expected_texels(emitter_scene(false, 0.0f),
                                       settings(4, pipeline::DirectLight::kAnalytic), false);
