@@ -85,7 +85,7 @@ struct BakeSettings {
   double device_memory_budget_mib = 0;
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
-  DirectLight direct = DirectLight::kAnalytic;
+  DirectLight direct = DirectLight::kSampled;  // docs/accuracy.md "Analytic direct light"
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
   // for GPUs (auto), or either on request (accel/intersector.h).
   accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;

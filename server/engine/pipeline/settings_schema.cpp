@@ -229,7 +229,7 @@ std::vector<Setting> make_schema() {
                "only) or sampled (plain next-event estimation)",
        .flag = "--direct",
        .metavar = "D",
-       .default_value = SettingValue::of_text("analytic"),
+       .default_value = SettingValue::of_text("sampled"),
        .choices = {"analytic", "sampled"},
        .get =
            [](const BakeSettings& s) { return SettingValue::of_text(direct_light_name(s.direct)); },
