@@ -266,6 +266,37 @@ TEST_F(AnalyticDirectTest, AgreesWithSampledNextEventEstimation) {
       << "a 2 % error must be detected";
 }
 
+// Mixed lights: the emitter and a point light are analytic, a constant sky
+// is not (its samples stay plain NEE under the same light choice, and keep
+// MIS with first segments). Same z-test as above.
+TEST_F(AnalyticDirectTest, MixedLightsAgreeWithSampledNextEventEstimation) {
+  auto s = emitter_scene(true, 0.5f);
+  scene::Light light;
+  light.type = scene::LightType::kPoint;
+  light.intensity = 0.4f;
+  light.position = {-0.5f, 0.4f, 0.3f};
+  s.lights.push_back(light);
+  auto sa = settings(1024, pipeline::DirectLight::kAnalytic);
+  auto sb = settings(1024, pipeline::DirectLight::kSampled, 11);
+  for (auto* st : {&sa, &sb}) {
+    st->lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+    st->lights.sky.color = {0.3f, 0.3f, 0.3f};
+  }
+  const auto a = bake(s, sa);
+  const auto b = bake(s, sb);
+  ASSERT_NE(a.features.find("direct_analytic"), std::string::npos) << a.features;
+  auto se = [&](uint32_t t) { return std::hypot(engine_se(a, t), engine_se(b, t)); };
+  auto in_plane = [&](uint32_t t) { return (t % a.width + 1.0) / a.width <= 0.5; };
+  EXPECT_TRUE(z_test(
+                  a, [&](uint32_t t) { return in_plane(t) ? b.irradiance[t * 4 + 1] : NAN; }, se)
+                  .ok());
+  EXPECT_FALSE(
+      z_test(
+          a, [&](uint32_t t) { return in_plane(t) ? 1.02 * b.irradiance[t * 4 + 1] : NAN; }, se)
+          .ok())
+      << "a 2 % error must be detected";
+}
+
 // Bias at a low sample count: the mean over seeds of 4-sample bakes against
 // the closed form, over the texels in the occluder's penumbra and umbra,
 // where visibility is sampled. The difference form is unbiased, so the
