@@ -17,6 +17,9 @@
  *   LUX_ADAPTIVE         adaptive sampling: iterations after the warm-up
  *                        allocate paths by per-texel error (bake/adaptive.h);
  *                        without it the alloc_* kernels are empty
+ *   LUX_DIRECT_ANALYTIC  irradiance lightmaps with lights of closed-form
+ *                        irradiance: exact unshadowed direct light at the
+ *                        texel point, sampled visibility (bake/raygen.h)
  *   LUX_BASIS            directional encodings (SH, SG, Ambient Dice): the
  *                        first segment is sampled uniformly over the
  *                        hemisphere and each path leaves a LuxBasisSample

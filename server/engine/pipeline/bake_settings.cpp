@@ -23,6 +23,10 @@ const char* filter_name(Filter f) {
   return f == Filter::kGaussian ? "gaussian" : "box";
 }
 
+const char* direct_light_name(DirectLight d) {
+  return d == DirectLight::kAnalytic ? "analytic" : "sampled";
+}
+
 const char* error_metric_name(ErrorMetric m) {
   switch (m) {
     case ErrorMetric::kEstimate:
@@ -59,6 +63,9 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
+  // Only when not the default: bake fingerprints (checkpoint resume) and
+  // manifests of default bakes stay what they were before the setting.
+  if (direct != DirectLight::kSampled) m["direct"] = direct_light_name(direct);
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
   if (!node_placements.empty()) {

@@ -21,6 +21,11 @@ namespace luxel::pipeline {
 
 enum class Filter { kBox, kGaussian };
 
+// Direct light at the texel point (irradiance lightmaps): the exact
+// unshadowed irradiance of analytic lights with sampled visibility
+// (kernels/bake/raygen.h), or plain next-event estimation.
+enum class DirectLight { kAnalytic, kSampled };
+
 // Where the lightmap UVs come from (pipeline/lightmap_layout.h).
 enum class UvMode { kAuto, kGenerate, kExisting };
 
@@ -82,6 +87,7 @@ struct BakeSettings {
   double device_memory_budget_mib = 0;
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
+  DirectLight direct = DirectLight::kSampled;  // docs/accuracy.md "Analytic direct light"
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
   // for GPUs (auto), or either on request (accel/intersector.h).
   accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;
@@ -119,6 +125,7 @@ Status validate_settings(const BakeSettings& settings,
                          const char* resolution_limit = "the engine's limit max_resolution");
 
 const char* filter_name(Filter f);
+const char* direct_light_name(DirectLight d);
 const char* uv_mode_name(UvMode m);
 
 }  // namespace luxel::pipeline

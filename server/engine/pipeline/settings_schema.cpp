@@ -243,6 +243,23 @@ std::vector<Setting> make_schema() {
            [](BakeSettings& s, const SettingValue& v) {
              s.filter = v.text == "gaussian" ? Filter::kGaussian : Filter::kBox;
            }});
+  t.push_back(
+      {.name = "direct",
+       .type = Type::kChoice,
+       .units = "",
+       .help = "direct light at the texel point: analytic (exact unshadowed irradiance of "
+               "untextured emissive triangles and punctual lights, sampled shadows; irradiance "
+               "only) or sampled (plain next-event estimation)",
+       .flag = "--direct",
+       .metavar = "D",
+       .default_value = SettingValue::of_text("sampled"),
+       .choices = {"analytic", "sampled"},
+       .get =
+           [](const BakeSettings& s) { return SettingValue::of_text(direct_light_name(s.direct)); },
+       .set =
+           [](BakeSettings& s, const SettingValue& v) {
+             s.direct = v.text == "sampled" ? DirectLight::kSampled : DirectLight::kAnalytic;
+           }});
   t.push_back({.name = "intersector",
                .type = Type::kChoice,
                .units = "",
