@@ -25,6 +25,7 @@
 #include "service/job_queue.h"
 #include "service/log.h"
 #include "service/luxel_service.h"
+#include "service/parse_error_interceptor.h"
 #include "service/scene_store.h"
 
 namespace {
@@ -95,6 +96,8 @@ int run(const DaemonConfig& config) {
   so.token = config.token;
   so.device_description = device_description;
   so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
+  so.streams = config.streams;
+  so.upload_deadlines = {config.upload_idle_timeout_s, config.upload_timeout_s};
   LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
 
   Status cred_error;
@@ -113,6 +116,9 @@ int run(const DaemonConfig& config) {
   builder.AddListeningPort(config.listen, creds, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(make_parse_error_interceptor_factory());
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
     log_event("fatal", {{"error", "cannot listen on " + config.listen +
