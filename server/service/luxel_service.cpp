@@ -222,8 +222,8 @@ grpc::Status LuxelService::CancelBake(grpc::ServerContext* ctx, const v1::Cancel
   return grpc::Status::OK;
 }
 
-grpc::ServerWriteReactor<v1::BakeEvent>* LuxelService::WatchBake(
-    grpc::CallbackServerContext* ctx, const v1::WatchBakeRequest* req) {
+grpc::ServerWriteReactor<v1::BakeEvent>* LuxelService::WatchBake(grpc::CallbackServerContext* ctx,
+                                                                 const v1::WatchBakeRequest* req) {
   StreamSlot slot;
   grpc::Status refused = authenticate(ctx, "WatchBake");
   if (refused.ok()) refused = check_id(req->bake_id(), "bake_id", 32);

@@ -40,9 +40,8 @@ struct ServiceOptions {
 
 grpc::Status to_grpc(const Status& status);
 
-using LuxelServiceBase =
-    v1::Luxel::WithCallbackMethod_UploadScene<v1::Luxel::WithCallbackMethod_WatchBake<
-        v1::Luxel::Service>>;
+using LuxelServiceBase = v1::Luxel::WithCallbackMethod_UploadScene<
+    v1::Luxel::WithCallbackMethod_WatchBake<v1::Luxel::Service>>;
 
 class LuxelService final : public LuxelServiceBase {
  public:
@@ -52,8 +51,8 @@ class LuxelService final : public LuxelServiceBase {
   // Refuse new uploads and bakes; end open WatchBake streams.
   void begin_shutdown() { shutting_down_ = true; }
 
-  grpc::ServerReadReactor<v1::UploadSceneRequest>* UploadScene(
-      grpc::CallbackServerContext* ctx, v1::SceneInfo* response) override;
+  grpc::ServerReadReactor<v1::UploadSceneRequest>* UploadScene(grpc::CallbackServerContext* ctx,
+                                                               v1::SceneInfo* response) override;
   grpc::Status GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
                         v1::SceneInfo* response) override;
   grpc::Status ListScenes(grpc::ServerContext* ctx, const v1::ListScenesRequest* req,

@@ -16,12 +16,11 @@ class ParseErrorInterceptor final : public grpc::experimental::Interceptor {
     if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS)) {
       const grpc::Status sent = methods->GetSendStatus();
       if (sent.error_code() == grpc::StatusCode::INTERNAL &&
-          (sent.error_message().empty() ||
-           sent.error_message() == "Did not read entire message"))
-        methods->ModifySendStatus(grpc::Status(
-            grpc::StatusCode::INVALID_ARGUMENT,
-            "request: the message bytes do not parse as the request of " + method_ +
-                " (malformed protobuf)"));
+          (sent.error_message().empty() || sent.error_message() == "Did not read entire message"))
+        methods->ModifySendStatus(
+            grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                         "request: the message bytes do not parse as the request of " + method_ +
+                             " (malformed protobuf)"));
     }
     methods->Proceed();
   }

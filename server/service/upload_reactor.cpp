@@ -31,8 +31,8 @@ UploadReactor::UploadReactor(grpc::CallbackServerContext* ctx, SceneStore& scene
 grpc::Status UploadReactor::end_locked(const grpc::Status& status, const char* event) {
   finished_ = true;
   if (event != nullptr && upload_)
-    log_event(event, {{"scene", scene_id_of(upload_->header())},
-                      {"error", status.error_message()}});
+    log_event(event,
+              {{"scene", scene_id_of(upload_->header())}, {"error", status.error_message()}});
   upload_.reset();  // removes the staging folder unless committed
   return status;
 }
