@@ -78,6 +78,7 @@ class StreamLimits(unittest.TestCase):
         cls.daemon = Luxeld(os.environ["LUXELD"], extra_args=[
             "--max-uploads", "2", "--max-uploads-per-client", "4",
             "--max-watchers", "1000", "--max-watchers-per-client", "3",
+            "--max-downloads-per-client", "1",
             "--upload-idle-timeout", str(IDLE_TIMEOUT_S)]).start()
         cls.client = Client(cls.daemon.address)
         cls.channel = grpc.insecure_channel(cls.daemon.address)
@@ -150,6 +151,31 @@ class StreamLimits(unittest.TestCase):
         finally:
             self.client.cancel_bake(bake.bake_id)
         wait_until(lambda: self.status().watchers == 0, what="every watcher gone")
+
+    def test_download_cap_per_client_refuses_then_frees(self):
+        scene = self.client.upload_scene(CORNELL)
+        # A float EXR of 512x512 texels, read through a channel without BDP
+        # probing (the HTTP/2 window stays at 64 KiB): an unread download
+        # stays open on the daemon.
+        bake = self.client.submit_bake(scene.scene_id, resolution=512, samples_per_texel=1)
+        info = self.client.wait(bake.bake_id)
+        request = luxel_pb2.DownloadResultRequest(bake_id=bake.bake_id, artifact="irradiance.exr")
+        slow = grpc.insecure_channel(self.daemon.address, options=[("grpc.http2.bdp_probe", 0)])
+        self.addCleanup(slow.close)
+        held = luxel_pb2_grpc.LuxelStub(slow).DownloadResult(request)
+        first = next(held)
+        self.assertGreater(first.total_size, 1 << 20, "the artifact must outgrow the window")
+        wait_until(lambda: self.status().downloads == 1, what="1 open download")
+        with self.assertRaises(grpc.RpcError) as refused:
+            next(self.stub.DownloadResult(request))
+        self.assertEqual(refused.exception.code(), grpc.StatusCode.RESOURCE_EXHAUSTED)
+        self.assertIn("--max-downloads-per-client", refused.exception.details())
+        held.cancel()
+        wait_until(lambda: self.status().downloads == 0, what="the download slot freed")
+        d = self.client.download(bake.bake_id, "manifest.json",
+                                 pathlib.Path(self.daemon.tmp.name) / "manifest.json")
+        self.assertGreater(d.size, 0)
+        self.assertIn("manifest.json", info.artifacts)
 
     def test_malformed_request_bytes_are_invalid_argument(self):
         for method in ("GetBake", "SubmitBake", "GetServerStatus"):
