@@ -12,11 +12,21 @@ class ParseErrorInterceptor final : public grpc::experimental::Interceptor {
  public:
   explicit ParseErrorInterceptor(std::string method) : method_(std::move(method)) {}
 
+  bool is_parse_failure(const grpc::Status& sent) const {
+    const std::string& m = sent.error_message();
+    if (sent.error_code() == grpc::StatusCode::INTERNAL)
+      return m.empty() || m == "Did not read entire message";
+    // A callback server-streaming handler (WatchBake) whose request does not
+    // parse never creates our reactor; gRPC ends the call with UNIMPLEMENTED
+    // and no message instead (CallbackServerStreamingHandler::RunHandler).
+    return sent.error_code() == grpc::StatusCode::UNIMPLEMENTED && m.empty() &&
+           method_ == "/luxel.v1.Luxel/WatchBake";
+  }
+
   void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
     if (methods->QueryInterceptionHookPoint(InterceptionHookPoints::PRE_SEND_STATUS)) {
       const grpc::Status sent = methods->GetSendStatus();
-      if (sent.error_code() == grpc::StatusCode::INTERNAL &&
-          (sent.error_message().empty() || sent.error_message() == "Did not read entire message"))
+      if (is_parse_failure(sent))
         methods->ModifySendStatus(
             grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
                          "request: the message bytes do not parse as the request of " + method_ +

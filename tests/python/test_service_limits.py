@@ -178,13 +178,19 @@ class StreamLimits(unittest.TestCase):
         self.assertIn("manifest.json", info.artifacts)
 
     def test_malformed_request_bytes_are_invalid_argument(self):
-        for method in ("GetBake", "SubmitBake", "GetServerStatus"):
-            call = self.channel.unary_unary(f"/luxel.v1.Luxel/{method}")  # raw bytes both ways
+        for method in ("GetBake", "SubmitBake", "GetServerStatus", "WatchBake", "DownloadResult"):
+            streaming = method in ("WatchBake", "DownloadResult")
+            # Raw bytes both ways (no serializer).
+            call = (self.channel.unary_stream if streaming else self.channel.unary_unary)(
+                f"/luxel.v1.Luxel/{method}")
             for junk in (b"\x0a\x64abc", b"\xff\xff\xff\xff\xff"):
                 with self.subTest(method=method, junk=junk):
                     with self.assertRaises(grpc.RpcError) as e:
-                        call(junk, timeout=10)
-                    self.assertEqual(e.exception.code(), grpc.StatusCode.INVALID_ARGUMENT)
+                        result = call(junk, timeout=10)
+                        if streaming:
+                            list(result)
+                    self.assertEqual(e.exception.code(), grpc.StatusCode.INVALID_ARGUMENT,
+                                     e.exception.details())
                     self.assertIn("malformed", e.exception.details())
         self.status()  # and the daemon lives on
 
