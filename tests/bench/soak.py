@@ -56,12 +56,16 @@ TERMINAL = {"SUCCEEDED", "FAILED", "CANCELLED"}
 
 
 def proc_figures(pid):
-    """RSS (MiB), open fds and threads of a process, from /proc."""
+    """RSS (MiB), open fds, threads and CPU seconds (user + system) of a
+    process, from /proc."""
     status = pathlib.Path(f"/proc/{pid}/status").read_text()
     fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+    stat = pathlib.Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    ticks = int(stat[11]) + int(stat[12])  # utime, stime (fields 14, 15)
     return {"rss_mib": round(int(fields["VmRSS"].split()[0]) / 1024, 1),
             "fds": len(os.listdir(f"/proc/{pid}/fd")),
-            "threads": int(fields["Threads"])}
+            "threads": int(fields["Threads"]),
+            "cpu_s": round(ticks / os.sysconf("SC_CLK_TCK"), 1)}
 
 
 class Soak:
@@ -234,11 +238,11 @@ class Soak:
         start = time.monotonic()
         for t in threads:
             t.start()
-        peak = dict(before)
+        peak = {k: v for k, v in before.items() if k != "cpu_s"}
         while time.monotonic() - start < args.minutes * 60:
             time.sleep(1)
             now = proc_figures(pid)
-            peak = {k: max(peak[k], now[k]) for k in peak}
+            peak = {k: max(peak[k], now[k]) for k in peak if k != "cpu_s"}
         self.stop.set()
         for t in threads:
             t.join()
