@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "service/files.h"
+#include "service/metrics.h"
 
 namespace luxel::service {
 
@@ -48,7 +49,10 @@ const char* kDaemonUsage =
     "  --upload-idle-timeout S   end an upload that sends nothing for S seconds with\n"
     "                            DEADLINE_EXCEEDED and discard it (default 60)\n"
     "  --upload-timeout S        end an upload not complete after S seconds (default 3600;\n"
-    "                            0 = no limit)\n";
+    "                            0 = no limit)\n"
+    "  --metrics-listen HOST:PORT  serve Prometheus metrics at http://HOST:PORT/metrics\n"
+    "                            (numeric address, e.g. 127.0.0.1:9464; default off)\n"
+    "  --log-format text|json    log lines on stderr: key=value (default) or JSON objects\n";
 
 Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
                                        const char* token_env) {
@@ -126,6 +130,15 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--upload-timeout") {
       LUXEL_RETURN_IF_ERROR(number(0, 1e7, &x));
       c.upload_timeout_s = x;
+    } else if (k == "--metrics-listen") {
+      LUXEL_RETURN_IF_ERROR(value());
+      LUXEL_RETURN_IF_ERROR(check_listen_address(k, v));
+      c.metrics_listen = v;
+    } else if (k == "--log-format") {
+      LUXEL_RETURN_IF_ERROR(value());
+      if (v != "text" && v != "json")
+        return invalid_argument("--log-format: expected 'text' or 'json', got '" + v + "'");
+      c.log_json = v == "json";
     } else
       return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
   }

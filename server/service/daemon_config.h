@@ -26,6 +26,8 @@ struct DaemonConfig {
   StreamCaps streams;                 // --max-uploads, --max-watchers, ... (per client too)
   double upload_idle_timeout_s = 60;  // an upload that sends nothing this long ends
   double upload_timeout_s = 3600;     // an upload not complete after this ends; 0: none
+  std::string metrics_listen;         // Prometheus /metrics HOST:PORT ("" = off)
+  bool log_json = false;              // --log-format json (one JSON object per line)
   bool help = false;
 };
 

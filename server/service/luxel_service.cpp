@@ -10,6 +10,8 @@
 #include "luxel_version.h"
 #include "service/files.h"
 #include "service/log.h"
+#include "service/metrics.h"
+#include "service/rpc_interceptor.h"
 #include "service/watch_reactor.h"
 
 namespace luxel::service {
@@ -69,6 +71,8 @@ LuxelService::LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue
       pump_(std::make_unique<StreamPump>(options_.pump_period)) {}
 
 grpc::Status LuxelService::authenticate(grpc::ServerContextBase* ctx, const char* rpc) const {
+  // Every handler starts here: its log lines carry the call's request id.
+  set_thread_request_id(request_id_of(ctx));
   if (options_.token.empty()) return grpc::Status::OK;
   const std::string expected = "Bearer " + options_.token;
   const auto& md = ctx->client_metadata();
@@ -89,8 +93,9 @@ grpc::ServerReadReactor<v1::UploadSceneRequest>* LuxelService::UploadScene(
   if (refused.ok() && shutting_down_)
     refused = {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
   if (refused.ok()) refused = slots_.acquire(StreamKind::kUpload, peer_host(ctx->peer()), &slot);
-  auto* reactor = new UploadReactor(ctx, scenes_, options_.upload, options_.upload_deadlines,
-                                    upload_bytes_, response, std::move(slot), refused);
+  auto* reactor =
+      new UploadReactor(ctx, scenes_, options_.upload, options_.upload_deadlines, upload_bytes_,
+                        response, std::move(slot), request_id_of(ctx), refused);
   pump_->add(reactor);
   return reactor;
 }
@@ -232,8 +237,8 @@ grpc::ServerWriteReactor<v1::BakeEvent>* LuxelService::WatchBake(grpc::CallbackS
     if (auto first = bakes_.view(req->bake_id()); !first) refused = to_grpc(first.status());
   }
   if (refused.ok()) refused = slots_.acquire(StreamKind::kWatch, peer_host(ctx->peer()), &slot);
-  auto* reactor =
-      new WatchReactor(bakes_, req->bake_id(), std::move(slot), shutting_down_, refused);
+  auto* reactor = new WatchReactor(bakes_, req->bake_id(), std::move(slot), shutting_down_,
+                                   request_id_of(ctx), refused);
   pump_->add(reactor);
   return reactor;
 }
@@ -286,7 +291,9 @@ grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
     msg.set_chunk(std::move(current));
     const bool last = next.empty();
     if (last) msg.set_sha256(hash.hex_digest());
+    const uint64_t chunk_bytes = msg.chunk().size();
     if (!writer->Write(msg)) return {grpc::StatusCode::CANCELLED, "client went away"};
+    if (options_.metrics) options_.metrics->download_bytes(chunk_bytes);
     if (last) break;
     current = std::move(next);
   }

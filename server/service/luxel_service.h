@@ -26,6 +26,8 @@
 
 namespace luxel::service {
 
+class Metrics;
+
 struct ServiceOptions {
   UploadLimits upload;
   SettingsLimits settings;
@@ -36,6 +38,7 @@ struct ServiceOptions {
   UploadDeadlines upload_deadlines;
   // How often watchers look for a new bake state and uploads for deadlines.
   std::chrono::milliseconds pump_period{50};
+  Metrics* metrics = nullptr;  // download bytes (metrics.h); may be null
 };
 
 grpc::Status to_grpc(const Status& status);
@@ -50,6 +53,8 @@ class LuxelService final : public LuxelServiceBase {
 
   // Refuse new uploads and bakes; end open WatchBake streams.
   void begin_shutdown() { shutting_down_ = true; }
+  // Scene bytes received by UploadScene since the start (metrics).
+  uint64_t upload_bytes() const { return upload_bytes_.load(); }
 
   grpc::ServerReadReactor<v1::UploadSceneRequest>* UploadScene(grpc::CallbackServerContext* ctx,
                                                                v1::SceneInfo* response) override;

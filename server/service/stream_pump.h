@@ -14,8 +14,11 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
+
+#include "service/log.h"
 
 namespace luxel::service {
 
@@ -26,6 +29,17 @@ class PumpedStream {
   virtual void tick(std::chrono::steady_clock::time_point now) = 0;
   // Set by the reactor's OnDone; the pump then deletes it.
   std::atomic<bool> done{false};
+};
+
+// Reactions run on threads shared by every call (gRPC's callback threads,
+// the pump): each sets its call's request id for its log lines and clears it
+// when it returns, so no id leaks into another call's lines.
+class RequestIdScope {
+ public:
+  explicit RequestIdScope(const std::string& id) { set_thread_request_id(id); }
+  ~RequestIdScope() { set_thread_request_id(""); }
+  RequestIdScope(const RequestIdScope&) = delete;
+  RequestIdScope& operator=(const RequestIdScope&) = delete;
 };
 
 class StreamPump {

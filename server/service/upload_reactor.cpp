@@ -10,7 +10,7 @@ namespace luxel::service {
 UploadReactor::UploadReactor(grpc::CallbackServerContext* ctx, SceneStore& scenes,
                              const UploadLimits& limits, UploadDeadlines deadlines,
                              std::atomic<uint64_t>& upload_bytes, v1::SceneInfo* response,
-                             StreamSlot slot, grpc::Status refused)
+                             StreamSlot slot, std::string request_id, grpc::Status refused)
     : ctx_(ctx),
       scenes_(scenes),
       limits_(limits),
@@ -18,8 +18,10 @@ UploadReactor::UploadReactor(grpc::CallbackServerContext* ctx, SceneStore& scene
       upload_bytes_(upload_bytes),
       response_(response),
       slot_(std::move(slot)),
+      request_id_(std::move(request_id)),
       started_(std::chrono::steady_clock::now()),
       last_activity_(started_) {
+  RequestIdScope id(request_id_);
   if (!refused.ok()) {
     finished_ = true;
     Finish(refused);
@@ -77,6 +79,7 @@ grpc::Status UploadReactor::end_of_stream() {
 }
 
 void UploadReactor::OnReadDone(bool ok) {
+  RequestIdScope id(request_id_);
   std::optional<grpc::Status> finish;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -96,6 +99,7 @@ void UploadReactor::OnReadDone(bool ok) {
 }
 
 void UploadReactor::tick(std::chrono::steady_clock::time_point now) {
+  RequestIdScope id(request_id_);
   std::optional<grpc::Status> finish;
   {
     std::unique_lock<std::mutex> lock(mu_, std::try_to_lock);

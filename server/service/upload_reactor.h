@@ -14,6 +14,7 @@
 #include <chrono>
 #include <memory>
 #include <mutex>
+#include <string>
 
 #include "luxel/v1/luxel.grpc.pb.h"
 #include "service/scene_store.h"
@@ -34,7 +35,8 @@ class UploadReactor final : public grpc::ServerReadReactor<v1::UploadSceneReques
   // With `refused` not OK the call finishes at once with that status.
   UploadReactor(grpc::CallbackServerContext* ctx, SceneStore& scenes, const UploadLimits& limits,
                 UploadDeadlines deadlines, std::atomic<uint64_t>& upload_bytes,
-                v1::SceneInfo* response, StreamSlot slot, grpc::Status refused);
+                v1::SceneInfo* response, StreamSlot slot, std::string request_id,
+                grpc::Status refused);
 
   void tick(std::chrono::steady_clock::time_point now) override;
   void OnReadDone(bool ok) override;
@@ -55,6 +57,7 @@ class UploadReactor final : public grpc::ServerReadReactor<v1::UploadSceneReques
   std::atomic<uint64_t>& upload_bytes_;
   v1::SceneInfo* const response_;
   StreamSlot slot_;
+  const std::string request_id_;  // for log lines (rpc_interceptor.h)
   const std::chrono::steady_clock::time_point started_;
 
   std::mutex mu_;  // held while a chunk is written; tick only try_locks it

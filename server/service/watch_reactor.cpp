@@ -8,11 +8,14 @@
 namespace luxel::service {
 
 WatchReactor::WatchReactor(BakeStore& bakes, std::string bake_id, StreamSlot slot,
-                           const std::atomic<bool>& shutting_down, grpc::Status refused)
+                           const std::atomic<bool>& shutting_down, std::string request_id,
+                           grpc::Status refused)
     : bakes_(bakes),
       bake_id_(std::move(bake_id)),
       slot_(std::move(slot)),
-      shutting_down_(shutting_down) {
+      shutting_down_(shutting_down),
+      request_id_(std::move(request_id)) {
+  RequestIdScope id(request_id_);
   if (!refused.ok()) {
     finished_ = true;
     Finish(refused);
@@ -28,6 +31,7 @@ void WatchReactor::end(const char* why) {
 }
 
 void WatchReactor::tick(std::chrono::steady_clock::time_point) {
+  RequestIdScope id(request_id_);
   std::optional<grpc::Status> finish;
   bool start_write = false;
   {
@@ -71,6 +75,7 @@ void WatchReactor::tick(std::chrono::steady_clock::time_point) {
 }
 
 void WatchReactor::OnWriteDone(bool ok) {
+  RequestIdScope id(request_id_);
   std::optional<grpc::Status> finish;
   {
     std::lock_guard<std::mutex> lock(mu_);
@@ -90,6 +95,7 @@ void WatchReactor::OnWriteDone(bool ok) {
 }
 
 void WatchReactor::OnCancel() {
+  RequestIdScope id(request_id_);
   bool finish_now = false;
   {
     std::lock_guard<std::mutex> lock(mu_);

@@ -23,7 +23,8 @@ class WatchReactor final : public grpc::ServerWriteReactor<v1::BakeEvent>, publi
  public:
   // With `refused` not OK the call finishes at once with that status.
   WatchReactor(BakeStore& bakes, std::string bake_id, StreamSlot slot,
-               const std::atomic<bool>& shutting_down, grpc::Status refused);
+               const std::atomic<bool>& shutting_down, std::string request_id,
+               grpc::Status refused);
 
   void tick(std::chrono::steady_clock::time_point now) override;
   void OnWriteDone(bool ok) override;
@@ -38,6 +39,7 @@ class WatchReactor final : public grpc::ServerWriteReactor<v1::BakeEvent>, publi
   const std::string bake_id_;
   StreamSlot slot_;
   const std::atomic<bool>& shutting_down_;
+  const std::string request_id_;  // for log lines (rpc_interceptor.h)
   std::mutex mu_;
   bool writing_ = false, finished_ = false, final_sent_ = false, sent_any_ = false;
   uint64_t seen_version_ = 0, sent_snapshot_ = 0;
