@@ -14,6 +14,7 @@
 #include <string>
 
 #include "luxel/v1/luxel.grpc.pb.h"
+#include "pipeline/resource_estimate.h"
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
@@ -33,6 +34,9 @@ struct ServiceOptions {
   SettingsLimits settings;
   std::string token;               // empty: no authentication
   std::string device_description;  // reported by GetServerStatus
+  // The bake device's memory limits, for the estimate at SubmitBake
+  // (pipeline/resource_estimate.h); zeros when there is no device.
+  pipeline::DeviceLimits device;
   uint32_t max_concurrent_bakes = 1;
   StreamCaps streams;
   UploadDeadlines upload_deadlines;
@@ -80,6 +84,10 @@ class LuxelService final : public LuxelServiceBase {
                                v1::ServerStatus* response) override;
 
  private:
+  // The resource estimate of a bake (pipeline/resource_estimate.h) as a
+  // gRPC status: RESOURCE_EXHAUSTED or INVALID_ARGUMENT naming the setting.
+  grpc::Status estimate_at_submit(const std::string& scene_id,
+                                  const pipeline::BakeSettings& settings);
   // UNAUTHENTICATED unless the call carries the configured bearer token.
   grpc::Status authenticate(grpc::ServerContextBase* ctx, const char* rpc) const;
 

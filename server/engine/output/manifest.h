@@ -90,6 +90,11 @@ struct Manifest {
   // pipeline/bake_outputs.cpp), kept as JSON text. Empty when the file's
   // TEXCOORD_1 was used.
   std::string uv_layout_json;
+  // Seam stitching (output/seam_stitch.h): one JSON object (seam edges,
+  // sample points, the bilinear discontinuity along seams before and after,
+  // seconds; see pipeline/bake_seams.cpp), kept as JSON text. Empty when
+  // seam_stitch is off.
+  std::string seam_stitch_json;
 
   struct Stats {
     double seconds = 0;

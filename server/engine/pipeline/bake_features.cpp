@@ -16,6 +16,7 @@ device::FeatureSet derive_bake_features(const BakeSettings& settings, const Ligh
     f.set("TEXCOORD1");
   if (settings.sort_directions) f.set("SORT_DIRECTIONS");
   if (settings.compaction) f.set("COMPACTION");
+  if (settings.adaptive) f.set("ADAPTIVE");
   if (settings.filter == Filter::kGaussian) f.set("FILTER_GAUSSIAN");
   if (settings.random_sequence) f.set("SEQUENCE_RANDOM");
   if (!plan.empty()) f.set("BASIS");

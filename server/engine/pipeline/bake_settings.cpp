@@ -74,10 +74,12 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["placements"] = list;
   }
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
+  m["adaptive"] = adaptive ? strprintf("on,min=%u", adaptive_min_samples) : "off";
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";
   m["dilation_texels"] = std::to_string(dilation_texels);
+  m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";
     for (const auto& n : encodings.names) list += "," + n;
@@ -120,6 +122,8 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.atlas.resolution > s.atlas.max_resolution)
     return bad("resolution", strprintf("%d exceeds %s=%d", s.atlas.resolution, resolution_limit,
                                        s.atlas.max_resolution));
+  if (!std::isfinite(s.atlas.texel_density))
+    return bad("texel_density", "does not fit a 32-bit float (at most 3.4e38)");
   if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))
     return bad("resolution", "give a resolution or a positive texel density");
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))

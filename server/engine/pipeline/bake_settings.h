@@ -60,9 +60,11 @@ struct BakeSettings {
 
   // Stopping rules: whichever is reached first. 0 disables a rule; at least
   // one must be set.
-  uint32_t samples_per_texel = 256;  // every covered texel has at least this many
-  double time_budget_s = 0;          // wall-clock seconds of path tracing
-  double target_error = 0;           // stop when target_metric falls to this
+  // Paths per covered texel: with adaptive sampling the mean over covered
+  // texels (paths traced = this x covered texels), uniform: every texel's.
+  uint32_t samples_per_texel = 256;
+  double time_budget_s = 0;  // wall-clock seconds of path tracing
+  double target_error = 0;   // stop when target_metric falls to this
   ErrorMetric target_metric = ErrorMetric::kEstimate;
   // Benchmark mode: a reference lightmap of the bake's size, RGBA float per
   // texel, row 0 = top (as BakeResult::irradiance, e.g. a converged bake's
@@ -90,6 +92,12 @@ struct BakeSettings {
   LightSettings lights;        // sky, sun, directional angular radius
   EncodingSettings encodings;  // directional encodings besides irradiance
 
+  // Adaptive sampling (thesis §3.3, kernels/bake/adaptive.h): after a
+  // uniform warm-up of adaptive_min_samples paths per texel, each
+  // iteration's paths go to texels in proportion to their relative error.
+  bool adaptive = true;
+  uint32_t adaptive_min_samples = 8;
+
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;
   bool sort_directions = false;
@@ -97,6 +105,7 @@ struct BakeSettings {
 
   double progress_interval_s = 1.0;  // progress callback period
   int dilation_texels = 2;           // output: fill uncovered texels this far
+  bool seam_stitch = true;           // output: make texels agree across UV seams (seam_stitch.h)
   JobSettings job;                   // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.

@@ -49,6 +49,7 @@ Manifest full_manifest() {
   m.stats.termination = "samples";
   m.stats.covered_texels = 99999;
   m.dilation_texels = 4;
+  m.seam_stitch_json = R"({"irradiance_after":{"rms_abs":0.25},"stitched_edges":3})";
   return m;
 }
 
@@ -108,6 +109,7 @@ TEST(Manifest, RoundTripKeepsEveryField) {
   EXPECT_EQ(got.stats.termination, m.stats.termination);
   EXPECT_EQ(got.stats.covered_texels, m.stats.covered_texels);
   EXPECT_EQ(got.dilation_texels, m.dilation_texels);
+  EXPECT_EQ(got.seam_stitch_json, m.seam_stitch_json);
 }
 
 TEST(Manifest, DefaultsCarryThisBuildsVersion) {
