@@ -134,7 +134,7 @@ def scene_list(args):
             d = args.out / "peer_scenes"
             d.mkdir(parents=True, exist_ok=True)
             subprocess.run([sys.executable, str(_REPO / "tests/bench/peers/make_scenes.py"), str(d)], check=False)
-            out += [("peer_" + f.stem, f, args.resolution) for f in sorted(d.glob("*.gl*"))]
+            out += [("peer_" + f.stem, f, args.resolution) for f in sorted(d.glob("*courtyard.gltf"))]
         else:
             path = pathlib.Path(evt.BUNDLED.get(item, item))
             path = path if path.is_absolute() else _REPO / path
@@ -143,7 +143,12 @@ def scene_list(args):
 
 
 def lights(name):
-    return [] if "cornell" in name.lower() else list(evt.SKY_SUN)
+    """The lighting of a scene without lights of its own (as error_vs_time.py and run_peer_bench.sh)."""
+    if "cornell" in name.lower() or name.startswith("peer_lights"):
+        return []
+    if name.startswith("peer_sky"):
+        return ["--sky", "0.5,0.8,1.0"]  # run_peer_bench.sh's SKY
+    return list(evt.SKY_SUN)
 
 
 def post_seconds(manifest):
