@@ -90,6 +90,10 @@ struct Manifest {
   // pipeline/bake_outputs.cpp), kept as JSON text. Empty when the file's
   // TEXCOORD_1 was used.
   std::string uv_layout_json;
+  // The denoiser that made the "irradiance_denoised" files: one JSON object
+  // (method, iterations, edge-stopping parameters, guides; see
+  // pipeline/denoise.h), kept as JSON text. Empty without denoising.
+  std::string denoise_json;
 
   struct Stats {
     double seconds = 0;

@@ -21,6 +21,11 @@ namespace luxel::pipeline {
 
 enum class Filter { kBox, kGaussian };
 
+// Denoising of the finished lightmap (pipeline/denoise.h): an extra output
+// irradiance_denoised.exr; the raw irradiance.exr is always written too.
+enum class Denoise { kOff, kAtrous };
+const char* denoise_name(Denoise d);
+
 // Where the lightmap UVs come from (pipeline/lightmap_layout.h).
 enum class UvMode { kAuto, kGenerate, kExisting };
 
@@ -38,8 +43,9 @@ struct JobSettings {
   int priority = 0;                // higher runs first; FIFO among equals
   double snapshot_interval_s = 5;  // seconds between snapshots
   SnapshotFormat snapshot_format = SnapshotFormat::kPng;
-  int snapshot_max_side = 512;    // PNG snapshot longest side, pixels
-  std::string reference_bake_id;  // benchmark mode on the daemon
+  int snapshot_max_side = 512;     // PNG snapshot longest side, pixels
+  std::string reference_bake_id;   // benchmark mode on the daemon
+  bool denoise_snapshots = false;  // snapshots denoised (with settings.denoise) for previews
 };
 
 // Lightmap placement of one glTF node dictated by the client (an editor
@@ -95,9 +101,10 @@ struct BakeSettings {
   bool sort_directions = false;
   bool random_sequence = false;
 
-  double progress_interval_s = 1.0;  // progress callback period
-  int dilation_texels = 2;           // output: fill uncovered texels this far
-  JobSettings job;                   // daemon only
+  double progress_interval_s = 1.0;    // progress callback period
+  int dilation_texels = 2;             // output: fill uncovered texels this far
+  Denoise denoise = Denoise::kAtrous;  // output: irradiance_denoised.exr besides irradiance.exr
+  JobSettings job;                     // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.
   std::map<std::string, std::string> describe() const;
