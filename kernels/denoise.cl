@@ -26,6 +26,12 @@ inline float lux_dn_h(int i) {
   return a == 0 ? LUX_DN_H0 : (a == 1 ? LUX_DN_H1 : LUX_DN_H2);
 }
 
+/* max(0, c)^e; native functions: the weights need no full precision (they
+ * stay deterministic on one device). */
+inline float lux_dn_power(float c, float e) {
+  return c > 0.0f ? native_exp2(e * native_log2(c)) : 0.0f;
+}
+
 inline float lux_dn_luminance(float4 c) {
   return dot(c.xyz, (float3)(0.2126f, 0.7152f, 0.0722f));
 }
@@ -82,13 +88,13 @@ __kernel void denoise_atrous(const LuxDenoiseParams p, __global const float4* co
       if (qpos.w <= 0.0f || charts[q] != chart) continue;
       const float4 qc = color_in[q];
       const float plane = dot(n, qpos.xyz - pos.xyz) * plane_scale;
-      const float w_normal = pow(max(0.0f, dot(n, normal[q].xyz)), p.sigma_normal);
+      const float w_normal = lux_dn_power(dot(n, normal[q].xyz), p.sigma_normal);
       /* Symmetric in p and q: both texels' noise (a bright outlier's own
        * variance estimate is high, so a weight by the centre's alone would
        * pull bright texels down and keep dim ones, biasing the mean low). */
-      const float sd = sqrt(var_p + max(variance_in[q], 0.0f));
+      const float sd = native_sqrt(var_p + max(variance_in[q], 0.0f));
       const float w_lum = fabs(lux_dn_luminance(qc) - lum) / (p.sigma_luminance * sd + eps);
-      const float w = lux_dn_h(dx) * lux_dn_h(dy) * w_normal * exp(-plane * plane - w_lum);
+      const float w = lux_dn_h(dx) * lux_dn_h(dy) * w_normal * native_exp(-plane * plane - w_lum);
       sum += w * qc.xyz;
       wsum += w;
       vsum += w * w * variance_in[q];

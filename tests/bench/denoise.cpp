@@ -14,10 +14,16 @@
 // more than 25 degrees, or of a shadow boundary (4-neighbours whose
 // reference luminance differs by more than a factor 2).
 //
-// --timing: an open plane covering an N x N lightmap, 1 sample per texel; the
-// denoiser's device time (denoise_atrous launches) and its wall time with the
-// host guides, per N.
+// --timing: an open plane covering an N x N lightmap (2 samples per texel,
+// constant sky); CPU (user + sys, all threads) and wall seconds of building
+// the host guides, and of one filter run (upload, 5 launches, read back; the
+// best of 3 after a warm-up run), per N.
+#include "pipeline/denoise.h"
+
+#include <sys/resource.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -51,7 +57,8 @@ std::vector<int> parse_list(const char* s) {
   return out;
 }
 
-pipeline::BakeResult bake(const scene::Scene& s, pipeline::BakeSettings st, device::Context& ctx) {
+pipeline::BakeResult run_bake(const scene::Scene& s, const pipeline::BakeSettings& st,
+                              device::Context& ctx) {
   auto r = pipeline::bake(s, st, ctx);
   if (!r) die(r.status().to_string());
   return std::move(r.value());
@@ -119,16 +126,22 @@ Err error(const std::vector<float>& x, const std::vector<float>& ref, const std:
   return e;
 }
 
-double kernel_ms(const pipeline::BakeResult& r, const char* name) {
-  for (const auto& [n, ms] : r.kernel_ms)
-    if (n == name) return ms;
-  return 0;
+// User + system seconds of the whole process (PoCL's worker threads included).
+double cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void timing(const std::vector<int>& sizes, device::Context& ctx) {
   std::printf(
-      "| lightmap | covered texels | denoise_atrous device ms (5 launches) | guides + "
-      "filter wall s |\n|---|---|---|---|\n");
+      "| lightmap | covered texels | guides CPU s | guides wall s | filter CPU s (5 launches + "
+      "transfers) | filter wall s |\n|---|---|---|---|---|---|\n");
   for (int n : sizes) {
     scene::Scene s;
     s.source_name = "plane";
@@ -151,10 +164,28 @@ void timing(const std::vector<int>& sizes, device::Context& ctx) {
     st.samples_per_texel = 2;
     st.max_bounces = 0;
     st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
-    bake(s, st, ctx);  // builds and caches the programs
-    const pipeline::BakeResult r = bake(s, st, ctx);
-    std::printf("| %d² | %zu | %.1f | %.2f |\n", n, r.covered_texels,
-                kernel_ms(r, "denoise_atrous"), r.denoise_s);
+    st.denoise = pipeline::Denoise::kOff;
+    const pipeline::BakeResult r = run_bake(s, st, ctx);
+    auto info = atlas::build_sample_info(s, r.atlas);
+    if (!info) die(info.status().to_string());
+    const double c0 = cpu_seconds();
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto guides = pipeline::build_denoise_guides(s, r.atlas, info.value());
+    const double guide_wall = seconds_since(t0), guide_cpu = cpu_seconds() - c0;
+    auto d = pipeline::Denoiser::create(ctx, guides);
+    if (!d) die(d.status().to_string());
+    const auto variance = pipeline::texel_variance(r.irradiance, r.rel_error);
+    if (!d.value()->run(r.irradiance, variance, {})) die("denoise failed");  // JIT warm-up
+    double best_wall = 1e30, best_cpu = 1e30;
+    for (int k = 0; k < 3; ++k) {
+      const double c = cpu_seconds();
+      const auto t = std::chrono::steady_clock::now();
+      if (!d.value()->run(r.irradiance, variance, {})) die("denoise failed");
+      best_wall = std::min(best_wall, seconds_since(t));
+      best_cpu = std::min(best_cpu, cpu_seconds() - c);
+    }
+    std::printf("| %d² | %zu | %.3f | %.3f | %.3f | %.3f |\n", n, r.covered_texels, guide_cpu,
+                guide_wall, best_cpu, best_wall);
   }
 }
 
@@ -218,7 +249,7 @@ int main(int argc, char** argv) {
     rs.samples_per_texel = uint32_t(ref_spp);
     rs.seed = 99;
     rs.denoise = pipeline::Denoise::kOff;
-    const pipeline::BakeResult r = bake(scene.value(), rs, *ctx.value());
+    const pipeline::BakeResult r = run_bake(scene.value(), rs, *ctx.value());
     ref = r.irradiance;
     std::fprintf(stderr, "reference: %d spp, %.1f s\n", ref_spp, r.seconds);
     if (!ref_cache.empty()) {
@@ -235,7 +266,7 @@ int main(int argc, char** argv) {
   for (int spp : spps) {
     st.samples_per_texel = uint32_t(spp);
     st.seed = 1;
-    const pipeline::BakeResult r = bake(scene.value(), st, *ctx.value());
+    const pipeline::BakeResult r = run_bake(scene.value(), st, *ctx.value());
     if (r.irradiance.size() != ref.size()) die("reference size differs (stale --ref-cache?)");
     auto info = atlas::build_sample_info(scene.value(), r.atlas);
     if (!info) die(info.status().to_string());
