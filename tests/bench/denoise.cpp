@@ -2,7 +2,8 @@
 // (pipeline/denoise.h), the figures of docs/accuracy.md "Denoiser".
 //
 //   bench_denoise [--resolution N] [--bounces B] [--ref-spp N] [--spp 4,16,64]
-//                 [--sky] [--ref-cache FILE.exr] SCENE
+//                 [--sky] [--ref-cache FILE.exr]
+//                 [--sigma-l X] [--sigma-n X] [--iterations N] SCENE
 //   bench_denoise --timing 512,2048
 //
 // Accuracy: a converged reference (seed 99, --ref-spp samples, denoise off;
@@ -13,6 +14,9 @@
 // uncovered texel, of a neighbour in the same chart whose normal differs by
 // more than 25 degrees, or of a shadow boundary (4-neighbours whose
 // reference luminance differs by more than a factor 2).
+//
+// --sigma-l / --sigma-n / --iterations: the filter run again with these
+// parameters (DenoiseParams) instead of the bake's defaults.
 //
 // --timing: an open plane covering an N x N lightmap (2 samples per texel,
 // constant sky); CPU (user + sys, all threads) and wall seconds of building
@@ -195,6 +199,8 @@ int main(int argc, char** argv) {
   int resolution = 128, bounces = 4, ref_spp = 4096;
   std::vector<int> spps = {4, 16, 64}, timing_sizes;
   bool sky = false;
+  pipeline::DenoiseParams params;  // --sigma-l, --iterations: run the filter with these
+  bool custom = false;
   std::string scene_path, ref_cache;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -216,6 +222,12 @@ int main(int argc, char** argv) {
       ref_cache = next();
     else if (a == "--timing")
       timing_sizes = parse_list(next());
+    else if (a == "--sigma-l")
+      params.sigma_luminance = float(std::atof(next())), custom = true;
+    else if (a == "--sigma-n")
+      params.sigma_normal = float(std::atof(next())), custom = true;
+    else if (a == "--iterations")
+      params.iterations = std::atoi(next()), custom = true;
     else
       scene_path = a;
   }
@@ -273,9 +285,18 @@ int main(int argc, char** argv) {
     const auto guides = pipeline::build_denoise_guides(scene.value(), r.atlas, info.value());
     const auto edges = edge_texels(guides, ref);
     const Err a = error(r.irradiance, ref, r.irradiance, nullptr);
-    const Err b = error(r.irradiance_denoised, ref, r.irradiance, nullptr);
+    std::vector<float> denoised = r.irradiance_denoised;
+    if (custom) {
+      auto d = pipeline::Denoiser::create(*ctx.value(), guides);
+      if (!d) die(d.status().to_string());
+      auto o =
+          d.value()->run(r.irradiance, pipeline::texel_variance(r.irradiance, r.rel_error), params);
+      if (!o) die(o.status().to_string());
+      denoised = std::move(o.value());
+    }
+    const Err b = error(denoised, ref, r.irradiance, nullptr);
     const Err c = error(r.irradiance, ref, r.irradiance, &edges);
-    const Err d = error(r.irradiance_denoised, ref, r.irradiance, &edges);
+    const Err d = error(denoised, ref, r.irradiance, &edges);
     std::printf("| %d | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %zu / %zu |\n", spp,
                 a.rmse, b.rmse, a.rel_mse, b.rel_mse, c.rmse, d.rmse, c.rel_mse, d.rel_mse,
                 c.texels, a.texels);
