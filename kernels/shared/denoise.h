@@ -18,9 +18,10 @@ namespace luxel::cl {
 typedef struct LuxDenoiseParams {
   int width, height; /* texels of the (stacked) lightmap */
   int step;          /* tap spacing of this iteration: 1, 2, 4, ... */
-  /* Edge-stopping (Schied et al. 2017, Eq. 3-5): luminance difference in
-   * units of the texel's standard error; normal weight max(0, n.n')^sigma_normal;
-   * distance from the texel's tangent plane in units of sigma_plane texels. */
+  /* Edge-stopping (after Schied et al. 2017, §4.4): luminance difference in
+   * units of sigma_luminance x the two texels' joint standard error; normal
+   * weight max(0, n.n')^sigma_normal; distance from the centre texel's
+   * tangent plane in units of sigma_plane texel sides. */
   float sigma_luminance;
   float sigma_normal;
   float sigma_plane;

@@ -23,7 +23,7 @@ namespace luxel::pipeline {
 
 struct DenoiseParams {
   int iterations = 5;            // tap spacing 1, 2, 4, 8, 16 texels
-  float sigma_luminance = 4.0f;  // SVGF sigma_l: luminance edge-stop, in standard errors
+  float sigma_luminance = 2.0f;  // SVGF sigma_l (their 4): luminance edge-stop, in standard errors
   float sigma_normal = 128.0f;   // SVGF sigma_n: exponent of max(0, n.n')
   float sigma_plane = 1.0f;      // tangent-plane distance edge-stop, in texels
   // Test hook (the injected error of the edge test): treat all texels as one

@@ -207,10 +207,11 @@ TEST_F(DenoiseTest, LowersErrorAgainstClosedFormWithoutBias) {
 
 // (b) + (c): texels within 3 texels of the atlas border between the two
 // charts. Large emitters make each plane's irradiance nearly flat; chart 1
-// is 3x brighter but coplanar with chart 0 (so only the chart id tells them
-// apart: position-plane and normal guides agree).
+// is 1.5x brighter (a step the luminance weight alone lets through at 16 spp)
+// and coplanar with chart 0 (so only the chart id tells them apart: the
+// tangent-plane and normal guides agree).
 TEST_F(DenoiseTest, DoesNotBlurAcrossChartBorders) {
-  TwoCharts t = two_charts(3.0f, 8.0f, 1.0f);
+  TwoCharts t = two_charts(1.5f, 8.0f, 1.0f);
   const int res = 64;
   const auto st = settings(res, 16);
   auto r = pipeline::bake(t.scene, st, *ctx_);
