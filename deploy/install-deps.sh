@@ -17,6 +17,8 @@ PACKAGES=(
   # service: gRPC + protobuf (C++ and Python), OpenSSL for SHA-256 and TLS
   libgrpc++-dev libprotobuf-dev protobuf-compiler protobuf-compiler-grpc libssl-dev
   python3-grpcio python3-protobuf
+  # luxeld --metrics-listen: Prometheus client (registry + pull exposer)
+  prometheus-cpp-dev
   # tests
   googletest libgtest-dev libgmock-dev
   python3 python3-numpy

@@ -25,6 +25,8 @@
 #include "service/job_queue.h"
 #include "service/log.h"
 #include "service/luxel_service.h"
+#include "service/metrics.h"
+#include "service/rpc_interceptor.h"
 #include "service/scene_store.h"
 
 namespace {
@@ -51,6 +53,7 @@ bool is_loopback(const std::string& address) {
 }
 
 int run(const DaemonConfig& config) {
+  set_log_format(config.log_json ? LogFormat::kJson : LogFormat::kText);
   // Before the stores open: they clean up what they take for this daemon's
   // own leftovers (staged uploads, RUNNING bakes to resume).
   auto lock = DataDirLock::acquire(config.data_dir);
@@ -78,7 +81,17 @@ int run(const DaemonConfig& config) {
   }
 
   JobQueue queue(config.max_queued);
+  // Scrape-time figures; the runner and the service exist before serve().
+  BakeRunner* runner_ptr = nullptr;
+  LuxelService* service_ptr = nullptr;
+  Metrics metrics({
+      .queue_depth = [&] { return uint64_t{queue.size()}; },
+      .bakes_by_state = [&] { return bakes.value()->count_by_state(); },
+      .paths_traced = [&] { return runner_ptr ? runner_ptr->paths_traced() : 0; },
+      .upload_bytes = [&] { return service_ptr ? service_ptr->upload_bytes() : 0; },
+  });
   RunnerOptions ro;
+  ro.metrics = &metrics;
   ro.max_concurrent_bakes = config.max_concurrent_bakes;
   ro.device_spec = config.device;
   ro.checkpoint_interval_s = config.checkpoint_interval_s;
@@ -95,7 +108,25 @@ int run(const DaemonConfig& config) {
   so.token = config.token;
   so.device_description = device_description;
   so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
+  so.metrics = &metrics;
   LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
+  runner_ptr = &runner;
+  service_ptr = &service;
+  // Stops the exposer before the runner and the stores it reads go away.
+  struct StopMetrics {
+    Metrics& m;
+    ~StopMetrics() { m.stop_serving(); }
+  } stop_metrics{metrics};
+  if (!config.metrics_listen.empty()) {
+    auto port = metrics.serve(config.metrics_listen);
+    if (!port) {
+      log_event("fatal", {{"error", port.status().to_string()}});
+      runner.shutdown();
+      return 1;
+    }
+    log_event("metrics_listening",
+              {{"address", config.metrics_listen}, {"port", std::to_string(port.value())}});
+  }
 
   Status cred_error;
   auto creds = credentials(config, &cred_error);
@@ -113,6 +144,10 @@ int run(const DaemonConfig& config) {
   builder.AddListeningPort(config.listen, creds, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
+  // Request ids, the per-RPC log line and RPC metrics (rpc_interceptor.h).
+  std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  interceptors.push_back(std::make_unique<RpcInterceptorFactory>(&metrics));
+  builder.experimental().SetInterceptorCreators(std::move(interceptors));
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();
   if (!server || port == 0) {
     log_event("fatal", {{"error", "cannot listen on " + config.listen +

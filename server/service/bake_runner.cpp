@@ -2,12 +2,14 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 
 #include "output/reference_exr.h"
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
 #include "service/files.h"
 #include "service/log.h"
+#include "service/metrics.h"
 
 namespace luxel::service {
 
@@ -216,6 +218,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     last_paths = std::max(last_paths, p.paths);
     (void)bakes_.update(
         bake_id, [&](v1::BakeInfo& b) { *b.mutable_progress() = to_proto(p); }, false);
+    if (options_.metrics)
+      options_.metrics->bake_progress(bake_id, p.paths, p.elapsed_s, p.device_bytes);
     return true;
   };
   hooks.on_layout = [&](const std::string& line) {
@@ -250,6 +254,23 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     };
   }
 
+  // Metrics: every bake that reached the device ends with one observation:
+  // before the record's final state where the outcome is known (a client
+  // that sees the state finds it counted), else on the way out ("failed").
+  std::string outcome = "failed";
+  double traced_s = -1;  // the bake's own seconds once known, else wall time
+  const auto device_start = Clock::now();
+  bool ended = false;
+  auto report_end = [&] {
+    if (ended || !options_.metrics) return;
+    ended = true;
+    const double wall = std::chrono::duration<double>(Clock::now() - device_start).count();
+    options_.metrics->bake_ended(bake_id, outcome, traced_s >= 0 ? traced_s : wall);
+  };
+  struct OnExit {
+    std::function<void()> f;
+    ~OnExit() { f(); }
+  } end_on_exit{report_end};
   auto result = pipeline::bake(*scene.value(), settings.value(), *ctx, hooks);
   if (!result) {
     ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
@@ -257,9 +278,12 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   }
   const pipeline::BakeResult& r = result.value();
   paths_traced_ += r.paths - std::min(r.paths, last_paths);
+  traced_s = r.seconds;
 
   if (r.termination == pipeline::Termination::kCancelled) {
     const bool by_user = running.by_user.load();
+    outcome = by_user ? "cancelled" : "interrupted";
+    report_end();
     // Logged before the record changes, so whoever sees the new state finds the line.
     log_event(by_user ? "bake_cancelled" : "bake_interrupted",
               {{"bake", bake_id}, {"scene", info->scene_id()}, {"paths", std::to_string(r.paths)}});
@@ -292,6 +316,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   if (Status st = rename_durable(partial, final_dir); !st.is_ok())
     return finish_failed(bake_id, st);
 
+  outcome = pipeline::termination_name(r.termination);
+  report_end();
   log_event("bake_finished", {{"bake", bake_id},
                               {"scene", info->scene_id()},
                               {"termination", pipeline::termination_name(r.termination)},

@@ -36,11 +36,14 @@
 
 namespace luxel::service {
 
+class Metrics;
+
 struct RunnerOptions {
   int max_concurrent_bakes = 1;
   std::string device_spec;            // device::choose_device spec ("" = default)
   double checkpoint_interval_s = 10;  // 0: no checkpoints
   SettingsLimits limits;
+  Metrics* metrics = nullptr;  // progress and finished bakes (metrics.h); may be null
 };
 
 class BakeRunner {

@@ -5,6 +5,7 @@
 #include <cstdlib>
 
 #include "service/files.h"
+#include "service/metrics.h"
 
 namespace luxel::service {
 
@@ -23,7 +24,10 @@ const char* kDaemonUsage =
     "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
     "  --max-queued N            most bakes waiting in the queue (default 256)\n"
     "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
-    "  --max-message-bytes N     largest request message (default 16 MiB)\n";
+    "  --max-message-bytes N     largest request message (default 16 MiB)\n"
+    "  --metrics-listen HOST:PORT  serve Prometheus metrics at http://HOST:PORT/metrics\n"
+    "                            (numeric address, e.g. 127.0.0.1:9464; default off)\n"
+    "  --log-format text|json    log lines on stderr: key=value (default) or JSON objects\n";
 
 Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
                                        const char* token_env) {
@@ -92,6 +96,15 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--max-message-bytes") {
       LUXEL_RETURN_IF_ERROR(number(1024, 2147483647.0, &x));
       c.max_message_bytes = int(x);
+    } else if (k == "--metrics-listen") {
+      LUXEL_RETURN_IF_ERROR(value());
+      LUXEL_RETURN_IF_ERROR(check_listen_address(k, v));
+      c.metrics_listen = v;
+    } else if (k == "--log-format") {
+      LUXEL_RETURN_IF_ERROR(value());
+      if (v != "text" && v != "json")
+        return invalid_argument("--log-format: expected 'text' or 'json', got '" + v + "'");
+      c.log_json = v == "json";
     } else
       return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
   }

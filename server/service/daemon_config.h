@@ -22,6 +22,8 @@ struct DaemonConfig {
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;
   int max_message_bytes = 16 << 20;  // largest request message accepted
+  std::string metrics_listen;        // Prometheus /metrics HOST:PORT ("" = off)
+  bool log_json = false;             // --log-format json (one JSON object per line)
   bool help = false;
 };
 

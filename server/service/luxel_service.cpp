@@ -10,6 +10,8 @@
 #include "luxel_version.h"
 #include "service/files.h"
 #include "service/log.h"
+#include "service/metrics.h"
+#include "service/rpc_interceptor.h"
 
 namespace luxel::service {
 
@@ -66,6 +68,8 @@ LuxelService::LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue
       started_at_(unix_now()) {}
 
 grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rpc) const {
+  // Every handler starts here: its log lines carry the call's request id.
+  set_thread_request_id(request_id_of(ctx));
   if (options_.token.empty()) return grpc::Status::OK;
   const std::string expected = "Bearer " + options_.token;
   const auto& md = ctx->client_metadata();
@@ -354,7 +358,9 @@ grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
     msg.set_chunk(std::move(current));
     const bool last = next.empty();
     if (last) msg.set_sha256(hash.hex_digest());
+    const uint64_t chunk_bytes = msg.chunk().size();
     if (!writer->Write(msg)) return {grpc::StatusCode::CANCELLED, "client went away"};
+    if (options_.metrics) options_.metrics->download_bytes(chunk_bytes);
     if (last) break;
     current = std::move(next);
   }

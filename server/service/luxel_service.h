@@ -20,12 +20,15 @@
 
 namespace luxel::service {
 
+class Metrics;
+
 struct ServiceOptions {
   UploadLimits upload;
   SettingsLimits settings;
   std::string token;               // empty: no authentication
   std::string device_description;  // reported by GetServerStatus
   uint32_t max_concurrent_bakes = 1;
+  Metrics* metrics = nullptr;  // download bytes (metrics.h); may be null
 };
 
 grpc::Status to_grpc(const Status& status);
@@ -37,6 +40,8 @@ class LuxelService final : public v1::Luxel::Service {
 
   // Refuse new uploads and bakes; end open WatchBake streams.
   void begin_shutdown() { shutting_down_ = true; }
+  // Scene bytes received by UploadScene since the start (metrics).
+  uint64_t upload_bytes() const { return upload_bytes_.load(); }
 
   grpc::Status UploadScene(grpc::ServerContext* ctx,
                            grpc::ServerReader<v1::UploadSceneRequest>* reader,

@@ -58,6 +58,11 @@ For each scene, in one run:
 
     /usr/bin/python3 tests/bench/error_vs_time.py --luxel build/client/luxel --out out/bench
 
+With --equal-error it runs tests/bench/equal_error.py instead: the time each
+variance-reduction feature (analytic direct light, adaptive sampling, the
+denoiser, seam stitching) needs to reach the error of the bake without them.
+(options: equal_error.py --help).
+
 Exit status: 0 when every bake succeeded, every series is non-empty and
 finite, error falls with time, and the estimate/true factors F_matched and
 k of every analysed bake lie within [--min-factor, --max-factor] (default
@@ -227,9 +232,14 @@ def bake(args, scene, out_dir, options, log_name="bake.log"):
 
 def reference(args, name, scene, filt, version_number):
     """The cached reference bake for (scene, settings, filter); bakes it when absent."""
+    return reference_with(args, name, scene, filt, version_number, scene_lights(name))
+
+
+def reference_with(args, name, scene, filt, version_number, options):
+    """The cached reference bake for (scene, settings, filter, extra options); bakes it when absent."""
     settings = {
         "resolution": args.resolution, "bounces": args.bounces, "samples": args.reference_spp,
-        "seed": args.seed + 1000, "filter": filt, "lights": scene_lights(name), "device": args.device,
+        "seed": args.seed + 1000, "filter": filt, "lights": options, "device": args.device,
     }
     h = hashlib.sha256()
     for f in scene_files(scene):
@@ -244,7 +254,7 @@ def reference(args, name, scene, filt, version_number):
         return d, True, ""
     print("  reference %s (%s filter): baking %d spp ..." % (name, filt, args.reference_spp), flush=True)
     opts = ["--samples", str(args.reference_spp), "--seed", str(args.seed + 1000), "--filter", filt]
-    ok, msg = bake(args, scene, d, opts + scene_lights(name))
+    ok, msg = bake(args, scene, d, opts + options)
     if not ok:
         return d, False, msg
     (d / "key.json").write_text(json.dumps({"key": key, "scene": str(scene), "settings": settings,
@@ -347,6 +357,9 @@ def fmt(v, spec=".4g"):
 
 
 def main(argv):
+    if "--equal-error" in argv:  # the variance-reduction ablations (equal_error.py)
+        import equal_error
+        return equal_error.main(argv)
     args = parse_args(argv)
     if not os.access(args.luxel, os.X_OK):
         print("error: %s is not an executable" % args.luxel, file=sys.stderr)

@@ -51,6 +51,11 @@ class Baker {
   Status compute_stats(BakeProgress& p);
   // The whole bake's progress from the current tile's (identity untiled).
   BakeProgress globalize(const BakeProgress& tile) const;
+  // Device buffers held now: BVH, bake buffers, sort and compaction scratch.
+  size_t device_bytes_held() const {
+    return s_.tracer->device_bytes() + b_.device_bytes() + sort_->device_bytes() +
+           (compaction_ ? compaction_->device_bytes() : 0);
+  }
   bool tiled() const { return plan_.tiles.size() > 1; }
   // Restores a checkpoint: finished tiles into the result, the current
   // tile onto the device (loaded); returns the current tile's index.
@@ -408,6 +413,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     progress = globalize(tile_progress);
     progress.iteration = iteration;
     progress.elapsed_s = elapsed();
+    progress.device_bytes = device_bytes_held();
     policy.estimate(progress, final_report);
     // The final report after a stopping rule repeats the last point: replace it.
     if (!result.series.empty() && result.series.back().paths == progress.paths)
@@ -546,9 +552,8 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   result.termination = why;
   result.tiles = plan_.tiles.size();
   result.device_memory_budget = budget_;
-  result.peak_device_bytes = s_.tracer->device_bytes() + b_.device_bytes() + sort_->device_bytes() +
-                             (compaction_ ? compaction_->device_bytes() : 0) +
-                             (denoiser_ ? denoiser_->device_bytes() : 0);
+  // The denoiser's guides and ping-pong buffers are held beside the bake's.
+  result.peak_device_bytes = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
   return result;
 }
 

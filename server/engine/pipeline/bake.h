@@ -37,6 +37,7 @@ struct BakeProgress {
   double eta_s = -1;     // estimated seconds left (-1: unknown)
   double fraction = 0;   // progress towards the nearest stopping rule, [0, 1]
   uint32_t iteration = 0;
+  size_t device_bytes = 0;  // device buffers the bake holds (BVH included)
 };
 
 enum class Termination { kSamples, kTime, kError, kCancelled };
