@@ -538,22 +538,38 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     if (last) break;
   }
   finish_result(s_, settings_, result);
+  // Device memory of the bake (with a snapshot denoiser, held beside it).
+  size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
   if (settings_.denoise != Denoise::kOff) {
-    const auto t_denoise = Clock::now();
-    std::unique_lock<std::mutex> turn;
-    if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
-    auto filtered = denoise(result.irradiance, result.rel_error);
-    if (!filtered) return filtered.status();
-    result.irradiance_denoised = std::move(filtered.value());
-    result.denoise_json = DenoiseParams{}.describe_json();
-    result.denoise_s = seconds_since(t_denoise);
+    // The path buffers and sort/compaction scratch are done with: free them,
+    // so the denoiser's buffers take their place within the budget.
+    { BakeBuffers released = std::move(b_); }
+    sort_.reset();
+    compaction_.reset();
+    offset_buffer_.reset();
+    const size_t texels = size_t(s_.atlas.width) * size_t(s_.atlas.height);
+    const size_t after = s_.tracer->device_bytes() + texels * Denoiser::kBytesPerTexel;
+    if (!denoiser_ && after > budget_) {
+      result.denoise_json = strprintf(
+          R"({"method":"atrous","skipped":"the denoiser needs %zu bytes beside the BVH, over the device-memory budget of %zu"})",
+          after, budget_);
+    } else {
+      const auto t_denoise = Clock::now();
+      std::unique_lock<std::mutex> turn;
+      if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+      auto filtered = denoise(result.irradiance, result.rel_error);
+      if (!filtered) return filtered.status();
+      result.irradiance_denoised = std::move(filtered.value());
+      result.denoise_json = DenoiseParams{}.describe_json();
+      result.denoise_s = seconds_since(t_denoise);
+      peak = std::max(peak, s_.tracer->device_bytes() + denoiser_->device_bytes());
+    }
   }
   record_final_progress(progress, ctx_, result);
   result.termination = why;
   result.tiles = plan_.tiles.size();
   result.device_memory_budget = budget_;
-  // The denoiser's guides and ping-pong buffers are held beside the bake's.
-  result.peak_device_bytes = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
+  result.peak_device_bytes = peak;
   return result;
 }
 

@@ -70,7 +70,9 @@ struct BakeResult {
   std::vector<float> samples;    // samples per texel (own-texel paths)
   std::vector<float> rel_error;  // relative standard error per texel (0 where uncovered)
   // settings.denoise != off: `irradiance` filtered by the denoiser (denoise.h),
-  // same layout; empty otherwise. denoise_json describes the filter (manifest).
+  // same layout; empty otherwise, or when the denoiser's buffers would not
+  // fit the device-memory budget beside the BVH. denoise_json describes the
+  // filter, or why it was skipped (manifest "denoise").
   std::vector<float> irradiance_denoised;
   std::string denoise_json;
   double denoise_s = 0;  // guides + filter, wall seconds (the launches are in kernel_ms)

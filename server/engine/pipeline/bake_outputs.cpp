@@ -112,7 +112,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.dilation_texels = settings.dilation_texels;
   for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
   if (result.uv_layout) m.uv_layout_json = uv_layout_json(*result.uv_layout);
-  if (!result.irradiance_denoised.empty()) m.denoise_json = result.denoise_json;
+  m.denoise_json = result.denoise_json;  // also says why a denoise was skipped
   if (!result.encodings.empty()) {
     m.encoding = "irradiance";
     for (const auto& e : result.encodings) m.encoding += "+" + e.name;

@@ -52,6 +52,9 @@ class Denoiser {
                                  const DenoiseParams& params);
 
   size_t device_bytes() const;
+  // Device bytes per texel: guides (position, normal, chart) and two
+  // colour + variance buffers.
+  static constexpr size_t kBytesPerTexel = 16 + 16 + 4 + 2 * (16 + 4);
 
  private:
   explicit Denoiser(device::Context& ctx) : ctx_(ctx) {}
