@@ -16,6 +16,7 @@
 #include "output/reference_exr.h"
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
+#include "pipeline/resource_estimate.h"
 #include "progress_bar.h"
 #include "scene/gltf_import.h"
 
@@ -74,6 +75,14 @@ int run_bake(const std::vector<std::string>& args) {
   auto ctx = device::Context::create(a.device);
   if (!ctx) {
     std::fprintf(stderr, "luxel bake: %s\n", ctx.status().to_string().c_str());
+    return 1;
+  }
+  // The daemon's check at SubmitBake (pipeline/resource_estimate.h): a bake
+  // that cannot fit is refused before the layout and the BVH are built.
+  if (auto e = pipeline::estimate_bake_resources(scene.value(), a.settings,
+                                                 pipeline::DeviceLimits::of(ctx.value()->info()));
+      !e) {
+    std::fprintf(stderr, "luxel bake: %s\n", e.status().to_string().c_str());
     return 1;
   }
   std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),

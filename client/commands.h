@@ -21,6 +21,8 @@ int run_list(const std::vector<std::string>& args);
 int run_watch(const std::vector<std::string>& args);
 int run_cancel(const std::vector<std::string>& args);
 int run_fetch(const std::vector<std::string>& args);
+// `luxel health`: grpc.health.v1 Check, exit 0 when SERVING (health.cpp).
+int run_health(const std::vector<std::string>& args);
 // `luxel report DIR|BAKE`: error against time (report.cpp; a folder or luxeld).
 int run_report(const std::vector<std::string>& args);
 // `luxel settings [--json]`: the bake settings schema (bake_options.cpp).

@@ -36,6 +36,7 @@ void usage(FILE* out) {
       "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
       "  report DIR|BAKE [--csv F] [--plot F.png]   error against time of a bake\n"
       "  settings [--json]     every bake setting: option, default, range, units\n"
+      "  health [--service N]  is luxeld SERVING? (grpc.health.v1; exit 0 yes, 1 no)\n"
       "  common options: --server HOST:PORT (default $LUXEL_SERVER or 127.0.0.1:50051),\n"
       "        --token T ($LUXEL_TOKEN), --tls-ca FILE, --tls, --timeout S, --json\n\n"
       "exit codes: 0 success, 1 error (daemon, network, files), 2 usage error,\n"
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
   if (cmd == "fetch") return luxel::cli::run_fetch(args);
   if (cmd == "report") return luxel::cli::run_report(args);
   if (cmd == "settings") return luxel::cli::run_settings(args);
+  if (cmd == "health") return luxel::cli::run_health(args);
   std::fprintf(stderr, "luxel: unknown command '%s'\n\n", cmd.c_str());
   usage(stderr);
   return 2;

@@ -5,7 +5,9 @@
 //
 // SIGTERM / SIGINT: graceful stop. New uploads and bakes are refused, running
 // bakes write a checkpoint and stop (left INTERRUPTED, resumed by the next
-// start), open streams end, stores are flushed, exit status 0.
+// start), open streams end, stores are flushed, exit status 0. A second
+// SIGTERM / SIGINT during that stop exits at once with status 128 + signal
+// (logged as forced_exit); the next start resumes from the last checkpoints.
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -73,9 +75,11 @@ int run(const DaemonConfig& config) {
   }
 
   std::string device_description;
-  if (auto dev = device::choose_device(config.device))
+  pipeline::DeviceLimits device_limits;  // for the estimate at SubmitBake
+  if (auto dev = device::choose_device(config.device)) {
     device_description = dev->describe();
-  else {
+    device_limits = pipeline::DeviceLimits::of(dev.value());
+  } else {
     device_description = "unavailable: " + dev.status().to_string();
     log_event("device_unavailable", {{"error", dev.status().to_string()}});
   }
@@ -107,6 +111,7 @@ int run(const DaemonConfig& config) {
   so.settings = ro.limits;
   so.token = config.token;
   so.device_description = device_description;
+  so.device = device_limits;
   so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
   so.metrics = &metrics;
   LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
@@ -176,6 +181,26 @@ int run(const DaemonConfig& config) {
     int sig = 0;
     sigwait(&set, &sig);
     log_event("shutdown_requested", {{"signal", sig == SIGTERM ? "SIGTERM" : "SIGINT"}});
+    // A second signal while the graceful stop waits (a bake finishing its
+    // iteration, a stream draining): exit at once. Every file of the data
+    // dir is written atomically (temp + rename) and stray temporaries are
+    // removed at the next start, so the store stays consistent; running
+    // bakes resume from their last checkpoint.
+    std::thread([] {
+      sigset_t again;
+      sigemptyset(&again);
+      sigaddset(&again, SIGTERM);
+      sigaddset(&again, SIGINT);
+      int second = 0;
+      sigwait(&again, &second);
+      log_event("forced_exit",
+                {{"signal", second == SIGTERM ? "SIGTERM" : "SIGINT"},
+                 {"note",
+                  "second signal during shutdown; running bakes resume from their last "
+                  "checkpoint at the next start"}});
+      std::fflush(nullptr);
+      std::_Exit(128 + second);
+    }).detach();
     service.begin_shutdown();
     server->GetHealthCheckService()->SetServingStatus("luxel.v1.Luxel", false);
     runner.shutdown();  // checkpoints and stops running bakes

@@ -50,6 +50,8 @@ class Connection {
   static std::unique_ptr<Connection> open(const char* cmd, const ConnectionOptions& options);
 
   luxel::v1::Luxel::Stub& stub() { return *stub_; }
+  // For calls outside luxel.v1 (the health service, through a GenericStub).
+  std::shared_ptr<grpc::Channel> channel() const { return channel_; }
   const ConnectionOptions& options() const { return options_; }
 
   // Adds the bearer token and, for unary calls, the deadline.

@@ -78,9 +78,40 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   LuxRay shadow;
   float3 contribution;
   LuxBsdf unused_bsdf;
+  int analytic_sample;
+  float3 analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &s,
                  1, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index,
-                 dim, seed, &shadow, &contribution);
+                 dim, seed, &shadow, &contribution, &analytic_sample, &analytic_e);
+#if LUX_DIRECT_ANALYTIC
+#if LUX_BASIS
+#error "LUX_DIRECT_ANALYTIC is for irradiance lightmaps only"
+#endif
+  /* Analytic direct light with stochastic shadows (support thesis Eq. 2.25,
+   * Heitz et al. 2018). Eq. 2.25 over N light samples of the texel,
+   *   E ~ E_u * (sum f V / p) / (sum f / p),
+   * E_u exact (shading/analytic_light.h), is to first order in the
+   * deviation of (1/N) sum f/p from E_u (the delta method) the mean of the
+   * per-sample values
+   *   E_u + (f V - f) / p = E_u - (f / p) (1 - V),
+   * the difference (regression) form of the ratio estimator. We accumulate
+   * that form, one light sample per path, through the same Welford mean as
+   * every other sample: it is unbiased at any sample count (the ratio's
+   * O(1/N) bias is gone), equals E_u exactly wherever the sampled light point
+   * is visible (noise comes only from visibility, never from the emitter's
+   * shape or size), and the Welford variance of these values is exactly the
+   * delta-method variance of the ratio, so stats.h's relative standard error
+   * keeps its meaning. Keeping per-texel sums of f V / p and f / p instead
+   * would add per-texel state to checkpoints, tiles and shard merges for an
+   * estimator that is biased at low counts. Lights that are not analytic
+   * (sky, textured emitters, sun discs) keep the plain NEE term f V / p: the
+   * sampled light decides which term its sample feeds, so both stay unbiased
+   * under the one light-selection pdf. Analytic lights are sampled in
+   * proportion to their exact irradiance here (scatter.h), so f / p ~ E_u
+   * and umbrae are nearly noise-free too. The visible part f V / p is added
+   * by resolve_shadows as before. */
+  path.radiance.xyz = analytic_e - (analytic_sample ? contribution : (float3)(0.0f));
+#endif
   shadow_rays[gid] = shadow;
   shadow_contrib[gid] = (float4)(contribution, 0.0f);
 

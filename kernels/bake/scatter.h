@@ -15,6 +15,7 @@
 
 #include "bake/path.h"
 #include "bake/surface.h"
+#include "shading/analytic_light.h"
 #include "shading/bsdf.h"
 #include "shading/lights.h"
 #include "shading/texture.h"
@@ -63,15 +64,60 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
                                LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
                            const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t, float3 b,
                            float3 n, float3 wo_local, float3 throughput, uint index, uint dim,
-                           uint seed, LuxRay* shadow_ray, float3* contribution) {
+                           uint seed, LuxRay* shadow_ray, float3* contribution,
+                           int* analytic_sample, float3* analytic_e) {
   *shadow_ray = lux_no_ray();
   *contribution = (float3)(0.0f);
+  *analytic_sample = 0;
+  *analytic_e = (float3)(0.0f);
 #if LUX_NEE
+  if (params.light_count == 0u) return;
   const float u_sel = lux_sample_1d(index, dim + LUX_DIM_LIGHT_SELECT, seed);
   const float2 u_pt = lux_sample_2d(index, dim + LUX_DIM_LIGHT_POINT, seed);
+  float select = 0.0f;
+  uint light = lux_sample_alias(light_select, params.light_count, u_sel, &select);
+#if LUX_DIRECT_ANALYTIC
+  if (sensor) {
+    /* At the texel point (raygen.h) the analytic lights' exact irradiance is
+     * E_a, and their samples only estimate visibility. When the power table
+     * picks an analytic light (probability P_a, their total pmf), the light
+     * actually sampled is analytic light k with probability e_k / e_a
+     * (luminance of each one's exact irradiance here), so the sample's
+     * f / p is close to E_a / P_a whatever the lights' sizes and distances:
+     * then E_a - (f / p)(1 - V) is near E_a V, the ratio estimator's value
+     * (exact in umbra and full light alike). Lights that are not analytic
+     * keep their power pmf, so MIS with first segments stays consistent;
+     * analytic ones get no MIS, and first segments ignore them (shade.h). */
+    const LuxLight picked = lights[light];
+    float p_a = 0.0f, w_sum = 0.0f, w_chosen = 0.0f;
+    int chosen = -1;
+    for (uint i = 0; i < params.light_count; ++i) {
+      const LuxLight l = lights[i];
+      if (!lux_light_is_analytic(&l)) continue;
+      p_a += light_select[i].pmf;
+      const float3 e = lux_light_irradiance(&l, s->p, n, s->ng);
+      const float w = lux_luminance(e);
+      if (!(w > 0.0f)) continue;
+      *analytic_e += e;
+      w_sum += w;
+      /* Weighted reservoir sampling (one independent number per candidate):
+       * light i is kept with probability w_i / sum of all w. */
+      if (lux_independent_1d(index, 0x40000000u + i, seed) * w_sum < w) {
+        chosen = (int)i;
+        w_chosen = w;
+      }
+    }
+    if (lux_light_is_analytic(&picked)) {
+      *analytic_sample = 1;
+      if (chosen < 0) return; /* no analytic light reaches p: nothing to shadow */
+      light = (uint)chosen;
+      select = p_a * (w_chosen / w_sum);
+    }
+  }
+#endif
   LuxLightSample ls;
-  if (!lux_sample_light(lights, light_select, params.light_count, sky, sky_texels, sky_block_cdfs,
-                        sky_texel_cdfs, s->p, n, u_sel, u_pt, &ls))
+  if (!lux_sample_light_at(lights, light, select, sky, sky_texels, sky_block_cdfs, sky_texel_cdfs,
+                           s->p, n, u_pt, &ls))
     return;
   if (!(ls.pdf > 0.0f) || dot(ls.wi, s->ng) <= 0.0f) return;
   float3 radiance = ls.radiance;
@@ -91,7 +137,7 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   if (cos_i <= 0.0f) return;
   /* MIS only for lights a BSDF ray can also reach (emissive triangles, the
    * sky); the sun disc and punctual lights are NEE-only with weight 1. */
-  const int mis = !ls.is_delta && ls.mis;
+  const int mis = !ls.is_delta && ls.mis && !*analytic_sample;
   float3 f_weighted;
   if (sensor) {
     const float w = mis ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;

@@ -62,6 +62,14 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     if (prev_pdf > 0.0f && s.light >= 0)
       w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light,
                                                                path.prev_pos.xyz, s.p, s.ng_front));
+#if LUX_DIRECT_ANALYTIC
+    /* The texel point's irradiance from this emitter is exact already
+     * (raygen.h): its first segment must not count it again. */
+    if (path.depth == 0u && s.light >= 0) {
+      const LuxLight hit_light = lights[s.light];
+      if (lux_light_is_analytic(&hit_light)) w = 0.0f;
+    }
+#endif
     path.radiance.xyz += throughput * le * w;
   }
 #endif
@@ -109,9 +117,11 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   const uint dim = LUX_DIM_VERTEX(path.depth);
   LuxRay shadow;
   float3 contribution;
+  int unused_analytic;
+  float3 unused_analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
                  0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed,
-                 &shadow, &contribution);
+                 &shadow, &contribution, &unused_analytic, &unused_analytic_e);
   shadow_rays[slot] = shadow;
   shadow_contrib[slot] = (float4)(contribution, 0.0f);
 

@@ -53,6 +53,10 @@ inline void lux_texel_domain(uint gid, LUX_STAGE_PARAMS(texel_domain)) {
     keys[gid] = 0xFFFFFFFFu;
     return;
   }
+#if LUX_ADAPTIVE
+  /* An adaptive iteration: alloc_keys writes the keys (bake/adaptive.h). */
+  if (params.adaptive_pass) return;
+#endif
   const ulong g = params.first_path + gid;
   const uint n = params.covered_count;
   const uint pass = (uint)(g / n);

@@ -337,17 +337,13 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
 }
 #endif
 
-/* Next-event estimation: pick a light by power with u_select, sample it with
- * u from shading point p with normal n (the constant sky is sampled about n;
- * lux_sky_pdf needs the same n). Returns 0 when the sample carries nothing (no
- * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
- * light type). */
-inline int lux_sample_light(const __global LuxLight* lights,
-                            const __global LuxAliasEntry* light_select, uint light_count,
-                            LuxSky sky, const __global float* sky_texels,
-                            const __global float* sky_block_cdfs,
-                            const __global float* sky_texel_cdfs, float3 p, float3 n,
-                            float u_select, float2 u, LuxLightSample* out) {
+/* Samples light `index`, chosen with probability `select`, from shading
+ * point p with normal n (see lux_sample_light). */
+inline int lux_sample_light_at(const __global LuxLight* lights, uint index, float select,
+                               LuxSky sky, const __global float* sky_texels,
+                               const __global float* sky_block_cdfs,
+                               const __global float* sky_texel_cdfs, float3 p, float3 n, float2 u,
+                               LuxLightSample* out) {
   out->wi = (float3)(0.0f, 1.0f, 0.0f);
   out->dist = 0.0f;
   out->radiance = (float3)(0.0f);
@@ -357,9 +353,6 @@ inline int lux_sample_light(const __global LuxLight* lights,
   out->light = -1;
   out->triangle = -1;
   out->bary = (float2)(0.0f);
-  if (light_count == 0u) return 0;
-  float select;
-  const uint index = lux_sample_alias(light_select, light_count, u_select, &select);
   if (!(select > 0.0f)) return 0;
   const LuxLight light = lights[index];
   out->light = (int)index;
@@ -402,6 +395,24 @@ inline int lux_sample_light(const __global LuxLight* lights,
   if (!ok || !(out->pdf > 0.0f)) return 0;
   out->pdf *= select;
   return 1;
+}
+
+/* Next-event estimation: pick a light by power with u_select, sample it with
+ * u from shading point p with normal n (the constant sky is sampled about n;
+ * lux_sky_pdf needs the same n). Returns 0 when the sample carries nothing (no
+ * lights, p behind a one-sided emitter, outside a spot cone, a compiled-out
+ * light type). */
+inline int lux_sample_light(const __global LuxLight* lights,
+                            const __global LuxAliasEntry* light_select, uint light_count,
+                            LuxSky sky, const __global float* sky_texels,
+                            const __global float* sky_block_cdfs,
+                            const __global float* sky_texel_cdfs, float3 p, float3 n,
+                            float u_select, float2 u, LuxLightSample* out) {
+  float select = 0.0f;
+  const uint index =
+      light_count == 0u ? 0u : lux_sample_alias(light_select, light_count, u_select, &select);
+  return lux_sample_light_at(lights, index, select, sky, sky_texels, sky_block_cdfs, sky_texel_cdfs,
+                             p, n, u, out);
 }
 
 /* Solid-angle pdf with which lux_sample_light would produce the point

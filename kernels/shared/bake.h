@@ -121,13 +121,23 @@ typedef struct LuxBakeParams {
   uint basis_stride;     /* float4 of encoding state per texel */
   float acceleration;    /* alpha of Eq. 7.14 (progressive solvers) */
   uint has_reference;    /* 1: the reference buffer holds a lightmap (benchmark mode) */
-  uint pad;
+  /* Adaptive sampling (LUX_ADAPTIVE, kernels/bake/adaptive.h): 1 when this
+   * iteration's paths are allocated by per-texel error instead of the
+   * uniform texel domain; the luminance under which a texel's relative error
+   * counts as absolute (dark floor); weight units per unit of relative error
+   * (the map's mean error maps to a fixed weight); the defensive weight every
+   * texel gets beside its error, in weight units. */
+  uint adaptive_pass;
+  float alloc_floor;
+  float alloc_scale;
+  float alloc_mix;
+  float alloc_cap; /* most weight units of a texel's error term */
 } LuxBakeParams;
 
 /* Per-work-group partial statistics of the accumulation buffer. */
 typedef struct LuxAccumStats {
   float rel_error_sum; /* sum over covered texels of the relative std. error */
-  uint error_texels;   /* texels that contributed to rel_error_sum */
+  float luminance_sum; /* sum over covered texels of the mean luminance */
   uint min_spp;
   uint pad;
   /* With a reference lightmap (benchmark mode, DESIGN.md "Accuracy"):

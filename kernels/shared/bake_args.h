@@ -87,6 +87,15 @@
   X(buffer, LuxAccumStats, stats, "stats partials") \
   X(buffer, float4, reference, "reference lightmap")
 
+/* Adaptive sampling (kernels/bake/adaptive.h), sized by the lightmap:
+ * each covered slot's integer allocation weight, and per block of
+ * LUX_ALLOC_GROUP slots the weights' sum, scanned in place into the
+ * blocks' first CDF value (entry `blocks` = the total). 16-byte
+ * placeholders without LUX_ADAPTIVE. */
+#define LUX_GROUP_alloc(X)                           \
+  X(buffer, uint, alloc_weights, "adaptive weights") \
+  X(buffer, ulong, alloc_blocks, "adaptive block sums")
+
 /* Directional encodings (Ch. 7-8): one sample record per path slot, the
  * encoding table, lobe directions and the per-texel solver state. */
 #define LUX_GROUP_encodings(X)                              \
@@ -106,14 +115,22 @@
 #define LUX_KERNEL_resolve_texel_shadows(G) G(in, paths) G(in, live) G(out, encodings)
 #define LUX_KERNEL_accumulate(G) G(in, scene) G(in, paths) G(out, accum) G(out, encodings)
 #define LUX_KERNEL_accum_stats(G) G(in, scene) G(out, accum)
+#define LUX_KERNEL_alloc_weights(G) G(in, accum) G(out, alloc)
+#define LUX_KERNEL_alloc_scan(G) G(out, alloc)
+#define LUX_KERNEL_alloc_keys(G) G(out, paths) G(in, alloc)
 
 /* Every bake kernel, for the host's kernel table. */
 #define LUX_BAKE_KERNELS(K) \
   K(texel_domain)           \
-  K(raygen) K(shade) K(resolve_shadows) K(resolve_texel_shadows) K(accumulate) K(accum_stats)
+  K(raygen)                 \
+  K(shade)                  \
+  K(resolve_shadows)        \
+  K(resolve_texel_shadows) K(accumulate) K(accum_stats) K(alloc_weights) K(alloc_scan) K(alloc_keys)
 
 /* Work-group size of accum_stats (its local reduction arrays). */
 #define LUX_STATS_GROUP 256
+/* Work-group size of alloc_weights and alloc_keys (one block of the CDF). */
+#define LUX_ALLOC_GROUP 256
 
 /* ---- Device declarations ------------------------------------------------- */
 #ifdef LUX_DEVICE

@@ -107,8 +107,17 @@ Result<std::unique_ptr<BakeStore>> BakeStore::open(const std::string& data_dir) 
       continue;
     }
     // Snapshots and transient files from the previous run.
-    for (const auto& f : fs::directory_iterator(dir.path(), ec))
-      if (f.path().filename().string().rfind("snapshot-", 0) == 0) remove_tree(f.path().string());
+    // Left-overs of a forced exit (a second SIGTERM, kill -9) are removed too:
+    // a temporary file of an atomic write (the file it was to replace is
+    // intact) and results half written (the record never said SUCCEEDED).
+    for (const auto& f : fs::directory_iterator(dir.path(), ec)) {
+      const std::string name = f.path().filename().string();
+      const bool tmp = name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0;
+      if (tmp || name == "results.partial")
+        log_event("partial_file_removed", {{"path", f.path().string()}});
+      if (name.rfind("snapshot-", 0) == 0 || tmp || name == "results.partial")
+        remove_tree(f.path().string());
+    }
     const std::string id = entry->info.bake_id();
     if (id != dir.path().filename().string()) {
       // Every later write goes to bake_dir(id): an id that is not the folder's

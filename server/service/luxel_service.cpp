@@ -164,6 +164,17 @@ grpc::Status LuxelService::DeleteScene(grpc::ServerContext* ctx, const v1::Delet
   return grpc::Status::OK;
 }
 
+grpc::Status LuxelService::estimate_at_submit(const std::string& scene_id,
+                                              const pipeline::BakeSettings& settings) {
+  auto info = scenes_.get(scene_id);
+  if (!info)
+    return {grpc::StatusCode::NOT_FOUND, strprintf("scene_id: no scene '%s'", scene_id.c_str())};
+  auto scene = scenes_.load_scene(info.value());  // cached; the bake reuses it
+  if (!scene) return to_grpc(scene.status());
+  auto estimate = pipeline::estimate_bake_resources(*scene.value(), settings, options_.device);
+  return to_grpc(estimate.status());
+}
+
 grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::SubmitBakeRequest* req,
                                       v1::BakeInfo* response) {
   if (auto st = authenticate(ctx, "SubmitBake"); !st.ok()) return st;
@@ -194,6 +205,13 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
   if (!scenes_.contains(req->scene_id()))
     return {grpc::StatusCode::NOT_FOUND,
             strprintf("scene_id: no scene '%s'", req->scene_id().c_str())};
+  // What the bake will need, against the daemon's device: a bake that cannot
+  // fit is refused now rather than FAILED once queued (after the retry
+  // check: an accepted request is never refused on a retry).
+  if (auto st = estimate_at_submit(req->scene_id(), settings.value()); !st.ok()) {
+    log_event("bake_refused", {{"scene", req->scene_id()}, {"error", st.error_message()}});
+    return st;
+  }
   if (const std::string& ref = req->settings().reference_bake_id(); !ref.empty()) {
     // One rule for ids inside the settings: malformed or unknown, the
     // settings are invalid (INVALID_ARGUMENT naming the field); NOT_FOUND is

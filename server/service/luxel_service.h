@@ -11,6 +11,7 @@
 #include <string>
 
 #include "luxel/v1/luxel.grpc.pb.h"
+#include "pipeline/resource_estimate.h"
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
@@ -27,6 +28,9 @@ struct ServiceOptions {
   SettingsLimits settings;
   std::string token;               // empty: no authentication
   std::string device_description;  // reported by GetServerStatus
+  // The bake device's memory limits, for the estimate at SubmitBake
+  // (pipeline/resource_estimate.h); zeros when there is no device.
+  pipeline::DeviceLimits device;
   uint32_t max_concurrent_bakes = 1;
   Metrics* metrics = nullptr;  // download bytes (metrics.h); may be null
 };
@@ -68,6 +72,10 @@ class LuxelService final : public v1::Luxel::Service {
                                v1::ServerStatus* response) override;
 
  private:
+  // The resource estimate of a bake (pipeline/resource_estimate.h) as a
+  // gRPC status: RESOURCE_EXHAUSTED or INVALID_ARGUMENT naming the setting.
+  grpc::Status estimate_at_submit(const std::string& scene_id,
+                                  const pipeline::BakeSettings& settings);
   // UNAUTHENTICATED unless the call carries the configured bearer token.
   grpc::Status authenticate(grpc::ServerContext* ctx, const char* rpc) const;
 

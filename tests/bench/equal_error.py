@@ -151,8 +151,8 @@ def post_seconds(manifest):
     s = 0.0
     for key in ("denoise", "seam_stitch"):
         v = manifest.get(key)
-        if isinstance(v, dict):
-            s += float(v.get("seconds", 0.0) or 0.0)
+        if isinstance(v, dict):  # "seconds", "find_seconds", "stitch_seconds", ...
+            s += sum(float(x) for k, x in v.items() if k.endswith("seconds") and isinstance(x, (int, float)))
     return s
 
 

@@ -173,6 +173,7 @@ class GgxReferenceAgreement : public ::testing::Test {
     settings.max_bounces = kMaxBounces;
     settings.filter = pipeline::Filter::kBox;
     settings.clamp_luminance = 0;  // unbiased
+    settings.adaptive = false;     // every texel the same samples, as the reference's
     settings.intersector = accel::IntersectorKind::kEmbree;
     for (int r = 0; r < kReplicas; ++r) {
       settings.seed = 2000u + static_cast<uint32_t>(r);

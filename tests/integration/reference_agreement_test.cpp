@@ -65,6 +65,7 @@ class ReferenceAgreement : public ::testing::Test {
     settings.max_bounces = kMaxBounces;
     settings.filter = pipeline::Filter::kBox;
     settings.clamp_luminance = 0;  // unbiased
+    settings.adaptive = false;     // every texel the same samples, as the reference's
     for (accel::IntersectorKind kind :
          {accel::IntersectorKind::kEmbree, accel::IntersectorKind::kOpenCl}) {
       auto bakes = std::make_unique<Bakes>();

@@ -73,6 +73,15 @@ Daemon::~Daemon() {
 int Daemon::stop(int sig, std::chrono::seconds timeout) {
   if (pid_ <= 0) return -1;
   kill(pid_, sig);
+  return wait_exit(timeout);
+}
+
+void Daemon::signal(int sig) const {
+  if (pid_ > 0) kill(pid_, sig);
+}
+
+int Daemon::wait_exit(std::chrono::milliseconds timeout) {
+  if (pid_ <= 0) return -1;
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   for (;;) {
     int status = 0;

@@ -27,6 +27,11 @@ class Daemon {
   // Sends `sig` and waits for the process; returns its exit status (or
   // 128+signal when killed). Times out after `timeout` with -1.
   int stop(int sig, std::chrono::seconds timeout = std::chrono::seconds(20));
+  // Sends `sig` without waiting (a second signal during a graceful stop).
+  void signal(int sig) const;
+  // Waits for the process to exit; its status as stop() returns it, -1
+  // (process killed) past `timeout`.
+  int wait_exit(std::chrono::milliseconds timeout);
   bool running() const { return pid_ > 0; }
 
   std::unique_ptr<v1::Luxel::Stub> stub() const;

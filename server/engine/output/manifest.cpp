@@ -95,6 +95,7 @@ Json to_json(const Manifest& m) {
   j["stats"] = stats_to_json(m.stats);
   if (!m.uv_layout_json.empty()) j["uv_layout"] = Json::parse(m.uv_layout_json);
   if (!m.denoise_json.empty()) j["denoise"] = Json::parse(m.denoise_json);
+  if (!m.seam_stitch_json.empty()) j["seam_stitch"] = Json::parse(m.seam_stitch_json);
   if (!m.encodings_json.empty()) {
     j["encodings"] = Json::array();
     for (const auto& e : m.encodings_json) j["encodings"].push_back(Json::parse(e));
@@ -343,6 +344,11 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
     const Json* dn = nullptr;
     LUXEL_RETURN_IF_ERROR(f.object("denoise", dn));
     m.denoise_json = dn->dump();
+  }
+  if (j.contains("seam_stitch")) {
+    const Json* seams = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.object("seam_stitch", seams));
+    m.seam_stitch_json = seams->dump();
   }
   if (j.contains("encodings")) {
     const Json& enc = j["encodings"];

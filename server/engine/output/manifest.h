@@ -94,6 +94,11 @@ struct Manifest {
   // (method, iterations, edge-stopping parameters, guides; see
   // pipeline/denoise.h), kept as JSON text. Empty without denoising.
   std::string denoise_json;
+  // Seam stitching (output/seam_stitch.h): one JSON object (seam edges,
+  // sample points, the bilinear discontinuity along seams before and after,
+  // seconds; see pipeline/bake_seams.cpp), kept as JSON text. Empty when
+  // seam_stitch is off.
+  std::string seam_stitch_json;
 
   struct Stats {
     double seconds = 0;

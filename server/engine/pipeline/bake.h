@@ -12,11 +12,13 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include "atlas/atlas.h"
+#include "atlas/seams.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "pipeline/bake_settings.h"
@@ -81,6 +83,10 @@ struct BakeResult {
   // Generated lightmap UVs (null when the file's TEXCOORD_1 was used):
   // what lightmap_layout.h decided, for the manifest and the written-back glTF.
   std::shared_ptr<const GeneratedUvLayout> uv_layout;
+  // The lightmap's UV seams (atlas/seams.h) when settings.seam_stitch: the
+  // outputs stitch them (pipeline/bake_seams.h). Null when off.
+  std::shared_ptr<const atlas::SeamSet> seams;
+  double seam_find_s = 0;  // seconds finding them
 
   Termination termination = Termination::kSamples;
   double seconds = 0;

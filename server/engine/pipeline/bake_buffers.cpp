@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "pipeline/resource_estimate.h"
 #include "pipeline/sample_slice.h"
 #include "pipeline/shading/texture_pack.h"
 
@@ -140,6 +141,15 @@ Status allocate_encodings(Allocator& a, const BakeSetup& s, size_t t, EncodingAr
   return a.upload(g.basis_dirs, s.plan.directions, "basis directions");
 }
 
+// Adaptive sampling's weights per covered slot and block sums (one per
+// LUX_ALLOC_GROUP slots, plus the total); placeholders without it.
+Status allocate_alloc(Allocator& a, const BakeSetup& s, size_t c, AllocArgs& g) {
+  const bool on = s.features.has("ADAPTIVE");
+  const size_t blocks = (c + LUX_ALLOC_GROUP - 1) / LUX_ALLOC_GROUP + 1;
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.alloc_weights, on ? c * 4 : 16, "adaptive weights"));
+  return a.alloc(g.alloc_blocks, on ? blocks * 8 : 16, "adaptive block sums");
+}
+
 }  // namespace
 
 Status BakeBuffers::allocate(device::Context& ctx, const scene::Scene& scene,
@@ -157,6 +167,7 @@ Status BakeBuffers::allocate(device::Context& ctx, const scene::Scene& scene,
   LUXEL_RETURN_IF_ERROR(a.alloc(active_b, p * 4, "active paths b"));
   LUXEL_RETURN_IF_ERROR(allocate_paths(a, p, cap.slots, args_.paths));
   LUXEL_RETURN_IF_ERROR(allocate_accum(a, setup, settings, cap.slots, args_.accum));
+  LUXEL_RETURN_IF_ERROR(allocate_alloc(a, setup, cap.slots, args_.alloc));
   return allocate_encodings(a, setup, cap.slots, args_.encodings);
 }
 
@@ -176,9 +187,8 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 }
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
-  // covered, sample-info offset, offset buffer, mean, M2, weight, spp, a
-  // stats partial's share (rounded up), basis state.
-  return 4 + 4 + 4 + 16 + 16 + 8 + 4 + 1 + s.plan.bytes_per_texel();
+  return texel_state_bytes(s.plan.bytes_per_texel(),
+                           s.features.has("ADAPTIVE"));  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {

@@ -13,6 +13,10 @@
 
 namespace luxel::pipeline {
 
+// Analytic direct light (DIRECT_ANALYTIC) loops over the whole light table
+// for every path; past this many lights the bake keeps plain NEE.
+inline constexpr size_t kMaxAnalyticLightTable = 4096;
+
 device::FeatureSet derive_bake_features(const BakeSettings& settings, const LightTable& lights,
                                         const SceneData& data, const EncodingPlan& plan);
 

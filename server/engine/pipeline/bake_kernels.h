@@ -46,6 +46,9 @@ struct AccumArgs {
 struct EncodingArgs {
   LUX_GROUP_encodings(LUXEL_HOST_MEMBER)
 };
+struct AllocArgs {
+  LUX_GROUP_alloc(LUXEL_HOST_MEMBER)
+};
 
 #undef LUXEL_HOST_MEMBER
 #undef LUXEL_HOST_MEMBER_buffer
@@ -63,6 +66,7 @@ struct BakeArgs {
   LiveArgs live;
   AccumArgs accum;
   EncodingArgs encodings;
+  AllocArgs alloc;
 };
 
 enum class BakeKernel {

@@ -10,6 +10,7 @@
 #include "output/dilate.h"
 #include "output/exr.h"
 #include "output/preview.h"
+#include "pipeline/bake_seams.h"
 #include "pipeline/lightmapped_gltf.h"
 
 namespace luxel::pipeline {
@@ -177,10 +178,30 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       {"luxel/units", "W/m^2"},
       {"luxel/alpha", "fraction of the texel covered by geometry"},
       {"luxel/scene", shown_name}};
+  BakeSeamStitch seams(result);
   for (int page = 0; page < pages; ++page) {
     const std::string page_note = pages == 1 ? "" : strprintf(" (page %d)", page);
     output::Image lightmap = to_image(result.width, page_h, 4, rows(result.irradiance, 4, page));
     LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
+    // Directional encodings are dilated with the irradiance map's coverage
+    // so every channel pads the same texels.
+    output::Image coverage = to_image(result.width, page_h, 1, {});
+    coverage.pixels.resize(size_t(result.width) * size_t(page_h));
+    const size_t first = size_t(result.width) * size_t(page_h) * size_t(page);
+    for (size_t t = 0; t < coverage.pixels.size(); ++t)
+      coverage.pixels[t] = result.irradiance[(first + t) * 4 + 3];
+    std::vector<output::Image> coefficients;
+    for (const auto& e : result.encodings) {
+      coefficients.push_back(
+          to_image(result.width, page_h, e.count * 3, rows(e.coefficients, e.count * 3, page)));
+      LUXEL_RETURN_IF_ERROR(
+          output::dilate(coefficients.back(), coverage, settings.dilation_texels));
+    }
+    // After dilation: bilinear fetches along seams read padding (bake_seams.h).
+    std::vector<output::Image*> coefficient_ptrs;
+    for (auto& img : coefficients) coefficient_ptrs.push_back(&img);
+    seams.stitch_page(page, lightmap, coverage, coefficient_ptrs);
+
     const std::string irradiance = name("irradiance", ".exr", page);
     const std::string preview = name("preview", ".png", page);
     const std::string samples = name("samples", ".exr", page);
@@ -224,22 +245,14 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       paths.samples_exr = at(samples.c_str());
       paths.error_exr = at(error.c_str());
     }
-    // Directional encodings: one EXR each, channels c00.R .. cNN.B, dilated
-    // with the irradiance map's coverage so every channel pads the same texels.
-    output::Image coverage = to_image(result.width, page_h, 1, {});
-    coverage.pixels.resize(size_t(result.width) * size_t(page_h));
-    const size_t first = size_t(result.width) * size_t(page_h) * size_t(page);
-    for (size_t t = 0; t < coverage.pixels.size(); ++t)
-      coverage.pixels[t] = result.irradiance[(first + t) * 4 + 3];
-    for (const auto& e : result.encodings) {
-      output::Image img =
-          to_image(result.width, page_h, e.count * 3, rows(e.coefficients, e.count * 3, page));
-      LUXEL_RETURN_IF_ERROR(output::dilate(img, coverage, settings.dilation_texels));
+    // Directional encodings: one EXR each, channels c00.R .. cNN.B.
+    for (size_t k = 0; k < result.encodings.size(); ++k) {
+      const auto& e = result.encodings[k];
       std::vector<std::string> names;
       for (int i = 0; i < e.count; ++i)
         for (const char* c : {"R", "G", "B"}) names.push_back(strprintf("c%02d.%s", i, c));
       const std::string file = name(e.name, ".exr", page);
-      LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), img, names,
+      LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), coefficients[k], names,
                                               {{"luxel/encoding", e.name},
                                                {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
                                                {"luxel/scene", shown_name}}));
@@ -258,6 +271,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
 
   output::Manifest m = make_manifest(scene, settings, result, scene_sha256);
   m.scene_name = shown_name;
+  m.seam_stitch_json = seams.manifest_json();
   add_file("error_series", "error_series.csv", "csv", "error estimate against time", -1);
   m.files = std::move(files);
   if (result.uv_layout && !source_path.empty()) {

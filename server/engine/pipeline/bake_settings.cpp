@@ -23,6 +23,10 @@ const char* filter_name(Filter f) {
   return f == Filter::kGaussian ? "gaussian" : "box";
 }
 
+const char* direct_light_name(DirectLight d) {
+  return d == DirectLight::kAnalytic ? "analytic" : "sampled";
+}
+
 const char* error_metric_name(ErrorMetric m) {
   switch (m) {
     case ErrorMetric::kEstimate:
@@ -63,6 +67,9 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);
   m["filter"] = filter_name(filter);
+  // Only when not the default: bake fingerprints (checkpoint resume) and
+  // manifests of default bakes stay what they were before the setting.
+  if (direct != DirectLight::kSampled) m["direct"] = direct_light_name(direct);
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
   if (!node_placements.empty()) {
@@ -78,11 +85,15 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     m["placements"] = list;
   }
   m["clamp_luminance"] = strprintf("%g", clamp_luminance);
+  m["adaptive"] = adaptive ? strprintf("on,min=%u", adaptive_min_samples) : "off";
   m["compaction"] = compaction ? "on" : "off";
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";
   m["dilation_texels"] = std::to_string(dilation_texels);
-  m["denoise"] = denoise_name(denoise);
+  // Only when not the default (as direct): fingerprints of default bakes stay
+  // what they were; the filter never changes what the bake accumulates.
+  if (denoise != Denoise::kAtrous) m["denoise"] = denoise_name(denoise);
+  m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";
     for (const auto& n : encodings.names) list += "," + n;
@@ -125,6 +136,8 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.atlas.resolution > s.atlas.max_resolution)
     return bad("resolution", strprintf("%d exceeds %s=%d", s.atlas.resolution, resolution_limit,
                                        s.atlas.max_resolution));
+  if (!std::isfinite(s.atlas.texel_density))
+    return bad("texel_density", "does not fit a 32-bit float (at most 3.4e38)");
   if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))
     return bad("resolution", "give a resolution or a positive texel density");
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))

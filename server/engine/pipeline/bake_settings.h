@@ -25,6 +25,10 @@ enum class Filter { kBox, kGaussian };
 // irradiance_denoised.exr; the raw irradiance.exr is always written too.
 enum class Denoise { kOff, kAtrous };
 const char* denoise_name(Denoise d);
+// Direct light at the texel point (irradiance lightmaps): the exact
+// unshadowed irradiance of analytic lights with sampled visibility
+// (kernels/bake/raygen.h), or plain next-event estimation.
+enum class DirectLight { kAnalytic, kSampled };
 
 // Where the lightmap UVs come from (pipeline/lightmap_layout.h).
 enum class UvMode { kAuto, kGenerate, kExisting };
@@ -66,9 +70,11 @@ struct BakeSettings {
 
   // Stopping rules: whichever is reached first. 0 disables a rule; at least
   // one must be set.
-  uint32_t samples_per_texel = 256;  // every covered texel has at least this many
-  double time_budget_s = 0;          // wall-clock seconds of path tracing
-  double target_error = 0;           // stop when target_metric falls to this
+  // Paths per covered texel: with adaptive sampling the mean over covered
+  // texels (paths traced = this x covered texels), uniform: every texel's.
+  uint32_t samples_per_texel = 256;
+  double time_budget_s = 0;  // wall-clock seconds of path tracing
+  double target_error = 0;   // stop when target_metric falls to this
   ErrorMetric target_metric = ErrorMetric::kEstimate;
   // Benchmark mode: a reference lightmap of the bake's size, RGBA float per
   // texel, row 0 = top (as BakeResult::irradiance, e.g. a converged bake's
@@ -86,6 +92,7 @@ struct BakeSettings {
   double device_memory_budget_mib = 0;
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
+  DirectLight direct = DirectLight::kSampled;  // docs/accuracy.md "Analytic direct light"
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
   // for GPUs (auto), or either on request (accel/intersector.h).
   accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;
@@ -96,6 +103,12 @@ struct BakeSettings {
   LightSettings lights;        // sky, sun, directional angular radius
   EncodingSettings encodings;  // directional encodings besides irradiance
 
+  // Adaptive sampling (thesis §3.3, kernels/bake/adaptive.h): after a
+  // uniform warm-up of adaptive_min_samples paths per texel, each
+  // iteration's paths go to texels in proportion to their relative error.
+  bool adaptive = true;
+  uint32_t adaptive_min_samples = 8;
+
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;
   bool sort_directions = false;
@@ -104,6 +117,7 @@ struct BakeSettings {
   double progress_interval_s = 1.0;    // progress callback period
   int dilation_texels = 2;             // output: fill uncovered texels this far
   Denoise denoise = Denoise::kAtrous;  // output: irradiance_denoised.exr besides irradiance.exr
+  bool seam_stitch = true;             // output: make texels agree across UV seams (seam_stitch.h)
   JobSettings job;                     // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.
@@ -117,6 +131,7 @@ Status validate_settings(const BakeSettings& settings,
                          const char* resolution_limit = "the engine's limit max_resolution");
 
 const char* filter_name(Filter f);
+const char* direct_light_name(DirectLight d);
 const char* uv_mode_name(UvMode m);
 
 }  // namespace luxel::pipeline

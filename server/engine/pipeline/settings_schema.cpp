@@ -52,7 +52,8 @@ std::vector<Setting> make_schema() {
   t.push_back({.name = "samples_per_texel",
                .type = Type::kInt,
                .units = "samples",
-               .help = "stop when every covered texel has this many samples (0: no sample rule)",
+               .help = "stop at this many paths per covered texel on average (adaptive "
+                       "sampling gives noisy texels more; 0: no sample rule)",
                .flag = "--samples",
                .metavar = "N",
                .default_value = SettingValue::of(256),
@@ -177,13 +178,35 @@ std::vector<Setting> make_schema() {
   t.push_back({.name = "paths_per_iteration",
                .type = Type::kInt,
                .units = "paths",
-               .help = "batch size: device memory scales with it",
+               .help = "batch size, at most the device's iteration cap (2^17 paths per compute "
+                       "unit, at least 2^18): device memory scales with it",
                .flag = "--paths-per-iteration",
                .metavar = "N",
                .default_value = SettingValue::of(1u << 18),
                .min = 1024,
                .max = 1u << 26,
                LUXEL_NUMBER(paths_per_iteration)});
+  t.push_back({.name = "adaptive",
+               .type = Type::kBool,
+               .units = "",
+               .help = "adaptive sampling: after a uniform warm-up, paths go where the relative "
+                       "error is highest (--no-adaptive: every texel alike)",
+               .flag = "--no-adaptive",
+               .default_value = SettingValue::of(1),
+               LUXEL_BOOL(adaptive)});
+  t.push_back({.name = "adaptive_min_samples",
+               .type = Type::kInt,
+               .units = "samples",
+               .help = "adaptive sampling's uniform warm-up: samples every texel has before "
+                       "paths follow the error",
+               .flag = "--adaptive-min-samples",
+               .metavar = "N",
+               .default_value = SettingValue::of(8),
+               .min = 2,
+               .max = 65536,
+               .api_note = "0 (unset) means 8",
+               LUXEL_NUMBER(adaptive_min_samples),
+               .active = [](const BakeSettings& s) { return s.adaptive; }});
   t.push_back({.name = "device_memory_budget_mib",
                .type = Type::kFloat,
                .units = "MiB",
@@ -219,6 +242,23 @@ std::vector<Setting> make_schema() {
        .set =
            [](BakeSettings& s, const SettingValue& v) {
              s.filter = v.text == "gaussian" ? Filter::kGaussian : Filter::kBox;
+           }});
+  t.push_back(
+      {.name = "direct",
+       .type = Type::kChoice,
+       .units = "",
+       .help = "direct light at the texel point: analytic (exact unshadowed irradiance of "
+               "untextured emissive triangles and punctual lights, sampled shadows; irradiance "
+               "only) or sampled (plain next-event estimation)",
+       .flag = "--direct",
+       .metavar = "D",
+       .default_value = SettingValue::of_text("sampled"),
+       .choices = {"analytic", "sampled"},
+       .get =
+           [](const BakeSettings& s) { return SettingValue::of_text(direct_light_name(s.direct)); },
+       .set =
+           [](BakeSettings& s, const SettingValue& v) {
+             s.direct = v.text == "sampled" ? DirectLight::kSampled : DirectLight::kAnalytic;
            }});
   t.push_back({.name = "intersector",
                .type = Type::kChoice,
@@ -511,6 +551,15 @@ std::vector<Setting> make_schema() {
            [](BakeSettings& s, const SettingValue& v) {
              s.denoise = v.text == "atrous" ? Denoise::kAtrous : Denoise::kOff;
            }});
+  t.push_back({.name = "seam_stitch",
+               .type = Type::kBool,
+               .units = "",
+               .help = "least-squares stitching of lightmap UV seams so bilinear fetches on both "
+                       "sides agree (--no-seam-stitch: off)",
+               .flag = "--no-seam-stitch",
+               .default_value = SettingValue::of(1),
+               .api_note = "unset means on",
+               LUXEL_BOOL(seam_stitch)});
   // ------------------------------------------------------------ the daemon's job
   t.push_back({.name = "priority",
                .type = Type::kInt,

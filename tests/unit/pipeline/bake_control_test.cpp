@@ -2,6 +2,7 @@
 // resumed bit-identically), snapshots, cancellation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -74,6 +75,63 @@ TEST_F(BakeControlTest, ResumeFromCheckpointIsBitIdentical) {
   // Another fingerprint is refused.
   resume.fingerprint = "other";
   EXPECT_FALSE(pipeline::bake(scene, settings(), *ctx_, resume));
+}
+
+// Adaptive sampling: the allocation depends only on the texels' state and
+// the path count, so a bake resumed past the warm-up continues exactly.
+// A point light over a plane gives texels different errors (uneven
+// allocation, checked).
+TEST_F(BakeControlTest, AdaptiveResumeFromCheckpointIsBitIdentical) {
+  scene::Scene scene = testing::open_plane();
+  scene::Light light;
+  light.type = scene::LightType::kPoint;
+  light.intensity = 3.0f;
+  light.position = {0.1f, 0.75f, -0.2f};
+  scene.lights.push_back(light);
+  pipeline::BakeSettings s = settings();
+  s.adaptive = true;
+  s.adaptive_min_samples = 8;
+  s.max_bounces = 0;
+  auto full = pipeline::bake(scene, s, *ctx_);
+  ASSERT_TRUE(full) << full.status().to_string();
+  const pipeline::BakeResult& f = full.value();
+  EXPECT_EQ(f.paths, uint64_t{64} * f.covered_texels);
+  float lo = INFINITY, hi = 0;
+  for (size_t t = 0; t < f.samples.size(); ++t) {
+    if (f.irradiance[t * 4 + 3] < 1.0f) continue;
+    lo = std::min(lo, f.samples[t]);
+    hi = std::max(hi, f.samples[t]);
+  }
+  EXPECT_GE(lo, 8.0f);
+  EXPECT_GT(hi, 1.5f * lo) << "the allocation should be uneven here";
+
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "adaptive";
+  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  auto again = pipeline::bake(scene, s, *ctx_, hooks);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(
+      0, std::memcmp(f.irradiance.data(), again.value().irradiance.data(), f.irradiance.size() * 4))
+      << "same seed and settings: same bits";
+  // A checkpoint past the warm-up (adaptive iterations before and after).
+  const pipeline::BakeCheckpoint* pick = nullptr;
+  for (const auto& c : checkpoints)
+    if (!pick && c.paths_done > uint64_t{16} * f.covered_texels &&
+        c.paths_done < uint64_t{48} * f.covered_texels)
+      pick = &c;
+  ASSERT_NE(pick, nullptr) << checkpoints.size() << " checkpoints";
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "adaptive";
+  resume.resume = pick;
+  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  EXPECT_EQ(resumed.value().paths, f.paths);
+  EXPECT_EQ(0, std::memcmp(f.irradiance.data(), resumed.value().irradiance.data(),
+                           f.irradiance.size() * 4))
+      << "a resumed adaptive bake must produce the same bits as an uninterrupted one";
+  EXPECT_EQ(0, std::memcmp(f.samples.data(), resumed.value().samples.data(), f.samples.size() * 4));
 }
 
 TEST_F(BakeControlTest, ResumeKeepsDirectionalEncodingsBitIdentical) {

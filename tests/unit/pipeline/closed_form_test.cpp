@@ -303,6 +303,36 @@ TEST_F(ClosedFormTest, FurnaceBox) {
   EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
 
+// Adaptive sampling (kernels/bake/adaptive.h) must stay unbiased: the same
+// closed form with small batches, so that most paths are allocated by the
+// texels' own error estimates. In the furnace every texel has the same true
+// error, so the allocation follows the noise of each texel's estimate: the
+// case where adaptive sampling's bias (Kirk and Arvo, thesis §3.3) would
+// show, since a texel's allocation then correlates with its own samples.
+TEST_F(ClosedFormTest, AdaptiveFurnaceBoxIsUnbiased) {
+  const float a = 0.5f, le = 0.25f;
+  const int bounces = 6;
+  scene::Scene s = testing::furnace_box(a, le);
+  auto st = settings(24, 128, bounces);
+  st.adaptive = true;
+  st.paths_per_iteration = 4096;
+  auto r = bake(s, st);
+  ASSERT_GT(r.covered_texels, 300u);
+  float lo = INFINITY, hi = 0;
+  for (size_t t = 0; t < r.samples.size(); ++t) {
+    if (r.irradiance[t * 4 + 3] < 1.0f) continue;
+    lo = std::min(lo, r.samples[t]);
+    hi = std::max(hi, r.samples[t]);
+  }
+  EXPECT_GE(lo, 8.0f) << "the warm-up gives every texel adaptive_min_samples";
+  EXPECT_GT(hi, 1.3f * lo) << "the allocation should follow the per-texel estimates";
+  EXPECT_EQ(r.paths, uint64_t{128} * r.covered_texels) << "samples_per_texel is the mean";
+  const double e = M_PI * le * (1 - std::pow(a, bounces + 1)) / (1 - a);
+  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
 // White furnace of the BSDF (glTF 2.0 Appendix B with the Kulla-Conty 2017
 // multiple-scattering compensation, kernels/shading/bsdf.h): a closed box
 // whose walls emit Le and are a white metal (base colour 1, metallic 1, so

@@ -2,7 +2,10 @@
 // small budget gives the bits of the untiled bake under the samples rule
 // (per-texel sequences depend only on texel, sample index and seed), the
 // other stopping rules stay correct, and a request that cannot be tiled
-// fails with an error that names the budget and the reason.
+// fails with an error that names the budget and the reason. Bit-identity to
+// the untiled bake holds for uniform sampling; with adaptive sampling each
+// tile allocates its own paths by its own texels' errors, so a tiled
+// adaptive bake is checked against itself (resume, stopping rule).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -31,6 +34,7 @@ class TiledBakeTest : public ::testing::Test {
     s.paths_per_iteration = 4096;  // several iterations per tile
     s.seed = 3;
     s.encodings.names = {"sg12", "sh2"};
+    s.adaptive = false;  // uniform: the tiles' bits equal the untiled bake's
     return s;
   }
   // A budget that leaves room for about a quarter of the per-texel state.
@@ -129,6 +133,47 @@ TEST_F(TiledBakeTest, ResumeInALaterTileIsBitIdentical) {
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.status().message().find("device_memory_budget_mib"), std::string::npos)
       << refused.status().message();
+}
+
+// Adaptive sampling in tiles: each tile warms up, then allocates by its own
+// texels' errors; resuming inside a later tile gives the uninterrupted
+// tiled bake's bits, and the samples rule holds per tile (the mean).
+TEST_F(TiledBakeTest, AdaptiveTilesResumeBitIdentically) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  pipeline::BakeSettings s = settings();
+  s.adaptive = true;
+  s.samples_per_texel = 24;
+  s.encodings.names.clear();
+  auto untiled = pipeline::bake(scene, s, *ctx_);
+  ASSERT_TRUE(untiled) << untiled.status().to_string();
+  s.device_memory_budget_mib = tight_budget_mib(untiled.value());
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "tiled-adaptive";
+  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  auto tiled = pipeline::bake(scene, s, *ctx_, hooks);
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  const pipeline::BakeResult& t = tiled.value();
+  ASSERT_GE(t.tiles, 3u);
+  EXPECT_EQ(t.paths, uint64_t{24} * t.covered_texels);
+  EXPECT_GE(t.min_spp, 8u);
+  // The last checkpoint of a later tile past its warm-up.
+  const pipeline::BakeCheckpoint* pick = nullptr;
+  for (const auto& c : checkpoints) {
+    if (c.tile.empty() || c.tile[pipeline::kTileIndex] < 1) continue;
+    const double slots = c.tile[pipeline::kTileEnd] - c.tile[pipeline::kTileBegin];
+    if (double(c.paths_done) > 8 * slots && double(c.paths_done) < 24 * slots) pick = &c;
+  }
+  ASSERT_NE(pick, nullptr);
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "tiled-adaptive";
+  resume.resume = pick;
+  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  expect_same_bits(t.irradiance, resumed.value().irradiance, "irradiance");
+  expect_same_bits(t.samples, resumed.value().samples, "samples");
+  EXPECT_EQ(t.paths, resumed.value().paths);
 }
 
 // Progress over a tiled bake covers the whole atlas: paths only grow, and

@@ -1,0 +1,304 @@
+#include "output/seam_stitch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+namespace luxel::output {
+
+SeamStitcher::SeamStitcher(int width, int height, const std::vector<StitchEdge>& edges,
+                           const std::vector<float>& coverage, const SeamStitchOptions& options)
+    : width_(width), height_(height), options_(options) {
+  for (const StitchEdge& e : edges) {
+    const double len_a = std::hypot(e.a1.x - e.a0.x, e.a1.y - e.a0.y);
+    const double len_b = std::hypot(e.b1.x - e.b0.x, e.b1.y - e.b0.y);
+    if (!std::isfinite(len_a) || !std::isfinite(len_b)) continue;  // no place to fetch from
+    if (std::min(len_a, len_b) < options_.min_edge_texels) {
+      ++short_edges_;
+      continue;
+    }
+    const double len = std::max(len_a, len_b);
+    const double want = std::ceil(options_.samples_per_texel * len);
+    const int n = std::isfinite(want) ? static_cast<int>(std::clamp(want, 2.0, 1e6)) : 2;
+    for (int k = 0; k < n; ++k) {
+      const float t = (float(k) + 0.5f) / float(n);
+      Row row;
+      add_sample(row, {e.a0.x + t * (e.a1.x - e.a0.x), e.a0.y + t * (e.a1.y - e.a0.y)}, 1.0);
+      add_sample(row, {e.b0.x + t * (e.b1.x - e.b0.x), e.b0.y + t * (e.b1.y - e.b0.y)}, -1.0);
+      rows_.push_back(row);
+    }
+  }
+  unknown_index_.clear();
+  split_components();
+  data_weight_.resize(texels_.size());
+  diagonal_.resize(texels_.size());
+  for (size_t u = 0; u < texels_.size(); ++u) {
+    data_weight_[u] = coverage[texels_[u]] > 0.0f ? 1.0 : options_.padding_weight;
+    diagonal_[u] = data_weight_[u];
+  }
+  for (const Row& r : rows_)
+    for (int k = 0; k < r.n; ++k)
+      diagonal_[r.unknown[k]] += options_.seam_weight * r.weight[k] * r.weight[k];
+}
+
+// Renumbers unknowns and rows so that every connected component (unknowns
+// linked through a row) is one contiguous range of each: the components
+// are independent systems, each solved by its own CG run, so a small seam
+// stops after the few iterations it needs instead of the largest one's.
+void SeamStitcher::split_components() {
+  const size_t n = texels_.size();
+  std::vector<uint32_t> parent(n);
+  for (size_t u = 0; u < n; ++u) parent[u] = static_cast<uint32_t>(u);
+  auto find = [&](uint32_t u) {
+    while (parent[u] != u) u = parent[u] = parent[parent[u]];
+    return u;
+  };
+  for (const Row& r : rows_)
+    for (int k = 1; k < r.n; ++k) {
+      const uint32_t a = find(r.unknown[0]), b = find(r.unknown[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);  // root: the smallest unknown
+    }
+  // Components in the order of their smallest unknown; unknowns within one
+  // in their old order.
+  std::vector<uint32_t> root(n), first_of(n, UINT32_MAX), slot(n);
+  std::vector<uint32_t> order;
+  for (size_t u = 0; u < n; ++u) {
+    root[u] = find(static_cast<uint32_t>(u));
+    if (first_of[root[u]] == UINT32_MAX) {
+      first_of[root[u]] = static_cast<uint32_t>(order.size());
+      order.push_back(root[u]);
+    }
+  }
+  std::vector<uint32_t> size(order.size(), 0), begin(order.size() + 1, 0);
+  for (size_t u = 0; u < n; ++u) ++size[first_of[root[u]]];
+  for (size_t c = 0; c < order.size(); ++c) begin[c + 1] = begin[c] + size[c];
+  std::vector<uint32_t> next(begin.begin(), begin.end() - 1);
+  std::vector<uint32_t> texels(n);
+  for (size_t u = 0; u < n; ++u) {
+    slot[u] = next[first_of[root[u]]]++;
+    texels[slot[u]] = texels_[u];
+  }
+  texels_ = std::move(texels);
+  for (Row& r : rows_)
+    for (int k = 0; k < r.n; ++k) r.unknown[k] = slot[r.unknown[k]];
+  // Rows by component (in their old order within one), then the ranges.
+  std::vector<std::vector<Row>> by_component(order.size());
+  for (const Row& r : rows_) {
+    const uint32_t u = r.unknown[0];
+    const size_t c = std::upper_bound(begin.begin(), begin.end(), u) - begin.begin() - 1;
+    by_component[c].push_back(r);
+  }
+  rows_.clear();
+  components_.clear();
+  for (size_t c = 0; c < order.size(); ++c) {
+    Component comp;
+    comp.unknown_begin = begin[c];
+    comp.unknown_end = begin[c + 1];
+    comp.row_begin = static_cast<uint32_t>(rows_.size());
+    rows_.insert(rows_.end(), by_component[c].begin(), by_component[c].end());
+    comp.row_end = static_cast<uint32_t>(rows_.size());
+    components_.push_back(comp);
+  }
+}
+
+uint32_t SeamStitcher::unknown_of(uint32_t texel) {
+  auto [it, added] = unknown_index_.try_emplace(texel, static_cast<uint32_t>(texels_.size()));
+  if (added) texels_.push_back(texel);
+  return it->second;
+}
+
+// The 2x2 texels a bilinear fetch at p reads, with their weights times
+// `sign`, merged into the row (a texel read by both sides, or twice after
+// clamping, appears once).
+void SeamStitcher::add_sample(Row& row, Vec2 p, double sign) {
+  const double sx = double(p.x) - 0.5, sy = double(p.y) - 0.5;
+  const double fx0 = std::floor(sx), fy0 = std::floor(sy);
+  const double fx = sx - fx0, fy = sy - fy0;
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 2; ++i) {
+      const double w = sign * (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+      const int x = static_cast<int>(std::clamp(fx0 + i, 0.0, double(width_ - 1)));
+      const int y = static_cast<int>(std::clamp(fy0 + j, 0.0, double(height_ - 1)));
+      const uint32_t u = unknown_of(static_cast<uint32_t>(y) * uint32_t(width_) + uint32_t(x));
+      int k = 0;
+      while (k < row.n && row.unknown[k] != u) ++k;
+      if (k == row.n) {
+        row.unknown[row.n] = u;
+        row.weight[row.n++] = 0;
+      }
+      row.weight[k] += w;
+    }
+}
+
+double SeamStitcher::row_value(const Row& row, const std::vector<double>& x) const {
+  double v = 0;
+  for (int k = 0; k < row.n; ++k) v += row.weight[k] * x[row.unknown[k]];
+  return v;
+}
+
+void SeamStitcher::apply(const Component& c, const Weights& w, const std::vector<double>& x,
+                         std::vector<double>& y) const {
+  for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u) y[u] = w.data[u] * x[u];
+  for (uint32_t i = c.row_begin; i < c.row_end; ++i) {
+    const Row& r = rows_[i];
+    const double v = options_.seam_weight * row_value(r, x);
+    for (int k = 0; k < r.n; ++k) y[r.unknown[k]] += r.weight[k] * v;
+  }
+}
+
+int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int count,
+                         bool clamp_negative) const {
+  const size_t n = texels_.size();
+  if (n == 0 || count <= 0) return 0;
+  // Channels are independent solves of the same matrix: one thread per
+  // group of channels. Each writes only its own channels, and a channel's
+  // arithmetic does not depend on the split, so the result is the same
+  // for any thread count.
+  const int threads =
+      std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(count, 16));
+  std::vector<int> most(threads, 0);
+  auto work = [&](int t) {
+    std::vector<double> x0(n), delta(n), r(n), z(n), p(n), q(n);
+    const Weights plain{data_weight_, diagonal_, {}};
+    for (int ch = first + t; ch < first + count; ch += threads) {
+      for (size_t u = 0; u < n; ++u) x0[u] = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+      std::fill(delta.begin(), delta.end(), 0.0);
+      for (const Component& c : components_)
+        most[t] = std::max(most[t], solve(c, plain, x0, delta, r, z, p, q));
+      if (clamp_negative) most[t] = std::max(most[t], pin_negatives(x0, delta, r, z, p, q));
+      for (size_t u = 0; u < n; ++u) {
+        const double v = x0[u] + delta[u];
+        pixels[size_t(texels_[u]) * size_t(stride) + ch] =
+            static_cast<float>(clamp_negative ? std::max(0.0, v) : v);
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, t);
+  work(0);
+  for (auto& th : pool) th.join();
+  return *std::max_element(most.begin(), most.end());
+}
+
+// A small active-set step towards the non-negative least-squares solution:
+// texels the solve took below 0 are pinned to 0 (a data weight of 1e6
+// towards 0) and their components solved again, up to 3 rounds; what is
+// still negative after that is clamped by the caller.
+int SeamStitcher::pin_negatives(const std::vector<double>& x0, std::vector<double>& delta,
+                                std::vector<double>& r, std::vector<double>& z,
+                                std::vector<double>& p, std::vector<double>& q) const {
+  constexpr double kPin = 1e6;
+  Weights w{data_weight_, diagonal_, std::vector<double>(texels_.size(), 0.0)};
+  int most = 0;
+  for (int round = 0; round < 3; ++round) {
+    bool any = false;
+    for (const Component& c : components_) {
+      bool pinned = false;
+      for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u)
+        if (x0[u] + delta[u] < 0 && w.data[u] < kPin) {
+          w.diagonal[u] += kPin - w.data[u];
+          w.data[u] = kPin;
+          w.target_shift[u] = -x0[u];  // t - x0 with t = 0
+          pinned = true;
+        }
+      if (!pinned) continue;
+      any = true;
+      for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u) delta[u] = 0;
+      most = std::max(most, solve(c, w, x0, delta, r, z, p, q));
+    }
+    if (!any) break;
+  }
+  return most;
+}
+
+// Preconditioned CG on one component for delta = x - x0:
+// (D + lambda R^T R) delta = D (t - x0) - lambda R^T R x0, from delta = 0
+// (t = x0 but for pinned texels).
+int SeamStitcher::solve(const Component& c, const Weights& w, const std::vector<double>& x0,
+                        std::vector<double>& delta, std::vector<double>& r, std::vector<double>& z,
+                        std::vector<double>& p, std::vector<double>& q) const {
+  const uint32_t u0 = c.unknown_begin, u1 = c.unknown_end;
+  for (uint32_t u = u0; u < u1; ++u)
+    r[u] = w.target_shift.empty() ? 0 : w.data[u] * w.target_shift[u];
+  for (uint32_t i = c.row_begin; i < c.row_end; ++i) {
+    const Row& row = rows_[i];
+    const double v = -options_.seam_weight * row_value(row, x0);
+    for (int k = 0; k < row.n; ++k) r[row.unknown[k]] += row.weight[k] * v;
+  }
+  double bb = 0, rz = 0;
+  for (uint32_t u = u0; u < u1; ++u) {
+    bb += r[u] * r[u];
+    z[u] = r[u] / w.diagonal[u];
+    rz += r[u] * z[u];
+    p[u] = z[u];
+  }
+  if (!(bb > 0) || !std::isfinite(bb)) return 0;  // already continuous, or non-finite input
+  const double stop = options_.tolerance * options_.tolerance * bb;
+  int it = 0;
+  while (it < options_.max_iterations) {
+    ++it;
+    apply(c, w, p, q);
+    double pq = 0;
+    for (uint32_t u = u0; u < u1; ++u) pq += p[u] * q[u];
+    if (!(pq > 0)) break;
+    const double alpha = rz / pq;
+    double rr = 0;
+    for (uint32_t u = u0; u < u1; ++u) {
+      delta[u] += alpha * p[u];
+      r[u] -= alpha * q[u];
+      rr += r[u] * r[u];
+    }
+    if (rr <= stop) break;
+    double rz_next = 0;
+    for (uint32_t u = u0; u < u1; ++u) {
+      z[u] = r[u] / w.diagonal[u];
+      rz_next += r[u] * z[u];
+    }
+    const double beta = rz_next / rz;
+    rz = rz_next;
+    for (uint32_t u = u0; u < u1; ++u) p[u] = z[u] + beta * p[u];
+  }
+  return it;
+}
+
+SeamDiscontinuity SeamStitcher::measure(const std::vector<float>& pixels, int stride, int first,
+                                        int count) const {
+  SeamDiscontinuity d;
+  d.points = rows_.size();
+  if (rows_.empty() || count <= 0) return d;
+  // Per point and channel: the difference is the row itself; the mean of
+  // the two sides is half the row with every weight made positive.
+  std::vector<double> diff(rows_.size()), mean(rows_.size());
+  double mean_sq = 0;
+  for (size_t i = 0; i < rows_.size(); ++i) {
+    const Row& row = rows_[i];
+    double dd = 0, mm = 0;
+    for (int c = first; c < first + count; ++c) {
+      double v = 0, m = 0;
+      for (int k = 0; k < row.n; ++k) {
+        const double x = pixels[size_t(texels_[row.unknown[k]]) * size_t(stride) + c];
+        v += row.weight[k] * x;
+        m += 0.5 * std::abs(row.weight[k]) * x;
+      }
+      dd += v * v;
+      mm += m * m;
+    }
+    diff[i] = std::sqrt(dd / count);
+    mean[i] = std::sqrt(mm / count);
+    mean_sq += mean[i] * mean[i];
+  }
+  const double floor = 1e-2 * std::sqrt(mean_sq / double(rows_.size())) + 1e-30;
+  double sa = 0, sr = 0;
+  for (size_t i = 0; i < rows_.size(); ++i) {
+    const double rel = diff[i] / std::max(mean[i], floor);
+    sa += diff[i] * diff[i];
+    sr += rel * rel;
+    d.max_abs = std::max(d.max_abs, diff[i]);
+    d.max_rel = std::max(d.max_rel, rel);
+  }
+  d.rms_abs = std::sqrt(sa / double(rows_.size()));
+  d.rms_rel = std::sqrt(sr / double(rows_.size()));
+  return d;
+}
+
+}  // namespace luxel::output

@@ -1,0 +1,128 @@
+// Seam stitching: makes the bilinearly filtered lightmap agree on both sides
+// of every UV seam (atlas/seams.h), so an engine's texture fetch shows no
+// line where a surface edge is cut into two charts.
+//
+// A least-squares problem over the texels that bilinear fetches along the
+// seams read (the 2x2 footprint of every sample point, dilated padding
+// included):
+//
+//   minimise  sum_i d_i (x_i - x0_i)^2  +  lambda sum_s (bilerp_A(s) - bilerp_B(s))^2
+//
+// x0 are the values as baked (and dilated), d_i the data weight of texel i
+// (1 where geometry covers it, `padding_weight` for dilated padding), and s
+// runs over sample points spread along each
+// seam edge (`samples_per_texel` per texel of the longer side's length), at
+// the same edge parameter t on both sides. The normal equations
+// (D + lambda R^T R) x = D x0 are sparse, symmetric positive definite, and
+// solved by conjugate gradients with a Jacobi preconditioner, for the change
+// x - x0 (zero start), on each connected component (texels linked through
+// sample points) separately. Every channel is solved on its own with the
+// same matrix. Texels outside all footprints keep their values exactly.
+//
+// Bilinear convention (atlas.h): texel (x, y) covers [x, x+1) x [y, y+1), its
+// centre at (x + 0.5, y + 0.5); fetches clamp to the image's edge texels.
+// Deterministic (a fixed order of sums, in double).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+#include "common/math.h"
+
+namespace luxel::output {
+
+// One seam edge in texel units of one image: a0 + t (a1 - a0) and
+// b0 + t (b1 - b0) are the same surface point for t in [0, 1].
+struct StitchEdge {
+  Vec2 a0, a1, b0, b1;
+};
+
+struct SeamStitchOptions {
+  double seam_weight = 1000;  // lambda
+  // d_i of texels no geometry covers. As much as a baked texel: with less
+  // (0.1 was tried) the solve swings padding far to satisfy a seam, and
+  // fetches just inside the chart see it (the breakfast room went to -4.4
+  // W/m^2 where 0.1 let it; docs/accuracy.md "Seam stitching").
+  double padding_weight = 1;
+  double samples_per_texel = 3;  // sample points per texel of edge length (at least 2 per edge)
+  int max_iterations = 2000;     // conjugate-gradient iterations per component and channel
+  double tolerance = 1e-6;       // stop at |residual| <= tolerance |rhs| (per component)
+  double min_edge_texels = 0;    // seams with a side shorter than this are left alone
+};
+
+// Size of the difference between the two sides' bilinear values over all
+// sample points: per point, the RMS over channels of bilerp_A - bilerp_B
+// (abs), and that divided by the RMS over channels of their mean (rel; with
+// a floor of 1e-2 times the RMS of all points' means, so near-black regions,
+// where noise dominates, do not dominate the figure).
+struct SeamDiscontinuity {
+  size_t points = 0;
+  double rms_abs = 0, max_abs = 0;
+  double rms_rel = 0, max_rel = 0;
+};
+
+class SeamStitcher {
+ public:
+  // `coverage`: width * height values, > 0 where geometry covers the texel.
+  SeamStitcher(int width, int height, const std::vector<StitchEdge>& edges,
+               const std::vector<float>& coverage, const SeamStitchOptions& options = {});
+
+  size_t points() const { return rows_.size(); }
+  size_t unknowns() const { return texels_.size(); }
+  size_t short_edges() const { return short_edges_; }
+
+  // Stitches channels [first, first + count) of `pixels` (width * height
+  // texels of `stride` interleaved channels) in place. Returns the most
+  // conjugate-gradient iterations any channel took. With `clamp_negative`
+  // solved values below 0 become 0 (for irradiance, which cannot be
+  // negative: where seams crowd (charts a few texels wide, footprints read
+  // by several seams), the least-squares compromise can undershoot).
+  int stitch(std::vector<float>& pixels, int stride, int first, int count,
+             bool clamp_negative = false) const;
+
+  SeamDiscontinuity measure(const std::vector<float>& pixels, int stride, int first,
+                            int count) const;
+
+ private:
+  // One sample point: bilerp_A - bilerp_B as up to 8 (unknown, weight) terms.
+  struct Row {
+    uint32_t unknown[8];
+    double weight[8];
+    int n = 0;
+  };
+  void add_sample(Row& row, Vec2 p, double sign);
+  uint32_t unknown_of(uint32_t texel);
+  // y = (D + lambda R^T R) x
+  struct Component {
+    uint32_t unknown_begin, unknown_end, row_begin, row_end;
+  };
+  void split_components();
+  // The data term: weights, the normal matrix's diagonal, and t - x0 per
+  // unknown (empty: 0, the baked values are the targets).
+  struct Weights {
+    std::vector<double> data, diagonal, target_shift;
+  };
+  void apply(const Component& c, const Weights& w, const std::vector<double>& x,
+             std::vector<double>& y) const;
+  int pin_negatives(const std::vector<double>& x0, std::vector<double>& delta,
+                    std::vector<double>& r, std::vector<double>& z, std::vector<double>& p,
+                    std::vector<double>& q) const;
+  int solve(const Component& c, const Weights& w, const std::vector<double>& x0,
+            std::vector<double>& delta, std::vector<double>& r, std::vector<double>& z,
+            std::vector<double>& p, std::vector<double>& q) const;
+  double row_value(const Row& row, const std::vector<double>& x) const;
+
+  int width_, height_;
+  SeamStitchOptions options_;
+  std::vector<Row> rows_;
+  std::vector<uint32_t> texels_;                          // unknown -> texel index
+  std::unordered_map<uint32_t, uint32_t> unknown_index_;  // texel -> unknown (construction)
+  std::vector<double> data_weight_;                       // per unknown
+  std::vector<double> diagonal_;
+  std::vector<Component> components_;
+  size_t short_edges_ = 0;  // of the normal matrix, per unknown
+};
+
+}  // namespace luxel::output

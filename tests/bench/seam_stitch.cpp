@@ -1,0 +1,119 @@
+// Seam stitching on a finished bake: re-finds the seams of SCENE at the
+// bake's resolution, reads DIR/irradiance.exr written with --no-seam-stitch
+// (dilated, unstitched) and stitches it, printing the discontinuity before
+// and after, the most negative value, and the solve's CPU seconds.
+//   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]
+//                     [--min-edge TEXELS] [--clamp 0|1]
+// The defaults are the bake's. SEAM_DEBUG=1 also prints every 20th-part
+// seam with its values and the seams around the lowest texel.
+#include "output/seam_stitch.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+
+#include "atlas/seams.h"
+#include "output/exr.h"
+#include "pipeline/bake_settings.h"
+#include "pipeline/lightmap_layout.h"
+#include "pipeline/settings_schema.h"
+#include "scene/gltf_import.h"
+
+using namespace luxel;
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: %s SCENE DIR [--lambda L] [--padding P] [--tolerance T]\n",
+                 argv[0]);
+    return 2;
+  }
+  output::SeamStitchOptions o;
+  bool clamp = true;  // as the bake does for irradiance
+  for (int i = 3; i + 1 < argc; i += 2) {
+    const std::string a = argv[i];
+    const double v = std::atof(argv[i + 1]);
+    if (a == "--lambda") o.seam_weight = v;
+    if (a == "--padding") o.padding_weight = v;
+    if (a == "--tolerance") o.tolerance = v;
+    if (a == "--points") o.samples_per_texel = v;
+    if (a == "--min-edge") o.min_edge_texels = v;
+    if (a == "--clamp") clamp = v != 0;
+  }
+  auto scene = scene::import_gltf_file(argv[1]);
+  if (!scene) return std::fprintf(stderr, "%s\n", scene.status().to_string().c_str()), 1;
+  auto img = output::read_exr(std::string(argv[2]) + "/irradiance.exr");
+  if (!img) return std::fprintf(stderr, "%s\n", img.status().to_string().c_str()), 1;
+  pipeline::BakeSettings s = pipeline::default_settings();
+  s.atlas.resolution = img.value().width;
+  auto layout = pipeline::lay_out_lightmap(scene.value(), s);
+  if (!layout) return std::fprintf(stderr, "%s\n", layout.status().to_string().c_str()), 1;
+  const std::clock_t c0 = std::clock();
+  const atlas::SeamSet seams = atlas::find_seams(*layout.value().scene, layout.value().atlas);
+  const double find_s = double(std::clock() - c0) / CLOCKS_PER_SEC;
+  std::vector<output::StitchEdge> edges;
+  for (const auto& e : seams.edges)
+    if (e.page == 0) edges.push_back({e.a0, e.a1, e.b0, e.b1});
+  output::Image& im = img.value();
+  std::vector<float> coverage(im.texel_count());
+  for (size_t t = 0; t < coverage.size(); ++t) coverage[t] = im.pixels[t * 4 + 3];
+  if (std::getenv("SEAM_DEBUG")) {
+    auto px = [&](Vec2 p, int c) {
+      const int x = std::clamp(int(p.x), 0, im.width - 1),
+                y = std::clamp(int(p.y), 0, im.height - 1);
+      return im.pixels[(size_t(y) * im.width + x) * 4 + c];
+    };
+    for (size_t i = 0; i < edges.size(); i += edges.size() / 20) {
+      const auto& e = edges[i];
+      const Vec2 ma{0.5f * (e.a0.x + e.a1.x), 0.5f * (e.a0.y + e.a1.y)};
+      const Vec2 mb{0.5f * (e.b0.x + e.b1.x), 0.5f * (e.b0.y + e.b1.y)};
+      std::printf(
+          "A (%.2f,%.2f)-(%.2f,%.2f) v %.3f a %.2f | B (%.2f,%.2f)-(%.2f,%.2f) v %.3f a %.2f\n",
+          e.a0.x, e.a0.y, e.a1.x, e.a1.y, px(ma, 1), px(ma, 3), e.b0.x, e.b0.y, e.b1.x, e.b1.y,
+          px(mb, 1), px(mb, 3));
+    }
+  }
+  const std::clock_t c1 = std::clock();
+  const output::SeamStitcher st(im.width, im.height, edges, coverage, o);
+  const auto before = st.measure(im.pixels, 4, 0, 3);
+  const int it = st.stitch(im.pixels, 4, 0, 3, clamp);
+  const double stitch_s = double(std::clock() - c1) / CLOCKS_PER_SEC;
+  const auto after = st.measure(im.pixels, 4, 0, 3);
+  float lowest = 0;
+  size_t negative = 0;
+  for (size_t t = 0; t < im.texel_count(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      lowest = std::min(lowest, im.pixels[t * 4 + c]);
+      negative += im.pixels[t * 4 + c] < 0;
+    }
+  if (std::getenv("SEAM_DEBUG")) {
+    size_t worst = 0;
+    for (size_t t = 0; t < im.texel_count(); ++t)
+      if (im.pixels[t * 4 + 1] < im.pixels[worst * 4 + 1]) worst = t;
+    const double wx = double(worst % im.width) + 0.5, wy = double(worst / im.width) + 0.5;
+    std::printf("lowest at texel (%zu, %zu) = %.3f\n", worst % im.width, worst / im.width,
+                im.pixels[worst * 4 + 1]);
+    for (const auto& e : edges) {
+      auto close = [&](Vec2 p, Vec2 q) {
+        for (int k = 0; k <= 20; ++k) {
+          const double x = p.x + k / 20.0 * (q.x - p.x), y = p.y + k / 20.0 * (q.y - p.y);
+          if (std::abs(x - wx) < 1 && std::abs(y - wy) < 1) return true;
+        }
+        return false;
+      };
+      if (close(e.a0, e.a1) || close(e.b0, e.b1))
+        std::printf("  A (%.2f,%.2f)-(%.2f,%.2f) | B (%.2f,%.2f)-(%.2f,%.2f)\n", e.a0.x, e.a0.y,
+                    e.a1.x, e.a1.y, e.b0.x, e.b0.y, e.b1.x, e.b1.y);
+    }
+  }
+  std::printf(
+      "edges %zu (hard %zu, non-manifold %zu, cross-page %zu) points %zu unknowns %zu\n"
+      "before rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
+      "after  rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
+      "cg iterations %d, find %.3f s, stitch %.3f s CPU (3 channels), lowest %.4g, negative %zu\n",
+      edges.size(), seams.hard_edges, seams.non_manifold, seams.cross_page, st.points(),
+      st.unknowns(), before.rms_abs, before.max_abs, before.rms_rel, before.max_rel, after.rms_abs,
+      after.max_abs, after.rms_rel, after.max_rel, it, find_s, stitch_s, lowest, negative);
+  return 0;
+}
