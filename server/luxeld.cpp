@@ -28,6 +28,7 @@
 #include "service/log.h"
 #include "service/luxel_service.h"
 #include "service/metrics.h"
+#include "service/parse_error_interceptor.h"
 #include "service/rpc_interceptor.h"
 #include "service/scene_store.h"
 
@@ -113,6 +114,8 @@ int run(const DaemonConfig& config) {
   so.device_description = device_description;
   so.device = device_limits;
   so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
+  so.streams = config.streams;
+  so.upload_deadlines = {config.upload_idle_timeout_s, config.upload_timeout_s};
   so.metrics = &metrics;
   LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
   runner_ptr = &runner;
@@ -149,8 +152,11 @@ int run(const DaemonConfig& config) {
   builder.AddListeningPort(config.listen, creds, &port);
   builder.RegisterService(&service);
   builder.SetMaxReceiveMessageSize(config.max_message_bytes);
-  // Request ids, the per-RPC log line and RPC metrics (rpc_interceptor.h).
   std::vector<std::unique_ptr<grpc::experimental::ServerInterceptorFactoryInterface>> interceptors;
+  // Malformed request bytes: INVALID_ARGUMENT (parse_error_interceptor.h).
+  // First, so the status it sets is the one the RPC log line and metrics see.
+  interceptors.push_back(make_parse_error_interceptor_factory());
+  // Request ids, the per-RPC log line and RPC metrics (rpc_interceptor.h).
   interceptors.push_back(std::make_unique<RpcInterceptorFactory>(&metrics));
   builder.experimental().SetInterceptorCreators(std::move(interceptors));
   std::unique_ptr<grpc::Server> server = builder.BuildAndStart();

@@ -9,6 +9,20 @@
 
 namespace luxel::service {
 
+namespace {
+
+uint32_t* stream_cap(StreamCaps& caps, const std::string& flag) {
+  if (flag == "--max-uploads") return &caps.max_uploads;
+  if (flag == "--max-uploads-per-client") return &caps.max_uploads_per_client;
+  if (flag == "--max-watchers") return &caps.max_watchers;
+  if (flag == "--max-watchers-per-client") return &caps.max_watchers_per_client;
+  if (flag == "--max-downloads") return &caps.max_downloads;
+  if (flag == "--max-downloads-per-client") return &caps.max_downloads_per_client;
+  return nullptr;
+}
+
+}  // namespace
+
 const char* kDaemonUsage =
     "usage: luxeld --data-dir DIR [options]\n"
     "  --listen HOST:PORT        address to serve on (default 127.0.0.1:50051, loopback)\n"
@@ -25,6 +39,17 @@ const char* kDaemonUsage =
     "  --max-queued N            most bakes waiting in the queue (default 256)\n"
     "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
     "  --max-message-bytes N     largest request message (default 16 MiB)\n"
+    "  --max-uploads N           uploads open at once, all clients (default 16)\n"
+    "  --max-uploads-per-client N  uploads open at once from one client host (default 4)\n"
+    "  --max-watchers N          WatchBake streams open at once (default 256)\n"
+    "  --max-watchers-per-client N  WatchBake streams from one client host (default 64)\n"
+    "  --max-downloads N         DownloadResult streams open at once (default 32)\n"
+    "  --max-downloads-per-client N  DownloadResult streams from one client host (default 8)\n"
+    "                            past a cap a call gets RESOURCE_EXHAUSTED naming the flag\n"
+    "  --upload-idle-timeout S   end an upload that sends nothing for S seconds with\n"
+    "                            DEADLINE_EXCEEDED and discard it (default 60)\n"
+    "  --upload-timeout S        end an upload not complete after S seconds (default 3600;\n"
+    "                            0 = no limit)\n"
     "  --metrics-listen HOST:PORT  serve Prometheus metrics at http://HOST:PORT/metrics\n"
     "                            (numeric address, e.g. 127.0.0.1:9464; default off)\n"
     "  --log-format text|json    log lines on stderr: key=value (default) or JSON objects\n";
@@ -96,6 +121,15 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--max-message-bytes") {
       LUXEL_RETURN_IF_ERROR(number(1024, 2147483647.0, &x));
       c.max_message_bytes = int(x);
+    } else if (uint32_t* cap = stream_cap(c.streams, k)) {
+      LUXEL_RETURN_IF_ERROR(number(1, 1e5, &x));
+      *cap = uint32_t(x);
+    } else if (k == "--upload-idle-timeout") {
+      LUXEL_RETURN_IF_ERROR(number(0.1, 1e6, &x));
+      c.upload_idle_timeout_s = x;
+    } else if (k == "--upload-timeout") {
+      LUXEL_RETURN_IF_ERROR(number(0, 1e7, &x));
+      c.upload_timeout_s = x;
     } else if (k == "--metrics-listen") {
       LUXEL_RETURN_IF_ERROR(value());
       LUXEL_RETURN_IF_ERROR(check_listen_address(k, v));

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/status.h"
+#include "service/stream_limits.h"
 
 namespace luxel::service {
 
@@ -21,9 +22,12 @@ struct DaemonConfig {
   int max_resolution = 4096;
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;
-  int max_message_bytes = 16 << 20;  // largest request message accepted
-  std::string metrics_listen;        // Prometheus /metrics HOST:PORT ("" = off)
-  bool log_json = false;             // --log-format json (one JSON object per line)
+  int max_message_bytes = 16 << 20;   // largest request message accepted
+  StreamCaps streams;                 // --max-uploads, --max-watchers, ... (per client too)
+  double upload_idle_timeout_s = 60;  // an upload that sends nothing this long ends
+  double upload_timeout_s = 3600;     // an upload not complete after this ends; 0: none
+  std::string metrics_listen;         // Prometheus /metrics HOST:PORT ("" = off)
+  bool log_json = false;              // --log-format json (one JSON object per line)
   bool help = false;
 };
 

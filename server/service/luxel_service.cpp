@@ -12,6 +12,7 @@
 #include "service/log.h"
 #include "service/metrics.h"
 #include "service/rpc_interceptor.h"
+#include "service/watch_reactor.h"
 
 namespace luxel::service {
 
@@ -65,9 +66,11 @@ LuxelService::LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue
       queue_(queue),
       runner_(runner),
       options_(std::move(options)),
-      started_at_(unix_now()) {}
+      started_at_(unix_now()),
+      slots_(options_.streams),
+      pump_(std::make_unique<StreamPump>(options_.pump_period)) {}
 
-grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rpc) const {
+grpc::Status LuxelService::authenticate(grpc::ServerContextBase* ctx, const char* rpc) const {
   // Every handler starts here: its log lines carry the call's request id.
   set_thread_request_id(request_id_of(ctx));
   if (options_.token.empty()) return grpc::Status::OK;
@@ -83,50 +86,18 @@ grpc::Status LuxelService::authenticate(grpc::ServerContext* ctx, const char* rp
       it == md.end() ? "missing \"authorization: Bearer <token>\" metadata" : "wrong bearer token"};
 }
 
-grpc::Status LuxelService::UploadScene(grpc::ServerContext* ctx,
-                                       grpc::ServerReader<v1::UploadSceneRequest>* reader,
-                                       v1::SceneInfo* response) {
-  if (auto st = authenticate(ctx, "UploadScene"); !st.ok()) return st;
-  if (shutting_down_) return {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
-  v1::UploadSceneRequest msg;
-  if (!reader->Read(&msg))
-    return {grpc::StatusCode::DATA_LOSS, "upload: stream ended before the header"};
-  if (!msg.has_header()) return invalid("upload: the first message must carry a header");
-  auto upload = SceneUpload::begin(scenes_, msg.header(), options_.upload);
-  if (!upload) {
-    log_event("upload_refused",
-              {{"name", msg.header().name()}, {"error", upload.status().to_string()}});
-    return to_grpc(upload.status());
-  }
-  SceneUpload& up = *upload.value();
-  log_event("upload_started",
-            {{"scene", scene_id_of(msg.header())}, {"name", msg.header().name()}});
-  while (reader->Read(&msg)) {
-    if (msg.has_header()) return invalid("upload: a header may only be the first message");
-    const uint64_t before = up.received();
-    Status st = up.write(msg.chunk());
-    upload_bytes_ += up.received() - before;
-    if (!st.is_ok()) {
-      log_event("upload_failed", {{"scene", scene_id_of(up.header())}, {"error", st.to_string()}});
-      return to_grpc(st);
-    }
-  }
-  if (ctx->IsCancelled()) {
-    log_event("upload_cancelled", {{"scene", scene_id_of(up.header())}});
-    return {grpc::StatusCode::CANCELLED, "upload cancelled by the client"};
-  }
-  auto info = up.finish();
-  if (!info) {
-    log_event("upload_failed",
-              {{"scene", scene_id_of(up.header())}, {"error", info.status().to_string()}});
-    return to_grpc(info.status());
-  }
-  *response = info.value();
-  log_event("scene_stored", {{"scene", info->scene_id()},
-                             {"name", info->name()},
-                             {"bytes", std::to_string(info->size())},
-                             {"already_stored", info->already_stored() ? "true" : "false"}});
-  return grpc::Status::OK;
+grpc::ServerReadReactor<v1::UploadSceneRequest>* LuxelService::UploadScene(
+    grpc::CallbackServerContext* ctx, v1::SceneInfo* response) {
+  StreamSlot slot;
+  grpc::Status refused = authenticate(ctx, "UploadScene");
+  if (refused.ok() && shutting_down_)
+    refused = {grpc::StatusCode::UNAVAILABLE, "daemon shutting down"};
+  if (refused.ok()) refused = slots_.acquire(StreamKind::kUpload, peer_host(ctx->peer()), &slot);
+  auto* reactor =
+      new UploadReactor(ctx, scenes_, options_.upload, options_.upload_deadlines, upload_bytes_,
+                        response, std::move(slot), request_id_of(ctx), refused);
+  pump_->add(reactor);
+  return reactor;
 }
 
 grpc::Status LuxelService::GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
@@ -274,61 +245,20 @@ grpc::Status LuxelService::CancelBake(grpc::ServerContext* ctx, const v1::Cancel
   return grpc::Status::OK;
 }
 
-grpc::Status LuxelService::WatchBake(grpc::ServerContext* ctx, const v1::WatchBakeRequest* req,
-                                     grpc::ServerWriter<v1::BakeEvent>* writer) {
-  if (auto st = authenticate(ctx, "WatchBake"); !st.ok()) return st;
-  if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
-  auto first = bakes_.view(req->bake_id());
-  if (!first) return to_grpc(first.status());
-  struct WatcherCount {
-    std::atomic<uint32_t>& n;
-    explicit WatcherCount(std::atomic<uint32_t>& c) : n(c) { ++n; }
-    ~WatcherCount() { --n; }
-  } count(watchers_);
-  log_event("watch_started", {{"bake", req->bake_id()}, {"peer", ctx->peer()}});
-
-  uint64_t sent_snapshot = 0;
-  // One event from the newest view: a watcher that fell behind skips every
-  // intermediate snapshot and progress value (coalescing).
-  auto send = [&](const BakeView& v, bool final) {
-    v1::BakeEvent event;
-    *event.mutable_info() = v.info;
-    if (v.snapshot && v.snapshot_seq != sent_snapshot) {
-      auto encoded = v.snapshot->encoded();
-      if (encoded)
-        *event.mutable_snapshot() = std::move(encoded.value());
-      else
-        log_event("snapshot_encode_failed",
-                  {{"bake", req->bake_id()}, {"error", encoded.status().to_string()}});
-      sent_snapshot = v.snapshot_seq;
-    }
-    event.set_final(final);
-    return writer->Write(event);
-  };
-  auto gone = [&] {
-    log_event("watch_ended", {{"bake", req->bake_id()}, {"why", "client went away"}});
-    return grpc::Status(grpc::StatusCode::CANCELLED, "watcher went away");
-  };
-
-  uint64_t seen = first->version;
-  if (!send(first.value(), is_terminal(first->info.state()))) return gone();
-  if (is_terminal(first->info.state())) return grpc::Status::OK;
-  for (;;) {
-    if (ctx->IsCancelled()) return gone();
-    if (shutting_down_)
-      return {grpc::StatusCode::UNAVAILABLE,
-              "daemon shutting down; the bake resumes after restart, watch again then"};
-    auto v = bakes_.wait_for_change(req->bake_id(), seen, std::chrono::milliseconds(250));
-    if (!v) return to_grpc(v.status());
-    if (v->version == seen) continue;
-    seen = v->version;
-    const bool final = is_terminal(v->info.state());
-    if (!send(v.value(), final)) return gone();
-    if (final) {
-      log_event("watch_ended", {{"bake", req->bake_id()}, {"why", "final"}});
-      return grpc::Status::OK;
-    }
+grpc::ServerWriteReactor<v1::BakeEvent>* LuxelService::WatchBake(grpc::CallbackServerContext* ctx,
+                                                                 const v1::WatchBakeRequest* req) {
+  StreamSlot slot;
+  grpc::Status refused = authenticate(ctx, "WatchBake");
+  if (refused.ok()) refused = check_id(req->bake_id(), "bake_id", 32);
+  if (refused.ok()) {
+    // NOT_FOUND before a slot is taken.
+    if (auto first = bakes_.view(req->bake_id()); !first) refused = to_grpc(first.status());
   }
+  if (refused.ok()) refused = slots_.acquire(StreamKind::kWatch, peer_host(ctx->peer()), &slot);
+  auto* reactor = new WatchReactor(bakes_, req->bake_id(), std::move(slot), shutting_down_,
+                                   request_id_of(ctx), refused);
+  pump_->add(reactor);
+  return reactor;
 }
 
 grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
@@ -336,6 +266,9 @@ grpc::Status LuxelService::DownloadResult(grpc::ServerContext* ctx,
                                           grpc::ServerWriter<v1::DownloadResultResponse>* writer) {
   if (auto st = authenticate(ctx, "DownloadResult"); !st.ok()) return st;
   if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
+  StreamSlot slot;
+  if (auto st = slots_.acquire(StreamKind::kDownload, peer_host(ctx->peer()), &slot); !st.ok())
+    return st;
   auto info = bakes_.get(req->bake_id());
   if (!info) return to_grpc(info.status());
   if (info->state() != v1::BAKE_STATE_SUCCEEDED)
@@ -401,7 +334,9 @@ grpc::Status LuxelService::GetServerStatus(grpc::ServerContext* ctx,
   response->set_upload_bytes(upload_bytes_.load());
   response->set_scenes(static_cast<uint32_t>(scenes_.size()));
   response->set_max_concurrent_bakes(options_.max_concurrent_bakes);
-  response->set_watchers(watchers_.load());
+  response->set_watchers(slots_.open(StreamKind::kWatch));
+  response->set_uploads(slots_.open(StreamKind::kUpload));
+  response->set_downloads(slots_.open(StreamKind::kDownload));
   return grpc::Status::OK;
 }
 

@@ -2,11 +2,14 @@
 // queue and the runner, and engine statuses to gRPC status codes. Every
 // handler returns a status (a bad request never ends the daemon); with a
 // token configured every call must carry "authorization: Bearer <token>".
-// Synchronous API: each streaming call holds one server thread, so a slow
-// WatchBake client blocks only its own thread, never a bake.
+// Unary calls and DownloadResult use the synchronous API; UploadScene and
+// WatchBake are callback reactors driven by one StreamPump thread (idle
+// deadlines for uploads, no thread per watcher). Uploads, watchers and
+// downloads are capped in total and per client (stream_limits.h).
 #pragma once
 
 #include <atomic>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -18,6 +21,9 @@
 #include "service/scene_store.h"
 #include "service/scene_upload.h"
 #include "service/settings_translate.h"
+#include "service/stream_limits.h"
+#include "service/stream_pump.h"
+#include "service/upload_reactor.h"
 
 namespace luxel::service {
 
@@ -32,12 +38,19 @@ struct ServiceOptions {
   // (pipeline/resource_estimate.h); zeros when there is no device.
   pipeline::DeviceLimits device;
   uint32_t max_concurrent_bakes = 1;
+  StreamCaps streams;
+  UploadDeadlines upload_deadlines;
+  // How often watchers look for a new bake state and uploads for deadlines.
+  std::chrono::milliseconds pump_period{50};
   Metrics* metrics = nullptr;  // download bytes (metrics.h); may be null
 };
 
 grpc::Status to_grpc(const Status& status);
 
-class LuxelService final : public v1::Luxel::Service {
+using LuxelServiceBase = v1::Luxel::WithCallbackMethod_UploadScene<
+    v1::Luxel::WithCallbackMethod_WatchBake<v1::Luxel::Service>>;
+
+class LuxelService final : public LuxelServiceBase {
  public:
   LuxelService(SceneStore& scenes, BakeStore& bakes, JobQueue& queue, BakeRunner& runner,
                ServiceOptions options);
@@ -47,9 +60,8 @@ class LuxelService final : public v1::Luxel::Service {
   // Scene bytes received by UploadScene since the start (metrics).
   uint64_t upload_bytes() const { return upload_bytes_.load(); }
 
-  grpc::Status UploadScene(grpc::ServerContext* ctx,
-                           grpc::ServerReader<v1::UploadSceneRequest>* reader,
-                           v1::SceneInfo* response) override;
+  grpc::ServerReadReactor<v1::UploadSceneRequest>* UploadScene(grpc::CallbackServerContext* ctx,
+                                                               v1::SceneInfo* response) override;
   grpc::Status GetScene(grpc::ServerContext* ctx, const v1::GetSceneRequest* req,
                         v1::SceneInfo* response) override;
   grpc::Status ListScenes(grpc::ServerContext* ctx, const v1::ListScenesRequest* req,
@@ -64,8 +76,8 @@ class LuxelService final : public v1::Luxel::Service {
                          v1::ListBakesResponse* response) override;
   grpc::Status CancelBake(grpc::ServerContext* ctx, const v1::CancelBakeRequest* req,
                           v1::BakeInfo* response) override;
-  grpc::Status WatchBake(grpc::ServerContext* ctx, const v1::WatchBakeRequest* req,
-                         grpc::ServerWriter<v1::BakeEvent>* writer) override;
+  grpc::ServerWriteReactor<v1::BakeEvent>* WatchBake(grpc::CallbackServerContext* ctx,
+                                                     const v1::WatchBakeRequest* req) override;
   grpc::Status DownloadResult(grpc::ServerContext* ctx, const v1::DownloadResultRequest* req,
                               grpc::ServerWriter<v1::DownloadResultResponse>* writer) override;
   grpc::Status GetServerStatus(grpc::ServerContext* ctx, const v1::GetServerStatusRequest* req,
@@ -77,7 +89,7 @@ class LuxelService final : public v1::Luxel::Service {
   grpc::Status estimate_at_submit(const std::string& scene_id,
                                   const pipeline::BakeSettings& settings);
   // UNAUTHENTICATED unless the call carries the configured bearer token.
-  grpc::Status authenticate(grpc::ServerContext* ctx, const char* rpc) const;
+  grpc::Status authenticate(grpc::ServerContextBase* ctx, const char* rpc) const;
 
   SceneStore& scenes_;
   BakeStore& bakes_;
@@ -87,7 +99,9 @@ class LuxelService final : public v1::Luxel::Service {
   const double started_at_;
   std::atomic<bool> shutting_down_{false};
   std::atomic<uint64_t> upload_bytes_{0};
-  std::atomic<uint32_t> watchers_{0};
+  StreamSlots slots_;
+  // Declared after everything its reactors use: destroyed first.
+  std::unique_ptr<StreamPump> pump_;
   // Serialises SubmitBake against DeleteScene (a bake never lands on a
   // scene being deleted) and the queue-limit check against the push.
   std::mutex submit_mu_;

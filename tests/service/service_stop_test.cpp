@@ -176,7 +176,9 @@ TEST(ServiceStop, SecondSigtermExitsAtOnceAndTheBakeResumes) {
   EXPECT_EQ(done.resumed(), 1u);
   EXPECT_TRUE(has_note(done, "interrupted")) << done.DebugString();
   EXPECT_TRUE(has_note(done, "resumed from checkpoint")) << done.DebugString();
-  EXPECT_GE(done.progress().min_spp(), 1000u);
+  // Adaptive sampling (on by default) spends the budget unevenly: the
+  // sample rule bounds the mean.
+  EXPECT_GE(done.progress().mean_spp(), 1000.0);
   for (const auto& f : fs::directory_iterator(bake_dir))
     EXPECT_NE(f.path().extension(), ".tmp") << f.path();
   EXPECT_EQ(daemon->stop(SIGTERM), 0);
