@@ -140,6 +140,9 @@ int run_bake(const std::vector<std::string>& args) {
   std::printf("\nwrote      %s\n           %s\n           %s\n",
               paths.value().irradiance_exr.c_str(), paths.value().preview_png.c_str(),
               paths.value().manifest_json.c_str());
+  if (!paths.value().irradiance_denoised_exr.empty())
+    std::printf("           %s (denoised, %.2f s)\n", paths.value().irradiance_denoised_exr.c_str(),
+                r.denoise_s);
   for (const auto& f : paths.value().encodings) std::printf("           %s\n", f.c_str());
   if (!paths.value().lightmapped_glb.empty())
     std::printf("           %s\n", paths.value().lightmapped_glb.c_str());

@@ -228,12 +228,13 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   };
   if (opts.snapshot_format != pipeline::SnapshotFormat::kNone) {
     hooks.snapshot_interval_s = opts.snapshot_interval_s;
+    hooks.denoise_snapshots = opts.denoise_snapshots;
     hooks.on_snapshot = [&](const pipeline::BakeSnapshot& s) {
       output::Image image{s.width, s.height, 4, s.irradiance};
       bakes_.publish_snapshot(
           bake_id, std::make_shared<SnapshotFrame>(
                        std::move(image), to_proto(s.progress), to_proto(opts.snapshot_format),
-                       opts.snapshot_max_side, bakes_.bake_dir(bake_id), s.pages));
+                       opts.snapshot_max_side, bakes_.bake_dir(bake_id), s.pages, s.denoised));
     };
   }
   if (options_.checkpoint_interval_s > 0) {

@@ -16,6 +16,7 @@ Result<v1::Snapshot> SnapshotFrame::encoded() const {
   v1::Snapshot snap;
   snap.set_format(format_);
   if (pages_ > 1) snap.set_pages(static_cast<uint32_t>(pages_));
+  snap.set_denoised(denoised_);
   *snap.mutable_progress() = progress_;
   if (format_ == v1::SNAPSHOT_FORMAT_EXR) {
     const std::string path = scratch_dir_ + "/snapshot-" + random_hex_id() + ".exr";

@@ -20,11 +20,13 @@ namespace luxel::service {
 class SnapshotFrame {
  public:
   // `scratch_dir` is where EXR bytes are assembled (OpenImageIO writes files).
-  // `pages`: lightmap pages stacked from the top in `image` (Snapshot.pages).
+  // `pages`: lightmap pages stacked from the top in `image` (Snapshot.pages);
+  // `denoised`: the image went through the denoiser (Snapshot.denoised).
   SnapshotFrame(output::Image image, v1::BakeProgress progress, v1::SnapshotFormat format,
-                int max_side, std::string scratch_dir, int pages = 1)
+                int max_side, std::string scratch_dir, int pages = 1, bool denoised = false)
       : image_(std::move(image)),
         pages_(pages),
+        denoised_(denoised),
         progress_(std::move(progress)),
         format_(format),
         max_side_(max_side),
@@ -37,6 +39,7 @@ class SnapshotFrame {
  private:
   output::Image image_;
   int pages_;
+  bool denoised_;  // Snapshot.denoised
   v1::BakeProgress progress_;
   v1::SnapshotFormat format_;
   int max_side_;

@@ -163,6 +163,7 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   v1::SubmitBakeRequest submit;
   submit.set_scene_id(scene_id);
   *submit.mutable_settings() = small_settings(256);
+  submit.mutable_settings()->set_denoise_snapshots(true);  // previews through the denoiser
   v1::BakeInfo bake;
   auto ctx = daemon_->context();
   ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
@@ -195,6 +196,7 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
       EXPECT_EQ(s.data().substr(1, 3), "PNG");
       EXPECT_LE(std::max(s.width(), s.height()), 32u);
       EXPECT_GT(s.progress().paths(), 0u);
+      EXPECT_TRUE(s.denoised());
     }
     saw_final = event.final();
   }
@@ -211,7 +213,8 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   EXPECT_GT(event.info().finished_at(), event.info().started_at());
 
   // Every artifact downloads with a matching checksum; the EXR reads back.
-  ASSERT_EQ(event.info().artifacts_size(), 6);
+  // (irradiance_denoised.exr: denoise is atrous unless set off.)
+  ASSERT_EQ(event.info().artifacts_size(), 7);
   for (const auto& artifact : event.info().artifacts()) {
     std::string bytes, sha;
     uint64_t total = 0;
@@ -220,7 +223,7 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
     EXPECT_EQ(total, bytes.size()) << artifact;
     EXPECT_EQ(sha, sha256_hex(bytes)) << artifact;
     EXPECT_GT(bytes.size(), 0u) << artifact;
-    if (artifact == "irradiance.exr") {
+    if (artifact == "irradiance.exr" || artifact == "irradiance_denoised.exr") {
       const std::string path = dir_->path() + "/downloaded.exr";
       std::ofstream(path, std::ios::binary) << bytes;
       auto image = output::read_exr(path);
@@ -492,7 +495,8 @@ TEST(ServiceUv, GeneratedUvsAndPagesAreArtifacts) {
       EXPECT_LE(snapshot_pages, 1u);
     } else {
       for (int p = 0; p < c.pages; ++p)
-        for (const char* stem : {"irradiance_", "preview_", "samples_", "rel_error_"}) {
+        for (const char* stem :
+             {"irradiance_", "irradiance_denoised_", "preview_", "samples_", "rel_error_"}) {
           const std::string ext = std::string(stem) == "preview_" ? ".png" : ".exr";
           EXPECT_TRUE(has(stem + std::to_string(p) + ext)) << stem << p;
         }

@@ -94,6 +94,7 @@ Json to_json(const Manifest& m) {
   if (!m.import_warnings.empty()) j["import_warnings"] = m.import_warnings;
   j["stats"] = stats_to_json(m.stats);
   if (!m.uv_layout_json.empty()) j["uv_layout"] = Json::parse(m.uv_layout_json);
+  if (!m.denoise_json.empty()) j["denoise"] = Json::parse(m.denoise_json);
   if (!m.seam_stitch_json.empty()) j["seam_stitch"] = Json::parse(m.seam_stitch_json);
   if (!m.encodings_json.empty()) {
     j["encodings"] = Json::array();
@@ -338,6 +339,11 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
     const Json* uv = nullptr;
     LUXEL_RETURN_IF_ERROR(f.object("uv_layout", uv));
     m.uv_layout_json = uv->dump();
+  }
+  if (j.contains("denoise")) {
+    const Json* dn = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.object("denoise", dn));
+    m.denoise_json = dn->dump();
   }
   if (j.contains("seam_stitch")) {
     const Json* seams = nullptr;

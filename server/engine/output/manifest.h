@@ -90,6 +90,10 @@ struct Manifest {
   // pipeline/bake_outputs.cpp), kept as JSON text. Empty when the file's
   // TEXCOORD_1 was used.
   std::string uv_layout_json;
+  // The denoiser that made the "irradiance_denoised" files: one JSON object
+  // (method, iterations, edge-stopping parameters, guides; see
+  // pipeline/denoise.h), kept as JSON text. Empty without denoising.
+  std::string denoise_json;
   // Seam stitching (output/seam_stitch.h): one JSON object (seam edges,
   // sample points, the bilinear discontinuity along seams before and after,
   // seconds; see pipeline/bake_seams.cpp), kept as JSON text. Empty when

@@ -15,6 +15,7 @@
 #include "pipeline/bake_kernels.h"
 #include "pipeline/bake_policy.h"
 #include "pipeline/bake_setup.h"
+#include "pipeline/denoise.h"
 #include "pipeline/iteration_stops.h"
 #include "pipeline/lightmap_layout.h"
 #include "pipeline/primitives/offset_buffer.h"
@@ -74,6 +75,10 @@ class Baker {
   // A checkpoint of the whole atlas from the current tile's state.
   BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile) const;
   static void append_state(BakeCheckpoint& to, const BakeCheckpoint& from);
+  // settings_.denoise applied to a whole-atlas RGBA image with its per-texel
+  // relative errors (the guides are built and uploaded on the first call).
+  Result<std::vector<float>> denoise(const std::vector<float>& rgba,
+                                     const std::vector<float>& rel_error);
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -92,6 +97,7 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
+  std::unique_ptr<Denoiser> denoiser_;  // on the first denoise()
   TilePlan plan_;
   size_t budget_ = 0;
   uint64_t paths_done_ = 0;  // of the current tile (of the bake, untiled)
@@ -116,6 +122,16 @@ class Baker {
   // With a reference: the RMSE^2 and relMSE sums of each tile while black.
   std::vector<std::pair<double, double>> black_ref_;
 };
+
+Result<std::vector<float>> Baker::denoise(const std::vector<float>& rgba,
+                                          const std::vector<float>& rel_error) {
+  if (!denoiser_) {
+    auto d = Denoiser::create(ctx_, build_denoise_guides(scene_, s_.atlas, s_.info));
+    if (!d) return d.status();
+    denoiser_ = std::move(d.value());
+  }
+  return denoiser_->run(rgba, texel_variance(rgba, rel_error), DenoiseParams{});
+}
 
 Status Baker::setup() {
   auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_);
@@ -581,6 +597,16 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
         snap.pages = s_.atlas.pages;
         snap.irradiance = result.irradiance;  // the finished tiles (zero untiled)
         fill_irradiance(s_, state.value().mean, tile.begin, snap.irradiance);
+        if (hooks.denoise_snapshots && settings_.denoise != Denoise::kOff) {
+          std::vector<float> rel_error = result.rel_error;
+          fill_rel_error(s_, state.value(), tile.begin, rel_error);
+          std::unique_lock<std::mutex> turn;
+          if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+          auto filtered = denoise(snap.irradiance, rel_error);
+          if (!filtered) return filtered.status();
+          snap.irradiance = std::move(filtered.value());
+          snap.denoised = true;
+        }
         // The image's own statistics (error, min spp), not those of the last
         // progress report.
         LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress));
@@ -636,11 +662,38 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     if (last) break;
   }
   finish_result(s_, settings_, result);
+  // Device memory of the bake (with a snapshot denoiser, held beside it).
+  size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
+  if (settings_.denoise != Denoise::kOff) {
+    // The path buffers and sort/compaction scratch are done with: free them,
+    // so the denoiser's buffers take their place within the budget.
+    { BakeBuffers released = std::move(b_); }
+    sort_.reset();
+    compaction_.reset();
+    offset_buffer_.reset();
+    const size_t texels = size_t(s_.atlas.width) * size_t(s_.atlas.height);
+    const size_t after = s_.tracer->device_bytes() + texels * Denoiser::kBytesPerTexel;
+    if (!denoiser_ && after > budget_) {
+      result.denoise_json = strprintf(
+          R"({"method":"atrous","skipped":"the denoiser needs %zu bytes beside the BVH, over the device-memory budget of %zu"})",
+          after, budget_);
+    } else {
+      const auto t_denoise = Clock::now();
+      std::unique_lock<std::mutex> turn;
+      if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
+      auto filtered = denoise(result.irradiance, result.rel_error);
+      if (!filtered) return filtered.status();
+      result.irradiance_denoised = std::move(filtered.value());
+      result.denoise_json = DenoiseParams{}.describe_json();
+      result.denoise_s = seconds_since(t_denoise);
+      peak = std::max(peak, s_.tracer->device_bytes() + denoiser_->device_bytes());
+    }
+  }
   record_final_progress(progress, ctx_, result);
   result.termination = why;
   result.tiles = plan_.tiles.size();
   result.device_memory_budget = budget_;
-  result.peak_device_bytes = device_bytes_held();
+  result.peak_device_bytes = peak;
   return result;
 }
 

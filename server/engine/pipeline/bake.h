@@ -71,6 +71,13 @@ struct BakeResult {
       irradiance;                // RGBA, row 0 = top; A = fraction of the texel covered by geometry
   std::vector<float> samples;    // samples per texel (own-texel paths)
   std::vector<float> rel_error;  // relative standard error per texel (0 where uncovered)
+  // settings.denoise != off: `irradiance` filtered by the denoiser (denoise.h),
+  // same layout; empty otherwise, or when the denoiser's buffers would not
+  // fit the device-memory budget beside the BVH. denoise_json describes the
+  // filter, or why it was skipped (manifest "denoise").
+  std::vector<float> irradiance_denoised;
+  std::string denoise_json;
+  double denoise_s = 0;  // guides + filter, wall seconds (the launches are in kernel_ms)
   atlas::Atlas atlas;
   size_t covered_texels = 0;
   // Generated lightmap UVs (null when the file's TEXCOORD_1 was used):
@@ -114,6 +121,7 @@ struct BakeSnapshot {
   int width = 0, height = 0;
   int pages = 1;                  // lightmap pages stacked from the top, height / pages rows each
   std::vector<float> irradiance;  // RGBA like BakeResult::irradiance
+  bool denoised = false;          // irradiance went through the denoiser (BakeHooks)
   BakeProgress progress;
 };
 
@@ -126,6 +134,9 @@ struct BakeHooks {
   std::function<void(const std::string&)> on_layout;
   double snapshot_interval_s = 0;  // 0: no snapshots
   std::function<void(const BakeSnapshot&)> on_snapshot;
+  // Snapshots carry the denoised lightmap (settings.denoise != off) instead
+  // of the raw one: previews only, the result keeps both.
+  bool denoise_snapshots = false;
   double checkpoint_interval_s = 0;  // 0: no periodic checkpoints
   std::function<void(const BakeCheckpoint&)> on_checkpoint;
   const std::atomic<bool>* checkpoint_now = nullptr;  // set: checkpoint after the current iteration

@@ -42,19 +42,27 @@ void begin_result(const BakeSetup& setup, BakeResult& r) {
   }
 }
 
-void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin, BakeResult& r) {
+void fill_rel_error(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin,
+                    std::vector<float>& rel_error) {
   const auto& covered = setup.info.covered_texels;
-  fill_irradiance(setup, state.mean, begin, r.irradiance);
+  rel_error.resize(size_t{setup.params.texel_count}, 0.0f);
   for (size_t slot = 0; slot < state.spp.size(); ++slot) {
     const uint32_t texel = covered[begin + slot];
-    r.samples[texel] = static_cast<float>(state.spp[slot]);
     const double w = state.weight[slot].x, w2 = state.weight[slot].y;
     if (state.spp[slot] >= 2 && w > 0 && state.mean[slot].w > 0) {
       const double var = std::max(0.0, double{state.m2[slot].w} / w);
       const double n_eff = w * w / std::max(w2, 1e-30);
-      r.rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[slot].w);
+      rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[slot].w);
     }
   }
+}
+
+void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin, BakeResult& r) {
+  const auto& covered = setup.info.covered_texels;
+  fill_irradiance(setup, state.mean, begin, r.irradiance);
+  for (size_t slot = 0; slot < state.spp.size(); ++slot)
+    r.samples[covered[begin + slot]] = static_cast<float>(state.spp[slot]);
+  fill_rel_error(setup, state, begin, r.rel_error);
   r.nonfinite_dropped += state.nonfinite;
   const EncodingPlan& plan = setup.plan;
   for (size_t k = 0; k < plan.encodings.size(); ++k) {

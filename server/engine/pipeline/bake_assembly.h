@@ -17,6 +17,11 @@ namespace luxel::pipeline {
 // geometry.
 void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean, size_t begin,
                      std::vector<float>& rgba);
+// Relative standard error of the texel means of covered slots [begin, begin +
+// state.spp.size()) (BakeResult::rel_error; 0 below 2 samples or at zero
+// luminance), written into the whole image `rel_error` (sized here when empty).
+void fill_rel_error(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin,
+                    std::vector<float>& rel_error);
 
 // The result in three steps, so a bake in tiles can write each tile's state
 // as it finishes: begin_result sizes r's images (zero) and encodings;

@@ -113,6 +113,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.dilation_texels = settings.dilation_texels;
   for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
   if (result.uv_layout) m.uv_layout_json = uv_layout_json(*result.uv_layout);
+  m.denoise_json = result.denoise_json;  // also says why a denoise was skipped
   if (!result.encodings.empty()) {
     m.encoding = "irradiance";
     for (const auto& e : result.encodings) m.encoding += "+" + e.name;
@@ -221,6 +222,23 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     add_file("samples", samples, "exr", "float32 Y: samples per texel" + page_note, page);
     add_file("rel_error", error, "exr", "float32 Y: relative standard error per texel" + page_note,
              page);
+    if (!result.irradiance_denoised.empty()) {
+      // The denoised map, dilated the same way; the raw one above stays the bake.
+      output::Image denoised =
+          to_image(result.width, page_h, 4, rows(result.irradiance_denoised, 4, page));
+      LUXEL_RETURN_IF_ERROR(output::dilate(denoised, settings.dilation_texels));
+      std::map<std::string, std::string> denoised_meta = meta;
+      denoised_meta["luxel/denoise"] = result.denoise_json;
+      const std::string file = name("irradiance_denoised", ".exr", page);
+      LUXEL_RETURN_IF_ERROR(
+          output::write_exr(at(file.c_str()), denoised, {"R", "G", "B", "A"}, denoised_meta));
+      add_file("irradiance_denoised", file, "exr",
+               "RGBA float32, irradiance.exr filtered by the denoiser (see denoise in this "
+               "manifest); A = coverage" +
+                   page_note,
+               page);
+      if (page == 0) paths.irradiance_denoised_exr = at(file.c_str());
+    }
     if (page == 0) {
       paths.irradiance_exr = at(irradiance.c_str());
       paths.preview_png = at(preview.c_str());

@@ -1,9 +1,9 @@
 // Writes a finished bake into a folder: the irradiance lightmap (linear float
-// EXR, alpha = coverage), a tone-mapped PNG preview, the samples-per-texel and
-// relative-error maps, one EXR of coefficients per directional encoding,
-// the error-against-time series (CSV) and a JSON
-// manifest describing all of them. Uncovered texels are dilated first so
-// bilinear filtering in an engine does not bleed black into charts.
+// EXR, alpha = coverage), its denoised twin (settings.denoise), a tone-mapped
+// PNG preview, the samples-per-texel and relative-error maps, one EXR of
+// coefficients per directional encoding, the error-against-time series (CSV)
+// and a JSON manifest describing all of them. Uncovered texels are dilated
+// first so bilinear filtering in an engine does not bleed black into charts.
 #pragma once
 
 #include <string>
@@ -18,8 +18,9 @@ namespace luxel::pipeline {
 
 struct OutputPaths {
   std::string irradiance_exr, preview_png, samples_exr, error_exr, series_csv, manifest_json;
-  std::vector<std::string> encodings;  // one EXR per directional encoding ("sh2.exr", ...)
-  std::string lightmapped_glb;         // "<scene>_lightmapped.glb"; empty without generated UVs
+  std::vector<std::string> encodings;   // one EXR per directional encoding ("sh2.exr", ...)
+  std::string lightmapped_glb;          // "<scene>_lightmapped.glb"; empty without generated UVs
+  std::string irradiance_denoised_exr;  // settings.denoise != off; empty otherwise
   // Every file written, by name in `dir` (a multi-page lightmap has
   // "irradiance_<page>.exr", ...; the fields above then name page 0's).
   std::vector<std::string> files;

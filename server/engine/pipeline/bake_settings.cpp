@@ -46,6 +46,10 @@ Result<ErrorMetric> parse_error_metric(const std::string& name) {
       strprintf("unknown error metric '%s': expected estimate, rmse or relmse", name.c_str()));
 }
 
+const char* denoise_name(Denoise d) {
+  return d == Denoise::kAtrous ? "atrous" : "off";
+}
+
 std::map<std::string, std::string> BakeSettings::describe() const {
   std::map<std::string, std::string> m;
   m["resolution"] = std::to_string(atlas.resolution);
@@ -86,6 +90,9 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["sort_directions"] = sort_directions ? "on" : "off";
   m["sequence"] = random_sequence ? "random" : "sobol";
   m["dilation_texels"] = std::to_string(dilation_texels);
+  // Only when not the default (as direct): fingerprints of default bakes stay
+  // what they were; the filter never changes what the bake accumulates.
+  if (denoise != Denoise::kAtrous) m["denoise"] = denoise_name(denoise);
   m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";

@@ -21,6 +21,10 @@ namespace luxel::pipeline {
 
 enum class Filter { kBox, kGaussian };
 
+// Denoising of the finished lightmap (pipeline/denoise.h): an extra output
+// irradiance_denoised.exr; the raw irradiance.exr is always written too.
+enum class Denoise { kOff, kAtrous };
+const char* denoise_name(Denoise d);
 // Direct light at the texel point (irradiance lightmaps): the exact
 // unshadowed irradiance of analytic lights with sampled visibility
 // (kernels/bake/raygen.h), or plain next-event estimation.
@@ -43,8 +47,9 @@ struct JobSettings {
   int priority = 0;                // higher runs first; FIFO among equals
   double snapshot_interval_s = 5;  // seconds between snapshots
   SnapshotFormat snapshot_format = SnapshotFormat::kPng;
-  int snapshot_max_side = 512;    // PNG snapshot longest side, pixels
-  std::string reference_bake_id;  // benchmark mode on the daemon
+  int snapshot_max_side = 512;     // PNG snapshot longest side, pixels
+  std::string reference_bake_id;   // benchmark mode on the daemon
+  bool denoise_snapshots = false;  // snapshots denoised (with settings.denoise) for previews
 };
 
 // Lightmap placement of one glTF node dictated by the client (an editor
@@ -109,10 +114,11 @@ struct BakeSettings {
   bool sort_directions = false;
   bool random_sequence = false;
 
-  double progress_interval_s = 1.0;  // progress callback period
-  int dilation_texels = 2;           // output: fill uncovered texels this far
-  bool seam_stitch = true;           // output: make texels agree across UV seams (seam_stitch.h)
-  JobSettings job;                   // daemon only
+  double progress_interval_s = 1.0;    // progress callback period
+  int dilation_texels = 2;             // output: fill uncovered texels this far
+  Denoise denoise = Denoise::kAtrous;  // output: irradiance_denoised.exr besides irradiance.exr
+  bool seam_stitch = true;             // output: make texels agree across UV seams (seam_stitch.h)
+  JobSettings job;                     // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.
   std::map<std::string, std::string> describe() const;

@@ -536,6 +536,21 @@ std::vector<Setting> make_schema() {
                .max = 64,
                .api_note = "0 (unset) means 2",
                LUXEL_NUMBER(dilation_texels)});
+  t.push_back(
+      {.name = "denoise",
+       .type = Type::kChoice,
+       .units = "",
+       .help = "denoiser of the finished lightmap, written as irradiance_denoised.exr besides the "
+               "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; off: none)",
+       .flag = "--denoise",
+       .metavar = "D",
+       .default_value = SettingValue::of_text("atrous"),
+       .choices = {"off", "atrous"},
+       .get = [](const BakeSettings& s) { return SettingValue::of_text(denoise_name(s.denoise)); },
+       .set =
+           [](BakeSettings& s, const SettingValue& v) {
+             s.denoise = v.text == "atrous" ? Denoise::kAtrous : Denoise::kOff;
+           }});
   t.push_back({.name = "seam_stitch",
                .type = Type::kBool,
                .units = "",
@@ -589,6 +604,14 @@ std::vector<Setting> make_schema() {
                      for (int k = 0; k < 3; ++k)
                        if (v.text == kSnapshotFormats[k]) s.job.snapshot_format = SnapshotFormat(k);
                    }});
+  t.push_back({.name = "denoise_snapshots",
+               .type = Type::kBool,
+               .units = "",
+               .help = "denoise progressive snapshots too (previews; needs denoise != off)",
+               .flag = "--denoise-snapshots",
+               .default_value = SettingValue::of(0),
+               .scope = Scope::kApiOnly,
+               LUXEL_BOOL(job.denoise_snapshots)});
   t.push_back({.name = "snapshot_max_side",
                .type = Type::kInt,
                .units = "pixels",
