@@ -227,6 +227,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       output::Image denoised =
           to_image(result.width, page_h, 4, rows(result.irradiance_denoised, 4, page));
       LUXEL_RETURN_IF_ERROR(output::dilate(denoised, settings.dilation_texels));
+      seams.stitch_denoised_page(page, denoised, coverage);
       std::map<std::string, std::string> denoised_meta = meta;
       denoised_meta["luxel/denoise"] = result.denoise_json;
       const std::string file = name("irradiance_denoised", ".exr", page);

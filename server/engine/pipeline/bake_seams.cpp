@@ -21,13 +21,18 @@ BakeSeamStitch::BakeSeamStitch(const BakeResult& result)
       encodings_before_(result.encodings.size()),
       encodings_after_(result.encodings.size()) {}
 
+std::vector<output::StitchEdge> BakeSeamStitch::page_edges(int page) const {
+  std::vector<output::StitchEdge> edges;
+  for (const atlas::SeamEdge& e : result_.seams->edges)
+    if (e.page == page) edges.push_back({e.a0, e.a1, e.b0, e.b1});
+  return edges;
+}
+
 void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const output::Image& coverage,
                                  const std::vector<output::Image*>& encodings) {
   if (!enabled()) return;
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<output::StitchEdge> edges;
-  for (const atlas::SeamEdge& e : result_.seams->edges)
-    if (e.page == page) edges.push_back({e.a0, e.a1, e.b0, e.b1});
+  const std::vector<output::StitchEdge> edges = page_edges(page);
   if (edges.empty()) return;
   const output::SeamStitcher stitcher(irradiance.width, irradiance.height, edges, coverage.pixels);
   edges_ += edges.size();
@@ -42,6 +47,20 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
     encodings_after_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
   }
   most_iterations_ = std::max(most_iterations_, it);
+  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
+                                          const output::Image& coverage) {
+  if (!enabled()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<output::StitchEdge> edges = page_edges(page);
+  if (edges.empty()) return;
+  const output::SeamStitcher stitcher(denoised.width, denoised.height, edges, coverage.pixels);
+  denoised_before_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
+  most_iterations_ =
+      std::max(most_iterations_, stitcher.stitch(denoised.pixels, 4, 0, 3, true));  // >= 0
+  denoised_after_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
   seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -79,6 +98,10 @@ std::string BakeSeamStitch::manifest_json() const {
                       {"stitch_seconds", seconds_},
                       {"irradiance_before", js(before_)},
                       {"irradiance_after", js(after_)}};
+  if (denoised_before_.points > 0) {
+    j["irradiance_denoised_before"] = js(denoised_before_);
+    j["irradiance_denoised_after"] = js(denoised_after_);
+  }
   for (size_t k = 0; k < encodings_before_.size(); ++k) {
     j["encodings"].push_back({{"name", result_.encodings[k].name},
                               {"before", js(encodings_before_[k])},

@@ -31,6 +31,11 @@ class BakeSeamStitch {
   void stitch_page(int page, output::Image& irradiance, const output::Image& coverage,
                    const std::vector<output::Image*>& encodings);
 
+  // Stitches page `page`'s dilated denoised irradiance (RGB) the same way:
+  // the denoiser filters within charts, so its two sides of a seam disagree
+  // as the raw map's do.
+  void stitch_denoised_page(int page, output::Image& denoised, const output::Image& coverage);
+
   // The manifest's "seam_stitch" object; empty when not enabled.
   std::string manifest_json() const;
 
@@ -41,11 +46,13 @@ class BakeSeamStitch {
     double sum_abs = 0, sum_rel = 0, max_abs = 0, max_rel = 0;
     void add(const output::SeamDiscontinuity& d);
   };
+  std::vector<output::StitchEdge> page_edges(int page) const;
+
   const BakeResult& result_;
   size_t edges_ = 0, unknowns_ = 0;
   int most_iterations_ = 0;
   double seconds_ = 0;
-  Totals before_, after_;
+  Totals before_, after_, denoised_before_, denoised_after_;
   std::vector<Totals> encodings_before_, encodings_after_;
 };
 

@@ -106,7 +106,7 @@ TEST(SeamStitchBake, BothSidesOfTheSeamAgreeInTheWrittenLightmap) {
   s.samples_per_texel = 16;
   s.max_bounces = 0;
   s.paths_per_iteration = 1u << 14;
-  std::vector<output::Image> images;
+  std::vector<output::Image> images, denoised;
   json manifest;
   for (bool stitch : {false, true}) {
     s.seam_stitch = stitch;
@@ -119,6 +119,11 @@ TEST(SeamStitchBake, BothSidesOfTheSeamAgreeInTheWrittenLightmap) {
     auto img = output::read_exr(written.value().irradiance_exr);
     ASSERT_TRUE(img) << img.status().to_string();
     images.push_back(std::move(img.value()));
+    // The denoised map (denoise is on by default) is stitched too.
+    ASSERT_FALSE(written.value().irradiance_denoised_exr.empty());
+    auto den = output::read_exr(written.value().irradiance_denoised_exr);
+    ASSERT_TRUE(den) << den.status().to_string();
+    denoised.push_back(std::move(den.value()));
     std::ifstream in(out + "/manifest.json");
     manifest = json::parse(in);
     EXPECT_EQ(manifest.contains("seam_stitch"), stitch);
@@ -128,7 +133,12 @@ TEST(SeamStitchBake, BothSidesOfTheSeamAgreeInTheWrittenLightmap) {
   EXPECT_GT(before, 0.02);
   EXPECT_LT(after, 0.01);
   EXPECT_LT(after, before / 10);
+  const double den_before = seam_gap(denoised[0]), den_after = seam_gap(denoised[1]);
+  std::printf("denoised: before %.4g, after %.4g\n", den_before, den_after);
+  EXPECT_GT(den_before, 0.02);
+  EXPECT_LT(den_after, 0.01);
   const json& m = manifest["seam_stitch"];
+  EXPECT_TRUE(m.contains("irradiance_denoised_after")) << m.dump();
   EXPECT_EQ(m["stitched_edges"], 1);
   EXPECT_LT(m["irradiance_after"]["max_rel"].get<double>(),
             m["irradiance_before"]["max_rel"].get<double>() / 10);
