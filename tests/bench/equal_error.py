@@ -138,7 +138,9 @@ def scene_list(args):
         else:
             path = pathlib.Path(evt.BUNDLED.get(item, item))
             path = path if path.is_absolute() else _REPO / path
-            out.append((item if item in evt.BUNDLED else path.stem, path, args.resolution))
+            name = item if item in evt.BUNDLED else ("shared_" if "shared" in path.parts else "") + path.stem
+            res = args.shared_resolution if name.startswith("shared_") else args.resolution
+            out.append((name, path, res))
     return out
 
 
