@@ -163,7 +163,8 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   v1::SubmitBakeRequest submit;
   submit.set_scene_id(scene_id);
   *submit.mutable_settings() = small_settings(256);
-  submit.mutable_settings()->set_denoise_snapshots(true);  // previews through the denoiser
+  submit.mutable_settings()->set_denoise(v1::DENOISE_ATROUS);  // irradiance_denoised.exr
+  submit.mutable_settings()->set_denoise_snapshots(true);      // previews through the denoiser
   v1::BakeInfo bake;
   auto ctx = daemon_->context();
   ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
@@ -213,7 +214,7 @@ TEST_F(ServiceE2E, BakeWatchDownloadVerify) {
   EXPECT_GT(event.info().finished_at(), event.info().started_at());
 
   // Every artifact downloads with a matching checksum; the EXR reads back.
-  // (irradiance_denoised.exr: denoise is atrous unless set off.)
+  // (irradiance_denoised.exr: denoise is atrous here.)
   ASSERT_EQ(event.info().artifacts_size(), 7);
   for (const auto& artifact : event.info().artifacts()) {
     std::string bytes, sha;
@@ -462,6 +463,7 @@ TEST(ServiceUv, GeneratedUvsAndPagesAreArtifacts) {
     // Enough samples that snapshots (every 0.1 s) come before the end.
     *submit.mutable_settings() = small_settings(512, 0);
     submit.mutable_settings()->set_texel_density(c.density);
+    submit.mutable_settings()->set_denoise(v1::DENOISE_ATROUS);  // per-page denoised maps too
     submit.mutable_settings()->mutable_sky()->set_kind(v1::Sky::KIND_CONSTANT);
     v1::BakeInfo bake;
     auto ctx = daemon.context();

@@ -92,7 +92,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["dilation_texels"] = std::to_string(dilation_texels);
   // Only when not the default (as direct): fingerprints of default bakes stay
   // what they were; the filter never changes what the bake accumulates.
-  if (denoise != Denoise::kAtrous) m["denoise"] = denoise_name(denoise);
+  if (denoise != Denoise::kOff) m["denoise"] = denoise_name(denoise);
   m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";

@@ -114,11 +114,11 @@ struct BakeSettings {
   bool sort_directions = false;
   bool random_sequence = false;
 
-  double progress_interval_s = 1.0;    // progress callback period
-  int dilation_texels = 2;             // output: fill uncovered texels this far
-  Denoise denoise = Denoise::kAtrous;  // output: irradiance_denoised.exr besides irradiance.exr
-  bool seam_stitch = true;             // output: make texels agree across UV seams (seam_stitch.h)
-  JobSettings job;                     // daemon only
+  double progress_interval_s = 1.0;  // progress callback period
+  int dilation_texels = 2;           // output: fill uncovered texels this far
+  Denoise denoise = Denoise::kOff;   // output: irradiance_denoised.exr besides irradiance.exr
+  bool seam_stitch = true;           // output: make texels agree across UV seams (seam_stitch.h)
+  JobSettings job;                   // daemon only
 
   // The settings as "key=value" strings, for manifests and reports.
   std::map<std::string, std::string> describe() const;

@@ -544,7 +544,7 @@ std::vector<Setting> make_schema() {
                "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; off: none)",
        .flag = "--denoise",
        .metavar = "D",
-       .default_value = SettingValue::of_text("atrous"),
+       .default_value = SettingValue::of_text("off"),
        .choices = {"off", "atrous"},
        .get = [](const BakeSettings& s) { return SettingValue::of_text(denoise_name(s.denoise)); },
        .set =
