@@ -1,5 +1,5 @@
 // Seam stitching on a finished bake: re-finds the seams of SCENE at the
-// bake's resolution, reads DIR/irradiance.exr written with --no-seam-stitch
+// bake's resolution, reads DIR/irradiance.exr written without --seam-stitch
 // (dilated, unstitched) and stitches it, printing the discontinuity before
 // and after, the most negative value, and the solve's CPU seconds.
 //   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]

@@ -555,10 +555,10 @@ std::vector<Setting> make_schema() {
                .type = Type::kBool,
                .units = "",
                .help = "least-squares stitching of lightmap UV seams so bilinear fetches on both "
-                       "sides agree (--no-seam-stitch: off)",
-               .flag = "--no-seam-stitch",
-               .default_value = SettingValue::of(1),
-               .api_note = "unset means on",
+                       "sides agree (opt-in: it distorts atlases whose charts are a few texels)",
+               .flag = "--seam-stitch",
+               .default_value = SettingValue::of(0),
+               .api_note = "unset means off",
                LUXEL_BOOL(seam_stitch)});
   // ------------------------------------------------------------ the daemon's job
   t.push_back({.name = "priority",
