@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "luxel/v1/luxel.grpc.pb.h"
+#include "service/grpc_status_name.h"
 
 namespace luxel::cli::remote {
 
@@ -70,7 +71,6 @@ class Connection {
   std::unique_ptr<luxel::v1::Luxel::Stub> stub_;
 };
 
-// "NOT_FOUND", "UNAVAILABLE", ... (the canonical gRPC names).
-const char* status_code_name(grpc::StatusCode code);
+using luxel::status_code_name;  // service/grpc_status_name.h
 
 }  // namespace luxel::cli::remote

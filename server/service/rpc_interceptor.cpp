@@ -9,6 +9,7 @@
 #include <random>
 
 #include "common/status.h"
+#include "service/grpc_status_name.h"
 #include "service/log.h"
 
 namespace luxel::service {
@@ -27,48 +28,6 @@ std::map<const grpc::ServerContextBase*, std::string> g_ids;
 std::string random_request_id() {
   thread_local std::mt19937_64 rng{std::random_device{}()};
   return strprintf("%016llx", static_cast<unsigned long long>(rng()));
-}
-
-const char* code_name(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK:
-      return "OK";
-    case grpc::StatusCode::CANCELLED:
-      return "CANCELLED";
-    case grpc::StatusCode::UNKNOWN:
-      return "UNKNOWN";
-    case grpc::StatusCode::INVALID_ARGUMENT:
-      return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED:
-      return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND:
-      return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS:
-      return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED:
-      return "PERMISSION_DENIED";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED:
-      return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION:
-      return "FAILED_PRECONDITION";
-    case grpc::StatusCode::ABORTED:
-      return "ABORTED";
-    case grpc::StatusCode::OUT_OF_RANGE:
-      return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNIMPLEMENTED:
-      return "UNIMPLEMENTED";
-    case grpc::StatusCode::INTERNAL:
-      return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE:
-      return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS:
-      return "DATA_LOSS";
-    case grpc::StatusCode::UNAUTHENTICATED:
-      return "UNAUTHENTICATED";
-    default:
-      break;
-  }
-  return "UNKNOWN";
 }
 
 LogLevel level_of(grpc::StatusCode code) {
@@ -161,11 +120,11 @@ class RpcInterceptor : public grpc::experimental::Interceptor {
     // Before the status leaves: a client that has it finds the call counted.
     if (metrics_ && kind_) metrics_->stream_closed(kind_);
     const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
-    if (metrics_) metrics_->rpc_finished(method_, code_name(code), seconds);
+    if (metrics_) metrics_->rpc_finished(method_, status_code_name(code), seconds);
     log_event(level_of(code), "rpc",
               {{"method", method_},
                {"request_id", id_},
-               {"code", code_name(code)},
+               {"code", status_code_name(code)},
                {"duration_ms", strprintf("%.3f", seconds * 1e3)},
                {"peer", peer_}});
   }
