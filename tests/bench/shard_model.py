@@ -133,8 +133,10 @@ def print_tables(p):
         print("| W | time s | trace s | upload s | download s | merge s | speedup | efficiency | overhead |")
         print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
         for w, r, s in rows:
+            # Efficiency against the pool's capacity in CPU-worker units.
+            capacity = w - min(w, p.gpu_workers) + min(w, p.gpu_workers) * p.gpu_speedup
             print(f"| {w} | {r['total']:,.1f} | {r['trace']:,.1f} | {r['upload']:.1f} | "
-                  f"{r['download']:.1f} | {r['merge']:.1f} | {s:.2f}x | {s / w:.0%} | "
+                  f"{r['download']:.1f} | {r['merge']:.1f} | {s:.2f}x | {s / capacity:.0%} | "
                   f"{r['overhead']:.1%} |")
         wstar = best_workers(p, g * 1e9 / 8)
         why = "as W" if p.topology == "star" else "as log2 W"
