@@ -1,9 +1,12 @@
-"""deploy/k8s/: the manifests are checked against minimal JSON schemas of the
-kinds used (required fields and types; kubeconform is not packaged in Debian)
-and for the consistency no schema sees: probes reach a declared container
-port, Services select the pod, volumeMounts name a volume or claim, the
-Secret keys used exist, the ServiceMonitor finds the metrics port, the pod
-is locked down. Each rule is also run on a broken copy that it must reject.
+"""deploy/k8s/ (one luxeld) and deploy/k8s/farm/ (coordinator and worker
+pools): the manifests are checked against minimal JSON schemas of the kinds
+used (required fields and types; kubeconform is not packaged in Debian) and
+for the consistency no schema sees: probes reach a declared container port,
+Services select the pod, volumeMounts name a volume or claim, the Secret keys
+used exist, the ServiceMonitor finds the metrics port, the pod is locked
+down; for the farm also discovery of both pools, the GPU pool, the
+coordinator's --workers-dns, budgets and the autoscaler's metrics. Each rule
+is also run on a broken copy that it must reject.
 
 usage: k8s_manifests_test.py [--dir deploy/k8s]
 """
