@@ -58,6 +58,7 @@ Json stats_to_json(const Manifest::Stats& s) {
     j["device_memory_budget"] = s.device_memory_budget;
     j["tiles"] = s.tiles;
   }
+  if (s.batch_paths > 0) j["batch_paths"] = s.batch_paths;
   return j;
 }
 
@@ -268,6 +269,7 @@ Status read_stats(const Json& j, const std::string& what, Manifest::Stats& s) {
     LUXEL_RETURN_IF_ERROR(f.unsigned64("device_memory_budget", s.device_memory_budget));
     LUXEL_RETURN_IF_ERROR(f.unsigned64("tiles", s.tiles));
   }
+  if (j.contains("batch_paths")) LUXEL_RETURN_IF_ERROR(f.unsigned64("batch_paths", s.batch_paths));
   return Status::ok();
 }
 

@@ -114,6 +114,7 @@ struct Manifest {
     // planned within, and the tiles of covered texels it took turns in
     // (0 / absent in JSON: not recorded).
     uint64_t peak_device_bytes = 0, device_memory_budget = 0, tiles = 0;
+    uint64_t batch_paths = 0;  // path slots of one iteration (paths_per_iteration resolved)
   } stats;
 
   int dilation_texels = 0;  // dilation radius applied to the images (>= 0)

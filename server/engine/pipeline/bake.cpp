@@ -692,6 +692,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   record_final_progress(progress, ctx_, result);
   result.termination = why;
   result.tiles = plan_.tiles.size();
+  result.batch_paths = s_.capacity;
   result.device_memory_budget = budget_;
   result.peak_device_bytes = peak;
   return result;

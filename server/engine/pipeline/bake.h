@@ -107,6 +107,7 @@ struct BakeResult {
   size_t peak_device_bytes = 0;     // device buffers held by the bake (BVH included)
   size_t device_memory_budget = 0;  // bytes the bake was planned within
   size_t tiles = 1;                 // tiles of covered texels baked in turn (tile_plan.h)
+  size_t batch_paths = 0;           // path slots of one iteration (paths_per_iteration resolved)
   double setup_s = 0;               // import excluded: atlas, BVH, uploads, program builds
   std::string kernel_table;         // per-kernel timing table (Table 5.4 style)
   std::vector<std::pair<std::string, double>> kernel_ms;  // name -> total ms

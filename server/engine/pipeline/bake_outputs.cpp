@@ -110,6 +110,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.stats.peak_device_bytes = result.peak_device_bytes;
   m.stats.device_memory_budget = result.device_memory_budget;
   m.stats.tiles = result.tiles;
+  m.stats.batch_paths = result.batch_paths;
   m.dilation_texels = settings.dilation_texels;
   for (const auto& e : result.encodings) m.encodings_json.push_back(e.manifest_json);
   if (result.uv_layout) m.uv_layout_json = uv_layout_json(*result.uv_layout);

@@ -62,7 +62,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   if (reference) m["reference"] = reference_name.empty() ? "given" : reference_name;
   m["max_bounces"] = std::to_string(max_bounces);
   m["rr_depth"] = std::to_string(rr_depth);
-  m["paths_per_iteration"] = std::to_string(paths_per_iteration);
+  m["paths_per_iteration"] = paths_per_iteration ? std::to_string(paths_per_iteration) : "auto";
   if (device_memory_budget_mib > 0)
     m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);

@@ -85,7 +85,9 @@ struct BakeSettings {
 
   int max_bounces = 4;  // indirect bounces after the texel point (0 = direct light only)
   int rr_depth = 3;     // Russian roulette from this vertex depth on
-  uint32_t paths_per_iteration = 1u << 18;  // batch size: bounds device memory
+  // Batch size: bounds device memory. 0: auto, the device's batch
+  // (resource_estimate.h, batch_paths_request).
+  uint32_t paths_per_iteration = 0;
   // Device memory the bake may hold, MiB; past it (or past the device's
   // largest allocation) the atlas is baked in tiles (pipeline/tile_plan.h).
   // 0: min(80 % of the device's memory, 4 GiB).

@@ -5,6 +5,7 @@
 #include "accel/bvh_builder.h"
 #include "pipeline/bake_features.h"
 #include "pipeline/iteration_stops.h"
+#include "pipeline/resource_estimate.h"
 
 namespace luxel::pipeline {
 
@@ -47,13 +48,16 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   s.plan = std::move(plan.value());
   s.features = derive_bake_features(settings, s.lights, s.data, s.plan);
 
-  // Batch size: the paths-per-iteration budget, at most the device's
-  // iteration cap (iteration_stops.h: stop requests wait for no more),
-  // never more than the samples the whole bake needs, and at most 2^29
-  // (slot ids share a word with the octant tag).
+  // Batch size: the paths-per-iteration budget (the device's for auto,
+  // resource_estimate.h), at most the device's iteration cap
+  // (iteration_stops.h: stop requests wait for no more), never more than
+  // the samples the whole bake needs, and at most 2^29 (slot ids share a
+  // word with the octant tag).
   const uint64_t covered = s.info.covered_texels.size();
-  uint64_t cap = std::min<uint64_t>(settings.paths_per_iteration,
-                                    iteration_path_cap(ctx.info().compute_units));
+  const uint64_t requested =
+      batch_paths_request(settings, DeviceLimits::of(ctx.info()), path_state_bytes(!s.plan.empty()),
+                          memory_budget(settings, ctx.info().global_mem_bytes));
+  uint64_t cap = std::min<uint64_t>(requested, iteration_path_cap(ctx.info().compute_units));
   if (settings.samples_per_texel > 0)
     cap = std::min<uint64_t>(cap, uint64_t{settings.samples_per_texel} * covered);
   s.capacity = static_cast<size_t>(std::clamp<uint64_t>(cap, 1, kSlotMask));

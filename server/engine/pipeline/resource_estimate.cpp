@@ -92,6 +92,22 @@ Status check_path_state(uint64_t paths, const PathStateBytes& bytes, size_t othe
   return Status::ok();
 }
 
+uint64_t batch_paths_request(const BakeSettings& settings, const DeviceLimits& device,
+                             const PathStateBytes& bytes, size_t budget) {
+  constexpr uint64_t kCpuBatch = uint64_t{1} << 18, kGpuBatch = uint64_t{1} << 22;
+  if (settings.paths_per_iteration > 0) return settings.paths_per_iteration;
+  if (!device.is_gpu) return kCpuBatch;
+  uint64_t batch = kGpuBatch;
+  auto fits = [&](uint64_t paths) {
+    const double total = static_cast<double>(paths) * static_cast<double>(bytes.per_path);
+    const double largest = static_cast<double>(paths) * static_cast<double>(bytes.largest);
+    return (budget == 0 || total <= 0.5 * static_cast<double>(budget)) &&
+           (device.max_alloc_bytes == 0 || largest <= static_cast<double>(device.max_alloc_bytes));
+  };
+  while (batch > kCpuBatch && !fits(batch)) batch /= 2;
+  return batch;
+}
+
 Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
                                                  const BakeSettings& settings,
                                                  const DeviceLimits& device) {
@@ -141,8 +157,9 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
   auto plan = plan_encodings(settings.encodings);
   if (!plan) return plan.status();
   e.per_path = path_state_bytes(!plan.value().empty());
-  e.batch_paths =
-      std::min<uint64_t>(settings.paths_per_iteration, iteration_path_cap(device.compute_units));
+  e.budget = memory_budget(settings, device.global_mem_bytes);
+  const uint64_t requested = batch_paths_request(settings, device, e.per_path, e.budget);
+  e.batch_paths = std::min<uint64_t>(requested, iteration_path_cap(device.compute_units));
   if (settings.samples_per_texel > 0)
     e.batch_paths = std::min<uint64_t>(
         e.batch_paths, static_cast<double>(settings.samples_per_texel) * e.max_texels > 4e18
@@ -151,15 +168,14 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
   e.path_bytes = static_cast<size_t>(e.batch_paths) * e.per_path.per_path;
   e.scene_bytes = scene_bytes(scene, triangles);
   e.per_texel_bytes = texel_state_bytes(plan.value().bytes_per_texel(), settings.adaptive);
-  e.budget = memory_budget(settings, device.global_mem_bytes);
   if (Status st = check_path_state(e.batch_paths, e.per_path, e.scene_bytes, e.budget,
                                    device.max_alloc_bytes);
       !st.is_ok()) {
-    if (e.batch_paths == settings.paths_per_iteration) return st;
+    if (e.batch_paths == requested) return st;
     return resource_exhausted(strprintf(
-        "%s (paths_per_iteration %u is trimmed to %llu paths by the device's iteration cap or "
+        "%s (paths_per_iteration %llu is trimmed to %llu paths by the device's iteration cap or "
         "the samples the bake needs)",
-        st.message().c_str(), settings.paths_per_iteration,
+        st.message().c_str(), static_cast<unsigned long long>(requested),
         static_cast<unsigned long long>(e.batch_paths)));
   }
   // Per-texel state that cannot be tiled: the Gaussian filter (bake.cpp,

@@ -28,8 +28,9 @@ struct DeviceLimits {
   uint64_t global_mem_bytes = 0;
   uint64_t max_alloc_bytes = 0;
   unsigned compute_units = 0;  // sets the iteration cap (iteration_stops.h)
+  bool is_gpu = false;         // sets the automatic batch (batch_paths_request)
   static DeviceLimits of(const device::DeviceInfo& info) {
-    return {info.global_mem_bytes, info.max_alloc_bytes, info.compute_units};
+    return {info.global_mem_bytes, info.max_alloc_bytes, info.compute_units, info.is_gpu};
   }
 };
 
@@ -61,6 +62,20 @@ size_t memory_budget(const BakeSettings& settings, uint64_t global_mem_bytes);
 // not checked.
 Status check_path_state(uint64_t paths, const PathStateBytes& bytes, size_t other_fixed,
                         size_t budget, uint64_t max_alloc);
+
+// The batch a bake asks for: settings.paths_per_iteration, or for 0 (auto)
+// the device's. CPUs: 2^18 paths, the fixed default of earlier releases (a
+// PoCL iteration of it takes about 0.4 s on 2 cores; more only delays
+// progress and stop requests). GPUs: 2^22 paths, halved while the path
+// state would take more than half the budget or one buffer would pass the
+// largest allocation, never below 2^18. On an H200, 2^18-path iterations
+// leave the GPU idle between launches of tens of microseconds: 2^22 traced
+// 2.5-2.6x more paths per second (docs/performance.md, "On a GPU"). The
+// result depends only on the device and the settings, never on timing, so
+// the bits stay those of the device. The iteration cap then trims it
+// (iteration_path_cap).
+uint64_t batch_paths_request(const BakeSettings& settings, const DeviceLimits& device,
+                             const PathStateBytes& bytes, size_t budget);
 
 struct ResourceEstimate {
   double surface_area = 0;     // world units^2 of the baked instances

@@ -179,12 +179,14 @@ std::vector<Setting> make_schema() {
                .type = Type::kInt,
                .units = "paths",
                .help = "batch size, at most the device's iteration cap (2^17 paths per compute "
-                       "unit, at least 2^18): device memory scales with it",
+                       "unit, at least 2^18): device memory scales with it; 0: auto (2^18 on "
+                       "CPUs, 2^22 on GPUs, halved to fit the memory budget)",
                .flag = "--paths-per-iteration",
                .metavar = "N",
-               .default_value = SettingValue::of(1u << 18),
+               .default_value = SettingValue::of(0),
                .min = 1024,
                .max = 1u << 26,
+               .zero_is_auto = true,
                LUXEL_NUMBER(paths_per_iteration)});
   t.push_back({.name = "adaptive",
                .type = Type::kBool,
@@ -639,6 +641,7 @@ std::string fmt_number(double x) {
 }
 
 bool in_range(const Setting& st, double x) {
+  if (st.zero_is_auto && x == 0) return true;
   if (st.min_open ? !(x > st.min) : !(x >= st.min)) return false;
   if (st.max_open ? !(x < st.max) : !(x <= st.max)) return false;
   return true;
@@ -648,7 +651,8 @@ bool in_range(const Setting& st, double x) {
 std::string range_phrase(const Setting& st) {
   const bool lo = std::isfinite(st.min), hi = std::isfinite(st.max);
   if (lo && hi)
-    return strprintf("in %c%s, %s%c", st.min_open ? '(' : '[', fmt_number(st.min).c_str(),
+    return strprintf("%sin %c%s, %s%c", st.zero_is_auto ? "0 (auto) or " : "",
+                     st.min_open ? '(' : '[', fmt_number(st.min).c_str(),
                      fmt_number(st.max).c_str(), st.max_open ? ')' : ']');
   if (lo) return strprintf("%s %s", st.min_open ? ">" : ">=", fmt_number(st.min).c_str());
   if (hi) return strprintf("%s %s", st.max_open ? "<" : "<=", fmt_number(st.max).c_str());

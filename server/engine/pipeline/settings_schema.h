@@ -78,8 +78,9 @@ struct Setting {
   bool max_open = false;
   // Values in (0, raise_to) are raised to raise_to (rate limits); 0: none.
   double raise_to = 0;
-  bool nonzero = false;                    // kVec3: must not be (0, 0, 0)
-  std::vector<const char*> choices;        // kChoice, kChoiceList
+  bool nonzero = false;              // kVec3: must not be (0, 0, 0)
+  bool zero_is_auto = false;         // kInt: 0 is accepted besides [min, max] (the engine picks)
+  std::vector<const char*> choices;  // kChoice, kChoiceList
   std::vector<const char*> local_choices;  // choices the API cannot carry
   SettingScope scope = SettingScope::kEverywhere;
   ApiZero api_zero = ApiZero::kDefault;

@@ -112,6 +112,45 @@ TEST(ResourceEstimate, BatchPastTheLargestAllocationNamesTheBytes) {
   EXPECT_EQ(trimmed->batch_paths, 16384u);
 }
 
+// paths_per_iteration 0 (auto): 2^18 paths on CPUs; on GPUs 2^22, halved
+// while the path state would take more than half the budget or one buffer
+// would pass the largest allocation, never below 2^18; a given value wins.
+TEST(ResourceEstimate, AutomaticBatchFollowsTheDevice) {
+  pipeline::BakeSettings s;
+  ASSERT_EQ(s.paths_per_iteration, 0u);
+  const pipeline::PathStateBytes bytes = pipeline::path_state_bytes(false);
+  ASSERT_EQ(bytes.per_path, 224u);
+  const DeviceLimits cpu{64 * kGiB, 16 * kGiB, 2, false};
+  EXPECT_EQ(pipeline::batch_paths_request(s, cpu, bytes, 4 * kGiB), 1u << 18);
+  DeviceLimits gpu{140 * kGiB, 35 * kGiB, 132, true};
+  // 2^22 x 224 B = 896 MiB, within half of 4 GiB.
+  EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 4 * kGiB), 1u << 22);
+  // Half of 1 GiB holds 2^21 x 224 B = 448 MiB, not 896 MiB.
+  EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 1 * kGiB), 1u << 21);
+  // The largest buffer of 2^20 paths is exactly the largest allocation.
+  gpu.max_alloc_bytes = (uint64_t{1} << 20) * bytes.largest;
+  EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 4 * kGiB), 1u << 20);
+  // Never below the CPU batch, however small the budget (the memory plan
+  // then refuses or tiles as for any batch).
+  EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 1 << 20), 1u << 18);
+  s.paths_per_iteration = 4096;
+  EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 4 * kGiB), 4096u);
+
+  // The estimate uses it: a time-bounded bake on the GPU gets 2^22 paths.
+  const scene::Scene scene = testing::open_plane();
+  pipeline::BakeSettings t = plane_settings();
+  t.samples_per_texel = 0;
+  t.time_budget_s = 10;
+  auto e =
+      pipeline::estimate_bake_resources(scene, t, DeviceLimits{140 * kGiB, 35 * kGiB, 132, true});
+  ASSERT_TRUE(e) << e.status().to_string();
+  EXPECT_EQ(e->batch_paths, 1u << 22);
+  auto c =
+      pipeline::estimate_bake_resources(scene, t, DeviceLimits{64 * kGiB, 16 * kGiB, 2, false});
+  ASSERT_TRUE(c) << c.status().to_string();
+  EXPECT_EQ(c->batch_paths, 1u << 18);
+}
+
 // The Gaussian filter cannot tile its per-texel state: at density 2048 the
 // plane has 4 x 2048^2 = 16.8 M texels, at least half of them covered, x 57
 // bytes = 478 MB against a 256 MiB budget. The box filter tiles it; with a

@@ -73,7 +73,10 @@ TEST(SettingsValidation, IntegerRanges) {
             "settings.max_bounces: must be a whole number, got 2.5");
   EXPECT_EQ(cli_error("max_bounces", "64"), "ok");
   EXPECT_EQ(cli_error("paths_per_iteration", "5"),
-            "settings.paths_per_iteration: must be in [1024, 67108864], got 5");
+            "settings.paths_per_iteration: must be 0 (auto) or in [1024, 67108864], got 5");
+  EXPECT_EQ(cli_error("paths_per_iteration", "0"), "ok");  // auto: the device's batch
+  EXPECT_EQ(cli_error("paths_per_iteration", "1023"),
+            "settings.paths_per_iteration: must be 0 (auto) or in [1024, 67108864], got 1023");
   EXPECT_EQ(cli_error("samples_per_texel", "-3"),
             "settings.samples_per_texel: must be in [0, 4294967295], got -3");
   EXPECT_EQ(cli_error("rr_depth", "0"), "settings.rr_depth: must be in [1, 64], got 0");
