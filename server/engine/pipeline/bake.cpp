@@ -527,6 +527,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
+    // Shards of one bake share the fingerprint, not their samples.
+    const uint32_t index = settings_.sharded() ? settings_.shard_index : 0;
+    const uint32_t count = settings_.sharded() ? settings_.shard_count : 1;
+    if (hooks.resume->shard_index != index || hooks.resume->shard_count != count)
+      return invalid_argument(strprintf("checkpoint is shard %u of %u, this bake shard %u of %u",
+                                        hooks.resume->shard_index, hooks.resume->shard_count, index,
+                                        count));
     auto tile = resume_tiles(*hooks.resume, result);
     if (!tile) return tile.status();
     first_tile = tile.value();

@@ -335,6 +335,47 @@ TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
   }
 }
 
+// A shard baked in device-memory tiles (pipeline/tile_plan.h) ends with
+// the state of every tile, the same bits as untiled; a merged state
+// finishes in tiles too, with the bits of the untiled finish.
+TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
+  // A budget leaving room for about a quarter of the per-texel state
+  // (tiled_bake_test's rule).
+  const double per_slot = 57.0 + static_cast<double>(single_->basis_bytes_per_texel);
+  const double state = per_slot * static_cast<double>(single_->covered_texels);
+  const double budget =
+      (static_cast<double>(single_->peak_device_bytes) - 0.75 * state) / 1048576.0;
+  std::vector<BakeCheckpoint> untiled = bake_shards(2);
+  ASSERT_EQ(untiled.size(), 2u);
+  BakeSettings s = settings();
+  s.shard_index = 1;
+  s.shard_count = 2;
+  s.device_memory_budget_mib = budget;
+  auto tiled = pipeline::bake(*scene_, s, *ctx_, hooks());
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  EXPECT_GE(tiled.value().tiles, 2u);
+  ASSERT_TRUE(tiled.value().final_state);
+  expect_same_bits(*tiled.value().final_state, untiled[1]);
+
+  auto merged = pipeline::merge_shard_states({untiled[0], *tiled.value().final_state});
+  ASSERT_TRUE(merged) << merged.status().to_string();
+  auto plain = finish(merged.value());
+  ASSERT_TRUE(plain) << plain.status().to_string();
+  BakeSettings whole = settings();
+  whole.device_memory_budget_mib = budget;
+  auto in_tiles = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(), hooks());
+  ASSERT_TRUE(in_tiles) << in_tiles.status().to_string();
+  EXPECT_GE(in_tiles.value().tiles, 2u);
+  EXPECT_EQ(in_tiles.value().paths, plain.value().paths);
+  EXPECT_EQ(in_tiles.value().irradiance, plain.value().irradiance);
+  EXPECT_EQ(in_tiles.value().rel_error, plain.value().rel_error);
+  EXPECT_EQ(in_tiles.value().samples, plain.value().samples);
+  EXPECT_EQ(in_tiles.value().encodings[0].coefficients, plain.value().encodings[0].coefficients);
+  EXPECT_EQ(in_tiles.value().min_spp, kSamples);
+  // The error summary sums per-tile partials in another order.
+  EXPECT_NEAR(in_tiles.value().error, plain.value().error, 1e-6 * plain.value().error);
+}
+
 TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   const std::vector<BakeCheckpoint> good = bake_shards(3);
   ASSERT_EQ(good.size(), 3u);
