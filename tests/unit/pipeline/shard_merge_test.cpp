@@ -13,8 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <set>
 
+#include "common/hash.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
 #include "pipeline/checkpoint.h"
@@ -57,6 +59,48 @@ TEST(ShardSampleIndices, ShardsPartitionTheSequence) {
   }
   // Shard 0 of 1 is the plain sequence.
   for (uint32_t i = 0; i < 100; ++i) EXPECT_EQ(cl::lux_shard_sample_index(i, 0, 1), i);
+}
+
+// A version-3 checkpoint (before the shard fields) still reads: a whole
+// bake's state (shard 0 of 1) without an encoding layout.
+TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
+  std::string b = "LUXCKPT3";
+  auto pod = [&](const auto& v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  auto vec = [&](const auto& v) {
+    pod(static_cast<uint64_t>(v.size()));
+    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0]));
+  };
+  vec(std::string("fp"));
+  pod(uint32_t{2});
+  pod(uint32_t{1});
+  pod(uint64_t{6});  // paths
+  pod(uint32_t{3});  // iteration
+  pod(double{1.5});  // elapsed
+  pod(uint64_t{0});  // nonfinite
+  vec(std::vector<double>{});
+  vec(std::vector<cl::float4>{{1, 2, 3, 4}, {5, 6, 7, 8}});
+  vec(std::vector<cl::float4>{{0, 0, 0, 0}, {1, 1, 1, 1}});
+  vec(std::vector<cl::float2>{{3, 3}, {3, 3}});
+  vec(std::vector<uint32_t>{3, 3});
+  vec(std::vector<cl::float4>{});
+  vec(std::vector<double>{});
+  b += Hasher().add(b).hex();
+  const std::string path = ::testing::TempDir() + "/shard_merge_v3.ckpt";
+  std::ofstream(path, std::ios::binary) << b;
+  auto c = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(c) << c.status().to_string();
+  EXPECT_EQ(c->fingerprint, "fp");
+  EXPECT_EQ(c->shard_index, 0u);
+  EXPECT_EQ(c->shard_count, 1u);
+  EXPECT_TRUE(c->basis_layout.empty());
+  EXPECT_EQ(c->paths_done, 6u);
+  EXPECT_EQ(c->mean[1].y, 6.0f);
+  // Written back, it is a version-4 file with the same state.
+  ASSERT_TRUE(pipeline::write_checkpoint(path, c.value()).is_ok());
+  auto again = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(again) << again.status().to_string();
+  EXPECT_EQ(again->shard_count, 1u);
+  EXPECT_EQ(again->spp, c->spp);
 }
 
 std::string error_of(const Status& s) {
