@@ -19,6 +19,7 @@
 #include "common/hash.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
+#include "pipeline/bake_outputs.h"
 #include "pipeline/checkpoint.h"
 #include "pipeline/settings_schema.h"
 #include "scene/gltf_import.h"
@@ -465,9 +466,23 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
     refused(s, "shard 0 of 3 (input 0): holds progressive");
   }
   refused({}, "no shard states");
-  // A merge missing samples is refused when finishing.
   auto merged = pipeline::merge_shard_states(good);
   ASSERT_TRUE(merged);
+  // The finished merge goes through the denoiser and the output writer like
+  // any bake (the daemon's default denoise is atrous); no accumulators.bin.
+  BakeSettings denoised = settings();
+  denoised.denoise = pipeline::Denoise::kAtrous;
+  auto finished = pipeline::finish_merged_bake(*scene_, denoised, *ctx_, merged.value(), hooks());
+  ASSERT_TRUE(finished) << finished.status().to_string();
+  EXPECT_EQ(finished.value().irradiance_denoised.size(), finished.value().irradiance.size());
+  const std::string out = ::testing::TempDir() + "/shard_merge_outputs";
+  auto written = pipeline::write_bake_outputs(out, *scene_, denoised, finished.value());
+  ASSERT_TRUE(written) << written.status().to_string();
+  const auto& files = written.value().files;
+  EXPECT_NE(std::find(files.begin(), files.end(), "manifest.json"), files.end());
+  EXPECT_NE(std::find(files.begin(), files.end(), "sh2.exr"), files.end());
+  EXPECT_EQ(std::find(files.begin(), files.end(), "accumulators.bin"), files.end());
+  // A merge missing samples is refused when finishing.
   BakeSettings more = settings();
   more.samples_per_texel = kSamples + 16;
   auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(), hooks());
