@@ -133,6 +133,9 @@ TEST(ShardSettings, RefusedCombinationsNameTheField) {
   s.encodings.names = {"sh2"};  // auto: projection
   s.encodings.solver = pipeline::EncodingSolver::kAuto;
   EXPECT_EQ(error_of(pipeline::validate_settings(s)), "");
+  s.filter = pipeline::Filter::kGaussian;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.filter"), std::string::npos);
+  s.filter = pipeline::Filter::kBox;
   // 40 samples make 3 blocks: a 4th shard would have none.
   s.samples_per_texel = 40;
   s.shard_index = 3;
@@ -184,10 +187,11 @@ class ShardMergeTest : public ::testing::Test {
     return h;
   }
   // The final states of shards 0..count-1.
-  static std::vector<BakeCheckpoint> bake_shards(uint32_t count) {
+  static std::vector<BakeCheckpoint> bake_shards(uint32_t count,
+                                                 const BakeSettings& whole = settings()) {
     std::vector<BakeCheckpoint> states;
     for (uint32_t k = 0; k < count; ++k) {
-      BakeSettings s = settings();
+      BakeSettings s = whole;
       s.shard_index = k;
       s.shard_count = count;
       auto r = pipeline::bake(*scene_, s, *ctx_, hooks());
@@ -419,6 +423,95 @@ TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
   EXPECT_EQ(in_tiles.value().min_spp, kSamples);
   // The error summary sums per-tile partials in another order.
   EXPECT_NEAR(in_tiles.value().error, plain.value().error, 1e-6 * plain.value().error);
+}
+
+// The weighted parts of the merge (sum w, sum w^2, Wa Wb / W), which box
+// bakes (unit weights) leave untouched: synthetic weighted samples
+// accumulated per shard with the kernel's float Welford update
+// (kernels/bake/accumulate.h lux_welford, West 1979), merged, against one
+// accumulator fed them all; the unweighted-mean merge must fail the check.
+void welford(const float* x, float w, cl::float4& mean, cl::float4& m2, cl::float2& weight) {
+  const float w_new = weight.x + w;
+  float* m = &mean.x;
+  float* v = &m2.x;
+  for (int c = 0; c < 4; ++c) {
+    const float delta = x[c] - m[c];
+    m[c] += delta * (w / w_new);
+    v[c] += w * delta * (x[c] - m[c]);
+  }
+  weight = {w_new, weight.y + w * w};
+}
+
+TEST(ShardMergeWeighted, WeightedWelfordStatesMergeToOneAccumulator) {
+  constexpr size_t kTexels = 64;
+  constexpr uint32_t kCount = 3;
+  uint64_t rng = 12345;
+  auto uniform = [&] {
+    rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<float>((rng >> 40) * 0x1p-24);
+  };
+  BakeCheckpoint one;
+  std::vector<BakeCheckpoint> shards(kCount);
+  for (uint32_t k = 0; k < kCount; ++k) {
+    shards[k].fingerprint = "synthetic";
+    shards[k].shard_index = k;
+    shards[k].shard_count = kCount;
+    shards[k].width = shards[k].height = 8;
+  }
+  for (BakeCheckpoint* c : {&one, &shards[0], &shards[1], &shards[2]}) {
+    c->mean.assign(kTexels, {});
+    c->m2.assign(kTexels, {});
+    c->weight.assign(kTexels, {});
+    c->spp.assign(kTexels, 0);
+  }
+  for (size_t t = 0; t < kTexels; ++t) {
+    const float level = 0.1f + 10.0f * uniform();
+    // Unequal shares (the shards' 16/16/8 blocks), samples with a heavy tail.
+    for (uint32_t i = 0; i < 40; ++i) {
+      const uint32_t k = i < 16 ? 0 : (i < 32 ? 1 : 2);
+      float x[4];
+      for (float& v : x) v = level * (uniform() < 0.1f ? 8.0f * uniform() : uniform());
+      const float w = 0.05f + 0.95f * uniform();
+      welford(x, w, one.mean[t], one.m2[t], one.weight[t]);
+      welford(x, w, shards[k].mean[t], shards[k].m2[t], shards[k].weight[t]);
+      ++one.spp[t];
+      ++shards[k].spp[t];
+      ++shards[k].paths_done;
+    }
+  }
+  auto merged = pipeline::merge_shard_states(shards);
+  ASSERT_TRUE(merged) << merged.status().to_string();
+  auto worst = [&](const BakeCheckpoint& m) {
+    double d = 0;
+    for (size_t t = 0; t < kTexels; ++t) {
+      for (int c = 0; c < 4; ++c) {
+        const double a = (&m.mean[t].x)[c], b = (&one.mean[t].x)[c];
+        d = std::max(d, std::abs(a - b) / (2e-4 * std::abs(b) + 1e-6));
+        const double va = (&m.m2[t].x)[c], vb = (&one.m2[t].x)[c];
+        d = std::max(d, std::abs(va - vb) / (2e-3 * std::abs(vb) + 1e-6));
+      }
+      for (int c = 0; c < 2; ++c) {
+        const double a = (&m.weight[t].x)[c], b = (&one.weight[t].x)[c];
+        d = std::max(d, std::abs(a - b) / (1e-5 * std::abs(b)));
+      }
+      EXPECT_EQ(m.spp[t], one.spp[t]);
+    }
+    return d;
+  };
+  const double right = worst(merged.value());
+  EXPECT_LE(right, 1.0);
+  // Negative control: the means averaged without weights.
+  BakeCheckpoint unweighted = merged.value();
+  for (size_t t = 0; t < kTexels; ++t)
+    for (int c = 0; c < 4; ++c) {
+      double sum = 0;
+      for (const BakeCheckpoint& s : shards) sum += (&s.mean[t].x)[c];
+      (&unweighted.mean[t].x)[c] = static_cast<float>(sum / kCount);
+    }
+  const double wrong = worst(unweighted);
+  EXPECT_GT(wrong, 10.0);
+  std::printf("weighted synthetic: deviation / tolerance %.3g; unweighted means %.3g\n", right,
+              wrong);
 }
 
 TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
