@@ -514,6 +514,57 @@ TEST(ShardMergeWeighted, WeightedWelfordStatesMergeToOneAccumulator) {
               wrong);
 }
 
+// A tiled shard checkpoints with its shard fields and resumes from a later
+// tile's checkpoint to the same final state; another shard may not resume it.
+TEST_F(ShardMergeTest, TiledShardResumesFromItsCheckpoint) {
+  BakeSettings s = settings();
+  s.shard_index = 1;
+  s.shard_count = 2;
+  s.paths_per_iteration = 1024;  // several iterations per tile
+  auto probe = pipeline::bake(*scene_, s, *ctx_, hooks());
+  ASSERT_TRUE(probe) << probe.status().to_string();
+  ASSERT_TRUE(probe.value().final_state);
+  const double per_slot = 57.0 + static_cast<double>(probe.value().basis_bytes_per_texel);
+  const double state = per_slot * static_cast<double>(probe.value().covered_texels);
+  s.device_memory_budget_mib =
+      (static_cast<double>(probe.value().peak_device_bytes) - 0.75 * state) / 1048576.0;
+  // Periodic checkpoints on the way, kept from the second tile on.
+  pipeline::BakeHooks h = hooks();
+  h.checkpoint_interval_s = 1e-9;
+  std::vector<BakeCheckpoint> checkpoints;
+  h.on_checkpoint = [&](const BakeCheckpoint& c) {
+    if (!c.tile.empty() && c.tile[pipeline::kTileIndex] >= 1) checkpoints.push_back(c);
+  };
+  auto tiled = pipeline::bake(*scene_, s, *ctx_, h);
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  EXPECT_GE(tiled.value().tiles, 2u);
+  ASSERT_TRUE(tiled.value().final_state);
+  const BakeCheckpoint& untiled = *probe.value().final_state;
+  expect_same_bits(*tiled.value().final_state, untiled);
+  // A shard resumed from a checkpoint of a later tile (through the file
+  // format) ends with the same state.
+  ASSERT_FALSE(checkpoints.empty());
+  const std::string path = ::testing::TempDir() + "/shard_merge_tiled.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, checkpoints.front()).is_ok());
+  auto read = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(read) << read.status().to_string();
+  EXPECT_EQ(read->shard_index, 1u);
+  EXPECT_EQ(read->shard_count, 2u);
+  pipeline::BakeHooks resume = hooks();
+  resume.resume = &read.value();
+  auto resumed = pipeline::bake(*scene_, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  ASSERT_TRUE(resumed.value().final_state);
+  expect_same_bits(*resumed.value().final_state, untiled);
+  // Another shard's checkpoint is refused.
+  BakeSettings other = s;
+  other.shard_index = 0;
+  auto refused = pipeline::bake(*scene_, other, *ctx_, resume);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("checkpoint is shard 1 of 2"), std::string::npos)
+      << refused.status().message();
+}
+
 TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   const std::vector<BakeCheckpoint> good = bake_shards(3);
   ASSERT_EQ(good.size(), 3u);
