@@ -58,8 +58,8 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
       batch_paths_request(settings, DeviceLimits::of(ctx.info()), path_state_bytes(!s.plan.empty()),
                           memory_budget(settings, ctx.info().global_mem_bytes));
   uint64_t cap = std::min<uint64_t>(requested, iteration_path_cap(ctx.info().compute_units));
-  if (settings.samples_per_texel > 0)
-    cap = std::min<uint64_t>(cap, uint64_t{settings.samples_per_texel} * covered);
+  if (settings.shard_samples() > 0)
+    cap = std::min<uint64_t>(cap, uint64_t{settings.shard_samples()} * covered);
   s.capacity = static_cast<size_t>(std::clamp<uint64_t>(cap, 1, kSlotMask));
 
   cl::LuxBakeParams& p = s.params;
@@ -81,6 +81,8 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   p.basis_stride = s.plan.stride;
   p.acceleration = settings.encodings.acceleration;
   p.has_reference = settings.reference ? 1u : 0u;
+  p.shard_index = settings.sharded() ? settings.shard_index : 0u;
+  p.shard_count = settings.sharded() ? settings.shard_count : 1u;
   return s;
 }
 
