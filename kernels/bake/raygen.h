@@ -11,6 +11,7 @@
 #include "primitives/offset_buffer.h"
 #include "shared/bake_args.h"
 #include "shared/sample_info.h"
+#include "shared/shard.h"
 #if LUX_BASIS
 #include "bake/basis.h"
 #endif
@@ -24,7 +25,9 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
    * atomics, so results do not depend on scheduling. */
   uint first = 0, end = 0;
   lux_offset_range(offsets, slot, params.covered_count, &first, &end);
-  const uint index = spp[slot] + (gid - first);
+  /* A shard's own count maps to its part of the sequence (shared/shard.h). */
+  const uint index =
+      lux_shard_sample_index(spp[slot] + (gid - first), params.shard_index, params.shard_count);
   const uint seed = lux_texel_seed(texel, params.bake_seed);
 
   /* Listing 4.2: choose one of the texel's valid Hammersley positions. */

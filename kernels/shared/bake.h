@@ -132,6 +132,10 @@ typedef struct LuxBakeParams {
   float alloc_scale;
   float alloc_mix;
   float alloc_cap; /* most weight units of a texel's error term */
+  /* Distributed bakes (shared/shard.h): this bake traces shard shard_index
+   * of shard_count of every texel's sample sequence (count <= 1: all). */
+  uint shard_index;
+  uint shard_count;
 } LuxBakeParams;
 
 /* Per-work-group partial statistics of the accumulation buffer. */

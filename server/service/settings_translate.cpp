@@ -209,6 +209,10 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
   // Rules of the API form (documented in luxel.proto): the sun is on when it
   // has an illuminance; the default lightmap size respects the daemon's limit.
   s.lights.sun.enabled = s.lights.sun.illuminance > 0;
+  // Shards sample uniformly (their accumulators must merge exactly): adaptive
+  // sampling left unset is off for them; adaptive=true given is refused by
+  // validate_settings.
+  if (s.sharded() && !in.has_adaptive()) s.adaptive = false;
   if (!size_given) s.atlas.resolution = std::min(s.atlas.resolution, limits.max_resolution);
   if (!s.job.reference_bake_id.empty()) s.reference_name = "bake " + s.job.reference_bake_id;
   // Placements: a list of structures, outside the schema's scalar settings
@@ -357,6 +361,9 @@ std::string bake_fingerprint(const std::string& scene_id, const pipeline::BakeSe
   h.add(scene_id);
   for (const auto& [key, value] : settings.describe()) {
     if (key == "progress_interval_s") continue;  // shapes reports, not the lightmap
+    // Shards of one bake share the fingerprint (their states merge,
+    // pipeline/shard_merge.h); the checkpoint records the shard itself.
+    if (key == "shard") continue;
     h.add(key).add("=").add(value).add("\n");
   }
   return h.hex();

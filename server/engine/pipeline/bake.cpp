@@ -83,7 +83,23 @@ class Baker {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
     c.paths_done = paths_done_;
+    c.shard_index = settings_.sharded() ? settings_.shard_index : 0;
+    c.shard_count = settings_.sharded() ? settings_.shard_count : 1;
+    for (const cl::LuxEncoding& e : s_.plan.table)
+      c.basis_layout.push_back(static_cast<uint32_t>(e.count) | static_cast<uint32_t>(e.solver)
+                                                                    << 16);
     return c;
+  }
+  // A state of every covered texel without a tile record (a merge of
+  // shards, pipeline/shard_merge.h) restored into a tiled bake: tile
+  // [begin, end)'s part of it, its paths the samples it holds.
+  Status restore_whole_state(size_t begin, size_t end) {
+    BakeCheckpoint k = slice_checkpoint(*whole_state_, begin, end);
+    if (begin > 0) k.nonfinite = 0;  // counted once, with the first tile
+    LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, k, s_.info.covered_texels));
+    paths_done_ = 0;
+    for (uint32_t n : k.spp) paths_done_ += n;
+    return Status::ok();
   }
 
   const scene::Scene& scene_;  // the layout's: split vertices when UVs were generated
@@ -119,6 +135,8 @@ class Baker {
   // [0, done_.slots)), for the checkpoints of later tiles.
   bool keep_finished_ = false;
   BakeCheckpoint finished_;
+  // Resumed from a whole-atlas state without a tile record into a tiled plan.
+  const BakeCheckpoint* whole_state_ = nullptr;
   // With a reference: the RMSE^2 and relMSE sums of each tile while black.
   std::vector<std::pair<double, double>> black_ref_;
 };
@@ -273,6 +291,12 @@ Result<size_t> Baker::resume_tiles(const BakeCheckpoint& c, BakeResult& result) 
                   plan_.tiles.size()));
   };
   if (c.tile.empty()) {
+    if (tiled() && c.mean.size() == s_.info.covered_texels.size() && !c.per_texel) {
+      whole_state_ = &c;
+      LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+      LUXEL_RETURN_IF_ERROR(restore_whole_state(plan_.tiles[0].begin, plan_.tiles[0].end));
+      return size_t{0};
+    }
     if (tiled()) return other_plan();
     LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
     LUXEL_RETURN_IF_ERROR(b_.restore_state(ctx_, c, s_.info.covered_texels));
@@ -492,7 +516,9 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   const auto t_setup = Clock::now();
   ctx_.timer().reset();
   LUXEL_RETURN_IF_ERROR(setup());
-  keep_finished_ = tiled() && static_cast<bool>(hooks.on_checkpoint);
+  // Shards keep every tile's state for BakeResult::final_state.
+  keep_finished_ = (tiled() && static_cast<bool>(hooks.on_checkpoint)) || settings_.sharded() ||
+                   hooks.keep_final_state;
   BakeResult result;
   begin_result(s_, result);
   BakeProgress progress;  // the whole bake's
@@ -504,7 +530,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto tile = resume_tiles(*hooks.resume, result);
     if (!tile) return tile.status();
     first_tile = tile.value();
-    paths_done_ = hooks.resume->paths_done;
+    if (!whole_state_) paths_done_ = hooks.resume->paths_done;
     resumed_elapsed = hooks.resume->elapsed_s;
     progress.iteration = hooks.resume->iteration;
     result.series = series_from_checkpoint(*hooks.resume);
@@ -553,9 +579,16 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     if (ti > first_tile) {
       LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));
       paths_done_ = 0;
+      if (whole_state_) LUXEL_RETURN_IF_ERROR(restore_whole_state(tile.begin, tile.end));
     }
     for (;;) {
       const uint64_t batch = tile_policy.next_batch(s_.capacity, paths_done_);
+      // Resumed with the samples already traced (a merge of shards): the
+      // outputs come from the restored state, no iteration runs.
+      if (batch == 0) {
+        why = Termination::kSamples;
+        break;
+      }
       bool completed = true;
       {
         std::unique_lock<std::mutex> turn;
@@ -660,6 +693,25 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     }
     done_.min_spp = std::min(done_.min_spp, tile_progress.min_spp);
     if (last) break;
+  }
+  if ((settings_.sharded() || hooks.keep_final_state) && why != Termination::kCancelled) {
+    auto state = std::make_shared<BakeCheckpoint>();
+    BakeCheckpoint& f = *state;
+    append_state(f, finished_);
+    f.fingerprint = hooks.fingerprint;
+    f.shard_index = settings_.sharded() ? settings_.shard_index : 0;
+    f.shard_count = settings_.sharded() ? settings_.shard_count : 1;
+    f.width = static_cast<uint32_t>(s_.atlas.width);
+    f.height = static_cast<uint32_t>(s_.atlas.height);
+    f.paths_done = done_.paths;
+    f.iteration = progress.iteration;
+    f.elapsed_s = result.seconds;
+    f.nonfinite = done_.nonfinite;
+    for (const cl::LuxEncoding& e : s_.plan.table)
+      f.basis_layout.push_back(static_cast<uint32_t>(e.count) | static_cast<uint32_t>(e.solver)
+                                                                    << 16);
+    series_to_checkpoint(result.series, f);
+    result.final_state = std::move(state);
   }
   finish_result(s_, settings_, result);
   // Device memory of the bake (with a snapshot denoiser, held beside it).

@@ -100,6 +100,13 @@ struct BakeResult {
   std::vector<EncodedLightmap> encodings;  // directional encodings, in the requested order
   size_t basis_bytes_per_texel = 0;        // device state of all encodings per texel
 
+  // Distributed bakes (settings.shard_count > 1, pipeline/shard_merge.h):
+  // the shard's final per-texel accumulators, every covered texel (all
+  // tiles complete), fingerprint from the hooks, shard fields set; what a
+  // coordinator merges. Null for cancelled bakes, and for whole bakes
+  // unless BakeHooks::keep_final_state.
+  std::shared_ptr<const BakeCheckpoint> final_state;
+
   std::string features;  // compiled bake features ("light_emissive, nee, ...")
   std::string device;
   std::string intersector;  // backend of the ray queries ("embree", "opencl")
@@ -148,6 +155,9 @@ struct BakeHooks {
   // turns on the device instead of oversubscribing it (two PoCL contexts on
   // one CPU would each start a thread per core).
   std::mutex* device_turn = nullptr;
+  // BakeResult::final_state for a whole bake too (shards always get it):
+  // a bake's accumulators as one "shard" of itself.
+  bool keep_final_state = false;
 };
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,

@@ -274,6 +274,17 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   m.scene_name = shown_name;
   m.seam_stitch_json = seams.manifest_json();
   add_file("error_series", "error_series.csv", "csv", "error estimate against time", -1);
+  if (result.final_state) {
+    // A shard of a distributed bake: its accumulators, for the merge
+    // (pipeline/shard_merge.h).
+    paths.accumulators_bin = at("accumulators.bin");
+    LUXEL_RETURN_IF_ERROR(write_checkpoint(paths.accumulators_bin, *result.final_state));
+    add_file("accumulators", "accumulators.bin", "luxel-checkpoint",
+             strprintf("shard %u of %u: per-texel accumulators (checkpoint format) for the exact "
+                       "merge of the shards",
+                       result.final_state->shard_index, result.final_state->shard_count),
+             -1);
+  }
   m.files = std::move(files);
   if (result.uv_layout && !source_path.empty()) {
     const std::string glb = lightmapped_glb_name(shown_name);

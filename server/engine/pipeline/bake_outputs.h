@@ -21,6 +21,10 @@ struct OutputPaths {
   std::vector<std::string> encodings;   // one EXR per directional encoding ("sh2.exr", ...)
   std::string lightmapped_glb;          // "<scene>_lightmapped.glb"; empty without generated UVs
   std::string irradiance_denoised_exr;  // settings.denoise != off; empty otherwise
+  // A shard of a distributed bake (result.final_state): "accumulators.bin",
+  // its per-texel accumulators in the checkpoint format (write_checkpoint);
+  // empty otherwise.
+  std::string accumulators_bin;
   // Every file written, by name in `dir` (a multi-page lightmap has
   // "irradiance_<page>.exr", ...; the fields above then name page 0's).
   std::vector<std::string> files;

@@ -26,9 +26,8 @@ BakePolicy::BakePolicy(const BakeSettings& settings, const BakeHooks& hooks,
       checkpoint_interval_s_(hooks.checkpoint_interval_s),
       snapshots_(static_cast<bool>(hooks.on_snapshot) && hooks.snapshot_interval_s > 0),
       checkpoints_(static_cast<bool>(hooks.on_checkpoint)),
-      target_paths_(settings.samples_per_texel > 0
-                        ? uint64_t{settings.samples_per_texel} * covered_texels
-                        : 0) {}
+      target_paths_(
+          settings.shard_samples() > 0 ? uint64_t{settings.shard_samples()} * covered_texels : 0) {}
 
 uint64_t BakePolicy::next_batch(uint64_t capacity, uint64_t paths_done) const {
   if (target_paths_ == 0) return capacity;

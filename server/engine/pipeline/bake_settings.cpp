@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "pipeline/settings_schema.h"
+#include "shared/shard.h"
 
 namespace luxel::pipeline {
 
@@ -50,11 +51,18 @@ const char* denoise_name(Denoise d) {
   return d == Denoise::kAtrous ? "atrous" : "off";
 }
 
+uint32_t BakeSettings::shard_samples() const {
+  return cl::lux_shard_samples(samples_per_texel, shard_index, shard_count);
+}
+
 std::map<std::string, std::string> BakeSettings::describe() const {
   std::map<std::string, std::string> m;
   m["resolution"] = std::to_string(atlas.resolution);
   m["texel_density"] = strprintf("%g", atlas.texel_density);
   m["samples_per_texel"] = std::to_string(samples_per_texel);
+  // Not in a bake's fingerprint (service/settings_translate.cpp): every
+  // shard of one bake shares it.
+  if (sharded()) m["shard"] = strprintf("%u/%u", shard_index, shard_count);
   m["time_budget_s"] = strprintf("%g", time_budget_s);
   m["target_error"] = strprintf("%g", target_error);
   if (target_metric != ErrorMetric::kEstimate)
@@ -180,6 +188,40 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
             field.c_str(),
             strprintf("node %d%s is placed twice (also placements[%zu])", np.node,
                       np.element >= 0 ? strprintf(" instance %d", np.element).c_str() : "", j));
+  }
+  if (s.shard_index > 0 && s.shard_index >= std::max(s.shard_count, 1u))
+    return bad("shard_index", strprintf("must be < shard_count (%u), got %u",
+                                        std::max(s.shard_count, 1u), s.shard_index));
+  if (s.sharded()) {
+    // A shard without samples would read as "no sample rule"; the blocks of
+    // LUX_SHARD_BLOCK indices bound how many shards S samples can feed.
+    if (s.samples_per_texel > 0 && s.shard_samples() == 0)
+      return bad("shard_count",
+                 strprintf("samples_per_texel=%u in blocks of %u samples leaves shard %u of %u "
+                           "without samples: use at most %u shards",
+                           s.samples_per_texel, LUX_SHARD_BLOCK, s.shard_index, s.shard_count,
+                           (s.samples_per_texel + LUX_SHARD_BLOCK - 1) / LUX_SHARD_BLOCK));
+    // Adaptive sampling allocates by the shard's own error estimates, which
+    // no merge can reproduce: shards sample uniformly.
+    if (s.adaptive)
+      return bad("adaptive",
+                 "adaptive sampling cannot be merged across shards (each shard would allocate by "
+                 "its own error); sharded bakes sample uniformly (adaptive=false)");
+    // Progressive least squares (Listing 7.1) is Gauss-Seidel state that
+    // depends on the order of the samples; projection state is running
+    // means, which merge exactly.
+    if (!s.encodings.names.empty()) {
+      auto plan = plan_encodings(s.encodings);
+      if (plan) {
+        for (const Encoding& e : plan.value().encodings)
+          if (e.solver != EncodingSolver::kProjection)
+            return bad("solver",
+                       strprintf("encoding '%s' uses the %s solver, whose state depends on the "
+                                 "order of the samples and cannot be merged across shards "
+                                 "(use solver=projection, or shard_count<=1)",
+                                 e.name().c_str(), solver_name(e.solver)));
+      }
+    }
   }
   if (s.reference) {
     for (float v : *s.reference)

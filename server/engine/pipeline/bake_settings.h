@@ -111,6 +111,20 @@ struct BakeSettings {
   bool adaptive = true;
   uint32_t adaptive_min_samples = 8;
 
+  // Distributed bakes (pipeline/shard_merge.h): this bake is shard
+  // shard_index of shard_count and traces only its part of every texel's
+  // sample sequence (kernels/sampling/shard.h); samples_per_texel stays the
+  // whole bake's count, of which the shard traces shard_samples(). 0 or 1:
+  // the whole bake. Sharded bakes sample uniformly (adaptive off) and fit
+  // directional encodings by projection, so that the shards' accumulators
+  // merge exactly.
+  uint32_t shard_index = 0;
+  uint32_t shard_count = 1;
+  bool sharded() const { return shard_count > 1; }
+  // The samples per texel this bake traces: samples_per_texel, or a shard's
+  // part of it (kernels/shared/shard.h). 0: no sample rule.
+  uint32_t shard_samples() const;
+
   // Ablation switches (thesis §5.1, §5.4, §6.2).
   bool compaction = true;
   bool sort_directions = false;

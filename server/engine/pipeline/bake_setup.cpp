@@ -54,8 +54,8 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   const uint64_t covered = s.info.covered_texels.size();
   uint64_t cap = std::min<uint64_t>(settings.paths_per_iteration,
                                     iteration_path_cap(ctx.info().compute_units));
-  if (settings.samples_per_texel > 0)
-    cap = std::min<uint64_t>(cap, uint64_t{settings.samples_per_texel} * covered);
+  if (settings.shard_samples() > 0)
+    cap = std::min<uint64_t>(cap, uint64_t{settings.shard_samples()} * covered);
   s.capacity = static_cast<size_t>(std::clamp<uint64_t>(cap, 1, kSlotMask));
 
   cl::LuxBakeParams& p = s.params;
@@ -77,6 +77,8 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   p.basis_stride = s.plan.stride;
   p.acceleration = settings.encodings.acceleration;
   p.has_reference = settings.reference ? 1u : 0u;
+  p.shard_index = settings.sharded() ? settings.shard_index : 0u;
+  p.shard_count = settings.sharded() ? settings.shard_count : 1u;
   return s;
 }
 

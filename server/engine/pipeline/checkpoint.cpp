@@ -10,7 +10,8 @@
 namespace luxel::pipeline {
 namespace {
 
-constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '3'};
+constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '4'};
+constexpr char kMagicV3[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '3'};
 constexpr char kMagicV2[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
 
@@ -85,6 +86,9 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   w.vec(c.spp);
   w.vec(c.basis);
   w.vec(c.tile);
+  w.pod(c.shard_index);
+  w.pod(c.shard_count);
+  w.vec(c.basis_layout);
   const std::string sum = Hasher().add(w.bytes()).hex();
   w.raw(sum.data(), sum.size());
   return write_file_atomic(path, w.bytes().data(), w.bytes().size());
@@ -109,14 +113,17 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   if (!r.raw(magic, sizeof magic)) return corrupt("not a Luxel checkpoint");
   const bool v1 = std::memcmp(magic, kMagicV1, sizeof kMagicV1) == 0;
   const bool v2 = std::memcmp(magic, kMagicV2, sizeof kMagicV2) == 0;
-  if (!v1 && !v2 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+  const bool v3 = std::memcmp(magic, kMagicV3, sizeof kMagicV3) == 0;
+  if (!v1 && !v2 && !v3 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
     return corrupt("not a Luxel checkpoint");
+  const bool v4 = !v1 && !v2 && !v3;
   c.per_texel = v1 || v2;
   if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
       !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
-      (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)))
+      (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)) ||
+      (v4 && (!r.pod(c.shard_index) || !r.pod(c.shard_count) || !r.vec(c.basis_layout, 64))))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   c.series_stride = v1 ? 5 : 7;
@@ -127,6 +134,7 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
       c.weight.size() != n || c.spp.size() != n || c.series.size() % c.series_stride != 0 ||
       c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields))
     return corrupt("array sizes do not match the lightmap");
+  if (c.shard_count == 0 || c.shard_index >= c.shard_count) return corrupt("invalid shard");
   return c;
 }
 
@@ -155,6 +163,9 @@ BakeCheckpoint compact_checkpoint(const BakeCheckpoint& c, const std::vector<uin
 BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t end) {
   BakeCheckpoint k;
   k.fingerprint = c.fingerprint;
+  k.shard_index = c.shard_index;
+  k.shard_count = c.shard_count;
+  k.basis_layout = c.basis_layout;
   k.width = c.width;
   k.height = c.height;
   k.paths_done = c.paths_done;

@@ -17,7 +17,12 @@ namespace luxel::pipeline {
 struct BakeCheckpoint {
   // What the state belongs to: a hash of the scene content and of the
   // settings that shape the result. Resuming with another fingerprint fails.
+  // Shards of one bake (pipeline/shard_merge.h) share it: it leaves out
+  // the shard fields below.
   std::string fingerprint;
+  // Distributed bakes (version 4): the shard this state belongs to
+  // (shard_count 1: the whole bake, or a merge of all its shards).
+  uint32_t shard_index = 0, shard_count = 1;
   uint32_t width = 0, height = 0;
   uint64_t paths_done = 0;
   uint32_t iteration = 0;
@@ -34,6 +39,10 @@ struct BakeCheckpoint {
   std::vector<uint32_t> spp;
   // Directional encodings: entries * stride float4 (empty without encodings).
   std::vector<cl::float4> basis;
+  // How `basis` is laid out (version 4; empty in older files): per encoding
+  // in state order, its lobe count | solver << 16 (LUX_SOLVER_*). Its state
+  // is one header float4 (x = sum of weights) then the lobes.
+  std::vector<uint32_t> basis_layout;
   // Bakes in tiles (pipeline/tile_plan.h): the state above covers every
   // covered texel (finished tiles, the current one, zeros after it) and
   // paths_done / nonfinite are the current tile's. Empty for a bake in one
@@ -58,8 +67,9 @@ enum TileField {
   kTileFields
 };
 
-// Binary, little-endian, "LUXCKPT3" magic (versions 1, without the basis
-// state, and 2, whole images, are still read), 128-bit checksum at the end.
+// Binary, little-endian, "LUXCKPT4" magic (versions 1, without the basis
+// state, 2, whole images, and 3, without the shard fields and basis
+// layout, are still read), 128-bit checksum at the end.
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
 // NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
 Result<BakeCheckpoint> read_checkpoint(const std::string& path);

@@ -16,10 +16,11 @@ static_assert(offsetof(LuxMaterial, normal_tex) == 160 &&
               offsetof(LuxMaterial, normal_scale) == 192);
 static_assert(sizeof(LuxPath) == 96);
 static_assert(offsetof(LuxPath, texel) == 64 && offsetof(LuxPath, sample_pos) == 80);
-static_assert(sizeof(LuxBakeParams) == 96 && alignof(LuxBakeParams) == 8);
+static_assert(sizeof(LuxBakeParams) == 104 && alignof(LuxBakeParams) == 8);
 static_assert(offsetof(LuxBakeParams, first_path) == 48 &&
               offsetof(LuxBakeParams, adaptive_pass) == 76 &&
-              offsetof(LuxBakeParams, alloc_mix) == 88);
+              offsetof(LuxBakeParams, alloc_mix) == 88 &&
+              offsetof(LuxBakeParams, shard_count) == 100);
 static_assert(sizeof(LuxAccumStats) == 32);
 static_assert(sizeof(LuxBasisSample) == 80 && alignof(LuxBasisSample) == 16);
 static_assert(sizeof(LuxEncoding) == 32 && offsetof(LuxEncoding, sharpness) == 28);

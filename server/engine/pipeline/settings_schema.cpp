@@ -207,6 +207,35 @@ std::vector<Setting> make_schema() {
                .api_note = "0 (unset) means 8",
                LUXEL_NUMBER(adaptive_min_samples),
                .active = [](const BakeSettings& s) { return s.adaptive; }});
+  t.push_back({.name = "shard_count",
+               .type = Type::kInt,
+               .units = "shards",
+               .help = "distributed bake: the bake is split into this many shards by sample "
+                       "index, merged exactly afterwards (0 or 1: the whole bake; implies "
+                       "--no-adaptive)",
+               .flag = "--shard-count",
+               .metavar = "N",
+               .default_value = SettingValue::of(1),
+               .min = 0,
+               .max = 4096,
+               .api_note = "0 (unset) means 1",
+               .implies =
+                   [](BakeSettings& s) {
+                     if (s.shard_count > 1) s.adaptive = false;
+                   },
+               LUXEL_NUMBER(shard_count)});
+  t.push_back({.name = "shard_index",
+               .type = Type::kInt,
+               .units = "",
+               .help = "distributed bake: which shard this bake traces, < shard_count "
+                       "(samples_per_texel stays the whole bake's)",
+               .flag = "--shard-index",
+               .metavar = "K",
+               .default_value = SettingValue::of(0),
+               .min = 0,
+               .max = 4095,
+               .api_zero = ApiZero::kValue,
+               LUXEL_NUMBER(shard_index)});
   t.push_back({.name = "device_memory_budget_mib",
                .type = Type::kFloat,
                .units = "MiB",

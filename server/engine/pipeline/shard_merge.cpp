@@ -1,0 +1,239 @@
+// The exact merge of shard accumulators. Per texel and channel the shards
+// hold weighted Welford states (kernels/bake/accumulate.h, West 1979): the
+// weight sums W = sum w and W2 = sum w^2, the weighted mean m and
+// M2 = sum w (x - m)^2. Two of them combine as (Chan, Golub and LeVeque,
+// "Updating formulae and a pairwise algorithm for computing sample
+// variances", 1979, weighted form):
+//   W = Wa + Wb,  d = mb - ma,  m = ma + d Wb / W,
+//   M2 = M2a + M2b + d^2 Wa Wb / W,  W2 = W2a + W2b,
+// which is what one accumulator fed both sample sets would hold, up to
+// rounding. The sums run in double, in shard-index order, so the merge is
+// deterministic whatever order the shards arrive in. Projection encodings
+// (kernels/bake/basis.h) hold running means of Monte Carlo moments with the
+// sample weight sum in their header: weighted means merge the same way.
+#include "pipeline/shard_merge.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "shared/bake.h"
+#include "shared/shard.h"
+
+namespace luxel::pipeline {
+namespace {
+
+bool finite4(const cl::float4& v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
+}
+
+struct Acc4 {
+  double v[4] = {0, 0, 0, 0};
+  void set(const cl::float4& f) { v[0] = f.x, v[1] = f.y, v[2] = f.z, v[3] = f.w; }
+  cl::float4 get() const {
+    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]),
+            static_cast<float>(v[3])};
+  }
+};
+
+// The checks of one shard on its own; `who` names it in errors.
+Status check_shard(const BakeCheckpoint& s, const std::string& who) {
+  auto bad = [&](const std::string& why) {
+    return invalid_argument(strprintf("%s: %s", who.c_str(), why.c_str()));
+  };
+  if (s.per_texel) return bad("holds a whole-image state (an old checkpoint), not a shard's");
+  if (!s.tile.empty())
+    return bad("is an unfinished tiled state (a periodic checkpoint), not a finished shard's");
+  const size_t n = s.mean.size();
+  if (n == 0) return bad("holds no texels");
+  if (s.m2.size() != n || s.weight.size() != n || s.spp.size() != n)
+    return bad(strprintf("array sizes disagree (mean %zu, m2 %zu, weight %zu, spp %zu)", n,
+                         s.m2.size(), s.weight.size(), s.spp.size()));
+  if (n > size_t{s.width} * s.height)
+    return bad(strprintf("holds %zu texels, more than its %ux%u lightmap", n, s.width, s.height));
+  uint64_t spp_sum = 0;
+  for (size_t i = 0; i < n; ++i) {
+    if (!finite4(s.mean[i]) || !finite4(s.m2[i]) || !std::isfinite(s.weight[i].x) ||
+        !std::isfinite(s.weight[i].y))
+      return bad(strprintf("texel slot %zu holds a non-finite accumulator", i));
+    if (s.m2[i].x < 0 || s.m2[i].y < 0 || s.m2[i].z < 0 || s.m2[i].w < 0 || s.weight[i].x < 0 ||
+        s.weight[i].y < 0)
+      return bad(strprintf("texel slot %zu holds a negative M2 or weight", i));
+    spp_sum += s.spp[i];
+  }
+  if (spp_sum != s.paths_done)
+    return bad(strprintf("its texels hold %llu samples but it traced %llu paths",
+                         static_cast<unsigned long long>(spp_sum),
+                         static_cast<unsigned long long>(s.paths_done)));
+  if (!s.basis.empty()) {
+    if (s.basis_layout.empty())
+      return bad("holds directional-encoding state without its layout (an old checkpoint)");
+    size_t stride = 0;
+    for (uint32_t e : s.basis_layout) {
+      const uint32_t count = e & 0xFFFFu, solver = e >> 16;
+      if (solver != LUX_SOLVER_PROJECTION)
+        return bad(
+            "holds progressive least-squares encoding state (order-dependent Gauss-Seidel "
+            "updates, Listing 7.1), which does not merge; shard with solver=projection");
+      if (count == 0 || count > LUX_ENC_MAX_LOBES) return bad("has an invalid encoding layout");
+      stride += 1 + count;
+    }
+    if (s.basis.size() != n * stride)
+      return bad(
+          strprintf("holds %zu encoding values, its layout needs %zu", s.basis.size(), n * stride));
+    for (size_t i = 0; i < s.basis.size(); ++i)
+      if (!finite4(s.basis[i]))
+        return bad(strprintf("texel slot %zu holds non-finite encoding state", i / stride));
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+Result<BakeCheckpoint> merge_shard_states(std::vector<BakeCheckpoint> shards) {
+  if (shards.empty()) return invalid_argument("shard merge: no shard states given");
+  auto who = [&](size_t i) {
+    return strprintf("shard %u of %u (input %zu)", shards[i].shard_index, shards[i].shard_count, i);
+  };
+  const BakeCheckpoint& first = shards[0];
+  const uint32_t count = first.shard_count;
+  if (count == 0 || count > 4096)
+    return invalid_argument(strprintf("%s: invalid shard_count", who(0).c_str()));
+  if (shards.size() > count)
+    return invalid_argument(
+        strprintf("shard merge: %zu states for a bake of %u shards", shards.size(), count));
+  for (size_t i = 0; i < shards.size(); ++i) {
+    const BakeCheckpoint& s = shards[i];
+    LUXEL_RETURN_IF_ERROR(check_shard(s, who(i)));
+    auto bad = [&](const std::string& why) {
+      return invalid_argument(strprintf("%s: %s", who(i).c_str(), why.c_str()));
+    };
+    if (s.fingerprint != first.fingerprint)
+      return bad(strprintf("belongs to another bake (fingerprint %s, input 0 has %s)",
+                           s.fingerprint.c_str(), first.fingerprint.c_str()));
+    if (s.shard_count != count)
+      return bad(strprintf("is one of %u shards, input 0 one of %u", s.shard_count, count));
+    if (s.shard_index >= count) return bad("shard_index is not below shard_count");
+    if (s.width != first.width || s.height != first.height || s.mean.size() != first.mean.size())
+      return bad(strprintf("is a %ux%u lightmap with %zu covered texels, input 0 %ux%u with %zu",
+                           s.width, s.height, s.mean.size(), first.width, first.height,
+                           first.mean.size()));
+    if (s.basis_layout != first.basis_layout || s.basis.size() != first.basis.size())
+      return bad("has other directional encodings than input 0");
+    for (size_t j = 0; j < i; ++j)
+      if (shards[j].shard_index == s.shard_index)
+        return bad(strprintf("duplicates input %zu (same shard_index)", j));
+  }
+  if (shards.size() < count) {
+    std::vector<bool> seen(count, false);
+    for (const BakeCheckpoint& s : shards) seen[s.shard_index] = true;
+    const size_t missing = std::find(seen.begin(), seen.end(), false) - seen.begin();
+    return invalid_argument(strprintf("shard merge: shard %zu of %u is missing (%zu of %u given)",
+                                      missing, count, shards.size(), count));
+  }
+  std::sort(shards.begin(), shards.end(), [](const BakeCheckpoint& a, const BakeCheckpoint& b) {
+    return a.shard_index < b.shard_index;
+  });
+
+  const size_t n = first.mean.size();
+  const size_t stride = first.basis.empty() ? 0 : first.basis.size() / n;
+  BakeCheckpoint out;
+  out.fingerprint = shards[0].fingerprint;
+  out.shard_index = 0;
+  out.shard_count = 1;
+  out.width = shards[0].width;
+  out.height = shards[0].height;
+  out.basis_layout = shards[0].basis_layout;
+  out.mean.resize(n);
+  out.m2.resize(n);
+  out.weight.resize(n);
+  out.spp.assign(n, 0);
+  out.basis.resize(n * stride);
+  for (const BakeCheckpoint& s : shards) {
+    out.paths_done += s.paths_done;
+    out.nonfinite += s.nonfinite;
+    out.iteration = std::max(out.iteration, s.iteration);
+    out.elapsed_s = std::max(out.elapsed_s, s.elapsed_s);
+  }
+  for (size_t t = 0; t < n; ++t) {
+    Acc4 mean, m2;
+    double w = 0, w2 = 0;
+    uint64_t spp = 0;
+    for (const BakeCheckpoint& s : shards) {
+      const double wb = s.weight[t].x;
+      spp += s.spp[t];
+      w2 += s.weight[t].y;
+      if (!(wb > 0)) continue;  // nothing accumulated here
+      const double wa = w;
+      w = wa + wb;
+      const float* mb = &s.mean[t].x;
+      const float* m2b = &s.m2[t].x;
+      for (int c = 0; c < 4; ++c) {
+        const double d = double{mb[c]} - mean.v[c];
+        mean.v[c] += d * (wb / w);
+        m2.v[c] += double{m2b[c]} + d * d * (wa * wb / w);
+      }
+    }
+    if (spp > 0xFFFFFFFFull)
+      return invalid_argument(
+          strprintf("shard merge: texel slot %zu would hold %llu samples, past 2^32 - 1", t,
+                    static_cast<unsigned long long>(spp)));
+    out.mean[t] = mean.get();
+    out.m2[t] = m2.get();
+    out.weight[t] = {static_cast<float>(w), static_cast<float>(w2)};
+    out.spp[t] = static_cast<uint32_t>(spp);
+    // Encodings: per encoding, the header's weight sum adds, every other
+    // value (running means) is the weight-sum-weighted mean.
+    size_t offset = t * stride;
+    for (uint32_t e : out.basis_layout) {
+      const size_t values = 1 + (e & 0xFFFFu);
+      std::vector<Acc4> acc(values);
+      double total = 0;
+      for (const BakeCheckpoint& s : shards) {
+        const cl::float4* st = &s.basis[offset];
+        const double wb = st[0].x;
+        if (!(wb > 0)) continue;
+        total += wb;
+        const double f = wb / total;
+        const float* h = &st[0].x;
+        for (int c = 1; c < 4; ++c) acc[0].v[c] += (double{h[c]} - acc[0].v[c]) * f;
+        for (size_t k = 1; k < values; ++k) {
+          const float* l = &st[k].x;
+          for (int c = 0; c < 4; ++c) acc[k].v[c] += (double{l[c]} - acc[k].v[c]) * f;
+        }
+      }
+      acc[0].v[0] = total;
+      for (size_t k = 0; k < values; ++k) out.basis[offset + k] = acc[k].get();
+      offset += values;
+    }
+  }
+  return out;
+}
+
+Result<BakeResult> finish_merged_bake(const scene::Scene& scene, const BakeSettings& settings,
+                                      device::Context& ctx, const BakeCheckpoint& merged,
+                                      const BakeHooks& hooks) {
+  if (merged.shard_count != 1)
+    return invalid_argument(
+        strprintf("finish_merged_bake: the state is shard %u of %u, not a merge of all shards",
+                  merged.shard_index, merged.shard_count));
+  BakeSettings whole = settings;
+  whole.shard_index = 0;
+  whole.shard_count = 1;
+  whole.adaptive = false;
+  if (whole.samples_per_texel == 0)
+    return invalid_argument(
+        "settings.samples_per_texel: a merged bake needs the whole bake's sample count (0 would "
+        "trace on)");
+  for (size_t t = 0; t < merged.spp.size(); ++t)
+    if (merged.spp[t] != whole.samples_per_texel)
+      return invalid_argument(strprintf(
+          "settings.samples_per_texel: texel slot %zu of the merged state holds %u samples, the "
+          "bake asks for %u (a shard missing, stopped early, or from another bake)",
+          t, merged.spp[t], whole.samples_per_texel));
+  BakeHooks h = hooks;
+  h.fingerprint = merged.fingerprint;
+  h.resume = &merged;
+  return bake(scene, whole, ctx, h);
+}
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,394 @@
+// Distributed bakes (pipeline/shard_merge.h, kernels/shared/shard.h): the
+// shards' sample indices partition every texel's sequence; N shards merged
+// give the bake one machine makes of the same sample indices (same spp,
+// means, variances and SH projections up to float rounding); the merge is
+// deterministic and order-independent; corrupt or mismatched shards are
+// refused with an error naming them; and two deliberately wrong merges
+// (means averaged without weights, Chan's between-shard M2 term dropped)
+// fail the same comparison, so it can tell a right merge from a wrong one.
+#include "pipeline/shard_merge.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
+
+#include "device/context.h"
+#include "pipeline/bake.h"
+#include "pipeline/checkpoint.h"
+#include "pipeline/settings_schema.h"
+#include "scene/gltf_import.h"
+#include "shared/shard.h"
+
+namespace luxel {
+namespace {
+
+using pipeline::BakeCheckpoint;
+using pipeline::BakeResult;
+using pipeline::BakeSettings;
+
+// 56 = 3 full blocks of 16 and an incomplete one of 8: every shard count
+// from 2 to 4 leaves one shard with the short block (and 4 shards get
+// 16, 16, 16, 8 samples: unequal weights, which the weighted merge must
+// honour).
+constexpr uint32_t kSamples = 56;
+
+TEST(ShardSampleIndices, ShardsPartitionTheSequence) {
+  for (uint32_t total : {0u, 1u, 15u, 16u, 17u, 40u, 56u, 64u, 100u, 1000u}) {
+    for (uint32_t count = 1; count <= 7; ++count) {
+      std::set<uint32_t> seen;
+      uint32_t sum = 0;
+      for (uint32_t k = 0; k < count; ++k) {
+        const uint32_t mine = cl::lux_shard_samples(total, k, count);
+        sum += mine;
+        for (uint32_t i = 0; i < mine; ++i) {
+          const uint32_t g = cl::lux_shard_sample_index(i, k, count);
+          EXPECT_LT(g, total) << total << " " << k << "/" << count << " i=" << i;
+          EXPECT_TRUE(seen.insert(g).second) << "index " << g << " traced twice";
+          // Whole aligned blocks of 16 belong to one shard.
+          EXPECT_EQ((g / LUX_SHARD_BLOCK) % count, k);
+        }
+      }
+      EXPECT_EQ(sum, total) << total << " over " << count;
+      EXPECT_EQ(seen.size(), total);
+    }
+  }
+  // Shard 0 of 1 is the plain sequence.
+  for (uint32_t i = 0; i < 100; ++i) EXPECT_EQ(cl::lux_shard_sample_index(i, 0, 1), i);
+}
+
+std::string error_of(const Status& s) {
+  return s.is_ok() ? "" : s.message();
+}
+
+TEST(ShardSettings, RefusedCombinationsNameTheField) {
+  BakeSettings s = pipeline::default_settings();
+  s.adaptive = false;
+  s.shard_count = 4;
+  s.shard_index = 3;
+  EXPECT_EQ(error_of(pipeline::validate_settings(s)), "");
+  EXPECT_EQ(s.shard_samples(), 64u);  // 256 = 16 blocks, 4 each
+  s.shard_index = 4;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.shard_index"),
+            std::string::npos);
+  s.shard_index = 0;
+  s.shard_count = 4097;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.shard_count"),
+            std::string::npos);
+  s.shard_count = 4;
+  s.adaptive = true;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.adaptive"), std::string::npos);
+  s.adaptive = false;
+  s.encodings.names = {"sg12"};  // auto: progressive non-negative
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.solver"), std::string::npos);
+  s.encodings.solver = pipeline::EncodingSolver::kProjection;
+  EXPECT_EQ(error_of(pipeline::validate_settings(s)), "");
+  s.encodings.names = {"sh2"};  // auto: projection
+  s.encodings.solver = pipeline::EncodingSolver::kAuto;
+  EXPECT_EQ(error_of(pipeline::validate_settings(s)), "");
+  // 40 samples make 3 blocks: a 4th shard would have none.
+  s.samples_per_texel = 40;
+  s.shard_index = 3;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.shard_count"),
+            std::string::npos);
+  // shard_index without sharding.
+  s.shard_count = 1;
+  s.shard_index = 1;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.shard_index"),
+            std::string::npos);
+}
+
+class ShardMergeTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto ctx = device::Context::create();
+    ASSERT_TRUE(ctx) << ctx.status().to_string();
+    ctx_ = ctx.value().release();
+    auto scene = scene::import_gltf_file(std::string(LUXEL_SCENES_DIR) + "/cornell_box.gltf");
+    ASSERT_TRUE(scene) << scene.status().to_string();
+    scene_ = new scene::Scene(std::move(scene.value()));
+    pipeline::BakeHooks h = hooks();
+    h.keep_final_state = true;
+    auto single = pipeline::bake(*scene_, settings(), *ctx_, h);
+    ASSERT_TRUE(single) << single.status().to_string();
+    single_ = new BakeResult(std::move(single.value()));
+    ASSERT_TRUE(single_->final_state);
+  }
+  static void TearDownTestSuite() {
+    delete single_;
+    delete scene_;
+    delete ctx_;
+  }
+  // The whole bake: uniform, SH2 by projection.
+  static BakeSettings settings() {
+    BakeSettings s;
+    s.atlas.resolution = 32;
+    s.samples_per_texel = kSamples;
+    s.max_bounces = 2;
+    s.paths_per_iteration = 8192;  // several iterations per bake
+    s.seed = 7;
+    s.adaptive = false;
+    s.encodings.names = {"sh2"};
+    return s;
+  }
+  static pipeline::BakeHooks hooks() {
+    pipeline::BakeHooks h;
+    h.fingerprint = "cornell-test-bake";  // what the service derives from scene + settings
+    return h;
+  }
+  // The final states of shards 0..count-1.
+  static std::vector<BakeCheckpoint> bake_shards(uint32_t count) {
+    std::vector<BakeCheckpoint> states;
+    for (uint32_t k = 0; k < count; ++k) {
+      BakeSettings s = settings();
+      s.shard_index = k;
+      s.shard_count = count;
+      auto r = pipeline::bake(*scene_, s, *ctx_, hooks());
+      EXPECT_TRUE(r) << r.status().to_string();
+      if (!r) return {};
+      EXPECT_TRUE(r.value().final_state) << "shard " << k;
+      if (!r.value().final_state) return {};
+      EXPECT_EQ(r.value().min_spp, s.shard_samples());
+      states.push_back(*r.value().final_state);
+    }
+    return states;
+  }
+  static Result<BakeResult> finish(const BakeCheckpoint& merged) {
+    return pipeline::finish_merged_bake(*scene_, settings(), *ctx_, merged, hooks());
+  }
+
+  static device::Context* ctx_;
+  static scene::Scene* scene_;
+  static BakeResult* single_;
+};
+device::Context* ShardMergeTest::ctx_ = nullptr;
+scene::Scene* ShardMergeTest::scene_ = nullptr;
+BakeResult* ShardMergeTest::single_ = nullptr;
+
+// How far a finished merge is from the single bake, in units of the
+// tolerance (<= 1: within). Both hold the same sample values (a path's
+// value depends only on its texel, sample index and seed), accumulated in
+// float in another order and grouping: a running mean of n samples carries
+// a rounding error of about n eps max|x| (Higham, Accuracy and Stability,
+// §1.9), with n = 56, eps = 6e-8 and max|x| up to ~10x the mean for
+// path-traced samples that is ~3e-5 of the mean; we allow 2e-4 relative
+// (plus 1e-6 absolute for black texels). The relative error comes from M2
+// and the weight sums through a square root: 1e-3. SH coefficients get
+// 2e-4 of the texel's largest coefficient, since higher bands cancel.
+struct Deviation {
+  double irradiance = 0, rel_error = 0, sh = 0;
+  bool samples_equal = true;
+};
+
+Deviation deviation(const BakeResult& a, const BakeResult& b) {
+  Deviation d;
+  EXPECT_EQ(a.irradiance.size(), b.irradiance.size());
+  EXPECT_EQ(a.rel_error.size(), b.rel_error.size());
+  if (a.irradiance.size() != b.irradiance.size() || a.rel_error.size() != b.rel_error.size())
+    return {1e9, 1e9, 1e9, false};
+  for (size_t i = 0; i < a.irradiance.size(); ++i) {
+    const double x = a.irradiance[i], y = b.irradiance[i];
+    d.irradiance = std::max(d.irradiance, std::abs(x - y) / (2e-4 * std::abs(y) + 1e-6));
+  }
+  for (size_t i = 0; i < a.rel_error.size(); ++i) {
+    const double x = a.rel_error[i], y = b.rel_error[i];
+    d.rel_error = std::max(d.rel_error, std::abs(x - y) / (1e-3 * std::abs(y) + 1e-7));
+  }
+  d.samples_equal = a.samples == b.samples;
+  if (a.encodings.size() != 1 || b.encodings.size() != 1) return {1e9, 1e9, 1e9, false};
+  const auto& ca = a.encodings[0].coefficients;
+  const auto& cb = b.encodings[0].coefficients;
+  const size_t per = static_cast<size_t>(b.encodings[0].count) * 3;
+  if (ca.size() != cb.size() || per == 0) return {1e9, 1e9, 1e9, false};
+  for (size_t t = 0; t + per <= cb.size(); t += per) {
+    double scale = 0;
+    for (size_t j = 0; j < per; ++j) scale = std::max(scale, double{std::abs(cb[t + j])});
+    for (size_t j = 0; j < per; ++j)
+      d.sh = std::max(d.sh, std::abs(double{ca[t + j]} - cb[t + j]) / (2e-4 * scale + 1e-6));
+  }
+  return d;
+}
+
+void expect_same_bits(const BakeCheckpoint& a, const BakeCheckpoint& b) {
+  auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() &&
+           (x.empty() || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+  };
+  EXPECT_TRUE(same(a.mean, b.mean));
+  EXPECT_TRUE(same(a.m2, b.m2));
+  EXPECT_TRUE(same(a.weight, b.weight));
+  EXPECT_TRUE(same(a.spp, b.spp));
+  EXPECT_TRUE(same(a.basis, b.basis));
+  EXPECT_EQ(a.paths_done, b.paths_done);
+}
+
+TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
+  for (uint32_t count = 1; count <= 4; ++count) {
+    SCOPED_TRACE(strprintf("%u shard(s)", count));
+    // One shard: the whole bake's own state (BakeHooks::keep_final_state).
+    std::vector<BakeCheckpoint> states =
+        count == 1 ? std::vector<BakeCheckpoint>{*single_->final_state} : bake_shards(count);
+    ASSERT_EQ(states.size(), count);
+    uint64_t paths = 0;
+    for (const BakeCheckpoint& st : states) {
+      EXPECT_EQ(st.fingerprint, "cornell-test-bake");
+      EXPECT_EQ(st.shard_count, count);
+      paths += st.paths_done;
+    }
+    EXPECT_EQ(paths, single_->paths);
+    auto merged = pipeline::merge_shard_states(states);
+    ASSERT_TRUE(merged) << merged.status().to_string();
+    EXPECT_EQ(merged.value().shard_count, 1u);
+    EXPECT_EQ(merged.value().paths_done, single_->paths);
+    for (uint32_t n : merged.value().spp) ASSERT_EQ(n, kSamples);
+    // The accumulators themselves against the single bake's, every channel.
+    const BakeCheckpoint& one = *single_->final_state;
+    ASSERT_EQ(merged.value().mean.size(), one.mean.size());
+    double worst_mean = 0, worst_m2 = 0, worst_w = 0;
+    for (size_t t = 0; t < one.mean.size(); ++t) {
+      for (int c = 0; c < 4; ++c) {
+        const double a = (&merged.value().mean[t].x)[c], b = (&one.mean[t].x)[c];
+        worst_mean = std::max(worst_mean, std::abs(a - b) / (2e-4 * std::abs(b) + 1e-6));
+        const double va = (&merged.value().m2[t].x)[c], vb = (&one.m2[t].x)[c];
+        worst_m2 = std::max(worst_m2, std::abs(va - vb) / (2e-3 * std::abs(vb) + 1e-6));
+      }
+      worst_w = std::max({worst_w, std::abs(double{merged.value().weight[t].x} - one.weight[t].x),
+                          std::abs(double{merged.value().weight[t].y} - one.weight[t].y)});
+      EXPECT_EQ(merged.value().spp[t], one.spp[t]);
+    }
+    EXPECT_LE(worst_mean, 1.0);
+    EXPECT_LE(worst_m2, 1.0);
+    EXPECT_EQ(worst_w, 0.0);  // sums of unit weights: exact in float below 2^24
+
+    // Merging twice, and in another order, gives the same bits.
+    auto again = pipeline::merge_shard_states(states);
+    ASSERT_TRUE(again);
+    expect_same_bits(merged.value(), again.value());
+    std::vector<BakeCheckpoint> reversed(states.rbegin(), states.rend());
+    auto permuted = pipeline::merge_shard_states(reversed);
+    ASSERT_TRUE(permuted);
+    expect_same_bits(merged.value(), permuted.value());
+
+    auto finished = finish(merged.value());
+    ASSERT_TRUE(finished) << finished.status().to_string();
+    const BakeResult& f = finished.value();
+    EXPECT_EQ(f.paths, single_->paths);  // nothing more traced
+    EXPECT_EQ(f.min_spp, kSamples);
+    EXPECT_EQ(f.termination, pipeline::Termination::kSamples);
+    EXPECT_FALSE(f.final_state);
+    const Deviation d = deviation(f, *single_);
+    EXPECT_TRUE(d.samples_equal);
+    EXPECT_LE(d.irradiance, 1.0);
+    EXPECT_LE(d.rel_error, 1.0);
+    EXPECT_LE(d.sh, 1.0);
+    EXPECT_NEAR(f.error, single_->error, 1e-3 * single_->error);
+    std::printf(
+        "%u shard(s): deviation / tolerance: state mean %.3g, M2 %.3g; irradiance %.3g, "
+        "rel_error %.3g, sh2 %.3g\n",
+        count, worst_mean, worst_m2, d.irradiance, d.rel_error, d.sh);
+
+    if (count != 4) continue;
+    // Negative controls on the 16/16/16/8 split. (1) Means averaged without
+    // their weights.
+    BakeCheckpoint unweighted = merged.value();
+    for (size_t t = 0; t < unweighted.mean.size(); ++t) {
+      float* m = &unweighted.mean[t].x;
+      for (int c = 0; c < 4; ++c) {
+        double sum = 0;
+        for (const BakeCheckpoint& st : states) sum += (&st.mean[t].x)[c];
+        m[c] = static_cast<float>(sum / count);
+      }
+    }
+    auto wrong_mean = finish(unweighted);
+    ASSERT_TRUE(wrong_mean) << wrong_mean.status().to_string();
+    const Deviation dm = deviation(wrong_mean.value(), *single_);
+    EXPECT_GT(dm.irradiance, 10.0) << "an unweighted mean went unnoticed";
+    // (2) M2 without Chan's between-shard term d^2 Wa Wb / W.
+    BakeCheckpoint no_between = merged.value();
+    for (size_t t = 0; t < no_between.m2.size(); ++t) {
+      float* m2 = &no_between.m2[t].x;
+      for (int c = 0; c < 4; ++c) {
+        double sum = 0;
+        for (const BakeCheckpoint& st : states) sum += (&st.m2[t].x)[c];
+        m2[c] = static_cast<float>(sum);
+      }
+    }
+    auto wrong_m2 = finish(no_between);
+    ASSERT_TRUE(wrong_m2) << wrong_m2.status().to_string();
+    const Deviation dv = deviation(wrong_m2.value(), *single_);
+    EXPECT_LE(dv.irradiance, 1.0);
+    EXPECT_GT(dv.rel_error, 10.0) << "a dropped between-shard M2 term went unnoticed";
+    std::printf("negative controls: unweighted mean %.3g, M2 without the between term %.3g\n",
+                dm.irradiance, dv.rel_error);
+
+    // The accumulators survive the artifact format.
+    const std::string path = ::testing::TempDir() + "/shard_merge_accumulators.bin";
+    ASSERT_TRUE(pipeline::write_checkpoint(path, states[3]).is_ok());
+    auto read = pipeline::read_checkpoint(path);
+    ASSERT_TRUE(read) << read.status().to_string();
+    EXPECT_EQ(read.value().shard_index, 3u);
+    EXPECT_EQ(read.value().shard_count, 4u);
+    EXPECT_EQ(read.value().basis_layout, states[3].basis_layout);
+    expect_same_bits(read.value(), states[3]);
+  }
+}
+
+TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
+  const std::vector<BakeCheckpoint> good = bake_shards(3);
+  ASSERT_EQ(good.size(), 3u);
+  auto refused = [&](std::vector<BakeCheckpoint> shards, const std::string& expected) {
+    auto r = pipeline::merge_shard_states(std::move(shards));
+    ASSERT_FALSE(r) << "accepted; expected: " << expected;
+    EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);
+    EXPECT_NE(r.status().message().find(expected), std::string::npos) << r.status().message();
+  };
+  {
+    auto s = good;
+    s[1].fingerprint = "another-bake";
+    refused(s, "shard 1 of 3 (input 1): belongs to another bake");
+  }
+  {
+    auto s = good;
+    s[2].mean[5].y = std::nanf("");
+    refused(s, "shard 2 of 3 (input 2): texel slot 5 holds a non-finite accumulator");
+  }
+  {
+    auto s = good;
+    s[2] = s[0];
+    refused(s, "shard 0 of 3 (input 2): duplicates input 0");
+  }
+  {
+    auto s = good;
+    s.erase(s.begin() + 1);
+    refused(s, "shard 1 of 3 is missing");
+  }
+  {
+    auto s = good;
+    s[0].spp[0] += 1;
+    refused(s, "shard 0 of 3 (input 0): its texels hold");
+  }
+  {
+    auto s = good;
+    s[1].m2.pop_back();
+    refused(s, "shard 1 of 3 (input 1): array sizes disagree");
+  }
+  {
+    auto s = good;
+    s[0].basis_layout[0] |= 1u << 16;  // progressive state
+    refused(s, "shard 0 of 3 (input 0): holds progressive");
+  }
+  refused({}, "no shard states");
+  // A merge missing samples is refused when finishing.
+  auto merged = pipeline::merge_shard_states(good);
+  ASSERT_TRUE(merged);
+  BakeSettings more = settings();
+  more.samples_per_texel = kSamples + 16;
+  auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(), hooks());
+  ASSERT_FALSE(r);
+  EXPECT_NE(r.status().message().find("settings.samples_per_texel"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace luxel
