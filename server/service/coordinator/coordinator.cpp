@@ -13,15 +13,11 @@
 #include "common/sha256.h"
 #include "output/reference_exr.h"
 #include "pipeline/checkpoint.h"
+#include "pipeline/shard_merge.h"
 #include "remote/scene_files.h"
 #include "service/coordinator/shard_plan.h"
 #include "service/files.h"
 #include "service/log.h"
-
-#if __has_include("pipeline/shard_merge.h")
-#include "pipeline/shard_merge.h"
-#define LUXEL_HAVE_SHARD_MERGE 1
-#endif
 
 namespace luxel::service::coordinator {
 
@@ -190,8 +186,8 @@ bool Run::assign(uint32_t k) {
       give_up = rec.attempts;
     if (rec.worker.empty() && !give_up) {
       if (workers.empty()) return false;
-      // Least loaded first, then workers that have not failed this shard,
-      // then rotation by shard index so shards spread on equal load.
+      // Workers that have not failed this shard first, then the least
+      // loaded, then rotation by shard index so shards spread on equal load.
       std::map<std::string, int> load;
       for (const ShardRecord& r : plan_.shards)
         if (!r.worker.empty() && !r.downloaded) ++load[r.worker];
@@ -405,11 +401,9 @@ Status Run::download(uint32_t k, const std::string& worker, const std::string& w
         data_loss(strprintf("%s belongs to another scene or other settings (fingerprint "
                             "%.16s, expected %.16s)",
                             kAccumulators, ckpt->fingerprint.c_str(), fingerprint_.c_str()));
-#ifdef LUXEL_HAVE_SHARD_MERGE
   else if (ckpt->shard_index != k || ckpt->shard_count != plan_.count)
     verdict = data_loss(strprintf("%s is shard %u/%u, expected %u/%u", kAccumulators,
                                   ckpt->shard_index, ckpt->shard_count, k, plan_.count));
-#endif
   if (!verdict.is_ok()) {
     std::remove(part.c_str());
     return verdict;
@@ -585,7 +579,6 @@ void Run::cancel_workers() {
 }
 
 Result<pipeline::BakeResult> Run::merge() {
-#ifdef LUXEL_HAVE_SHARD_MERGE
   const auto t0 = Clock::now();
   std::vector<pipeline::BakeCheckpoint> parts;
   for (uint32_t k = 0; k < plan_.count; ++k) {
@@ -613,10 +606,6 @@ Result<pipeline::BakeResult> Run::merge() {
                               {"merge_s", strprintf("%.4f", merge_s)},
                               {"finish_s", strprintf("%.4f", seconds_since(t2))}});
   return result;
-#else
-  return Status(StatusCode::kInternal,
-                "this luxeld was built without the shard merge (pipeline/shard_merge.h)");
-#endif
 }
 
 Result<pipeline::BakeResult> Run::execute() {

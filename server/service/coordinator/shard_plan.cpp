@@ -4,27 +4,16 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "service/settings_translate.h"
+
 namespace luxel::service::coordinator {
-
-namespace pb = google::protobuf;
-
-namespace {
-
-// shard_index / shard_count are the engine's fields (BakeSettings 38, 39); set
-// by name so this file does not care which proto revision generated them.
-void set_u32(v1::BakeSettings& s, const char* name, uint32_t value) {
-  const pb::FieldDescriptor* f = v1::BakeSettings::descriptor()->FindFieldByName(name);
-  if (f && f->cpp_type() == pb::FieldDescriptor::CPPTYPE_UINT32)
-    s.GetReflection()->SetUInt32(&s, f, value);
-}
-
-}  // namespace
 
 bool is_sharded(const v1::BakeSettings& s) {
   return s.shards() > 1 || s.shards_auto();
 }
 
-Status check_shard_settings(const v1::BakeSettings& s, bool have_workers) {
+Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
+                            const SettingsLimits& limits) {
   if (!is_sharded(s)) return Status::ok();
   const char* field = s.shards_auto() ? "settings.shards_auto" : "settings.shards";
   if (!have_workers)
@@ -42,15 +31,21 @@ Status check_shard_settings(const v1::BakeSettings& s, bool have_workers) {
   if (s.has_adaptive() && s.adaptive())
     return invalid_argument(
         "settings.adaptive: sharded bakes sample uniformly; leave adaptive unset or false");
-  return Status::ok();
+  if (s.shard_count() > 1 || s.shard_index() > 0)
+    return invalid_argument(
+        "settings.shard_count: set by the coordinator for its workers; not with shards");
+  // What the workers will be asked (the engine's rules for shards, e.g. no
+  // progressive solvers), refused here rather than FAILED on every worker.
+  auto engine = to_engine_settings(shard_settings(s, 0, 2), limits);
+  return engine.status();
 }
 
 v1::BakeSettings shard_settings(const v1::BakeSettings& s, uint32_t index, uint32_t count) {
   v1::BakeSettings out = s;
   out.set_shards(0);
   out.set_shards_auto(false);
-  set_u32(out, "shard_index", index);
-  set_u32(out, "shard_count", count);
+  out.set_shard_index(index);
+  out.set_shard_count(count);
   if (out.snapshot_format() != v1::SNAPSHOT_FORMAT_NONE)
     out.set_snapshot_format(v1::SNAPSHOT_FORMAT_EXR);
   return out;

@@ -9,6 +9,7 @@
 
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
+#include "service/settings_translate.h"
 
 namespace luxel::service::coordinator {
 
@@ -21,7 +22,10 @@ bool is_sharded(const v1::BakeSettings& s);
 // the merged one), so is benchmark mode (reference_bake_id lives on the
 // coordinator) and adaptive = true (shards sample uniformly, each tracing
 // its part of every texel's sample indices; adaptive unset is off for them).
-Status check_shard_settings(const v1::BakeSettings& s, bool have_workers);
+// Then the engine's own rules for a shard of these settings (the
+// progressive least-squares solvers do not merge), as a worker would apply them.
+Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
+                            const SettingsLimits& limits = {});
 
 // What worker `index` of `count` bakes: the whole bake's settings (all of
 // samples_per_texel: the engine takes shard index's share of it) with

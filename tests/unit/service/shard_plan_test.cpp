@@ -37,6 +37,15 @@ TEST(ShardPlan, RefusesWhatCannotBeSharded) {
             std::string::npos);
   adaptive.set_adaptive(false);
   EXPECT_TRUE(check_shard_settings(adaptive, true).is_ok());
+  v1::BakeSettings given = sharded(2);
+  given.set_shard_count(2);
+  EXPECT_NE(check_shard_settings(given, true).message().find("settings.shard_count"),
+            std::string::npos);
+  // The engine's rule for shards, applied at the coordinator's SubmitBake.
+  v1::BakeSettings progressive = sharded(2);
+  progressive.add_encodings(v1::ENCODING_SG6);
+  progressive.set_solver(v1::SOLVER_PROGRESSIVE);
+  EXPECT_FALSE(check_shard_settings(progressive, true).is_ok());
 }
 
 TEST(ShardPlan, WorkerSettingsKeepTheWholeSampleCount) {
@@ -47,11 +56,8 @@ TEST(ShardPlan, WorkerSettingsKeepTheWholeSampleCount) {
   EXPECT_FALSE(w.shards_auto());
   EXPECT_EQ(w.samples_per_texel(), 64u);
   EXPECT_EQ(w.snapshot_format(), v1::SNAPSHOT_FORMAT_EXR);
-  const auto* d = v1::BakeSettings::descriptor();
-  if (const auto* f = d->FindFieldByName("shard_index")) {
-    EXPECT_EQ(w.GetReflection()->GetUInt32(w, f), 2u);
-    EXPECT_EQ(w.GetReflection()->GetUInt32(w, d->FindFieldByName("shard_count")), 3u);
-  }
+  EXPECT_EQ(w.shard_index(), 2u);
+  EXPECT_EQ(w.shard_count(), 3u);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
   EXPECT_EQ(shard_settings(s, 0, 3).snapshot_format(), v1::SNAPSHOT_FORMAT_NONE);
 }
