@@ -156,8 +156,9 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
   // The one validation of the settings (the runner only translates them).
   auto settings = to_engine_settings(req->settings(), options_.settings);
   if (!settings) return to_grpc(settings.status());
-  if (Status st = coordinator::check_shard_settings(req->settings(), options_.workers != nullptr,
-                                                    options_.settings);
+  if (Status st = coordinator::check_shard_settings(
+          req->settings(), options_.workers != nullptr, options_.settings,
+          options_.workers ? uint32_t(options_.workers->last_resolved().size()) : 0);
       !st.is_ok())
     return to_grpc(st);
 

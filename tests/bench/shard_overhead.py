@@ -52,7 +52,7 @@ def timed_bake(client, scene_id, settings):
                 break
     wall = time.monotonic() - t0
     if state_name(info.state) != "SUCCEEDED":
-        raise SystemExit(f"bake ended {state_name(info.state)}: {info.error_message}")
+        raise SystemExit(f"bake ended {state_name(info.state)}: {info.error_message}\n" + "\n".join(info.notes))
     return info, wall, first_snapshot
 
 
@@ -81,7 +81,7 @@ def main():
             sid = c.upload_scene(args.scene).scene_id
             # Warm-up through the coordinator: it uploads the scene to both
             # workers (the upload figure) and both compile their programs.
-            timed_bake(c, sid, dict(settings, samples_per_texel=16, shards=2))
+            timed_bake(c, sid, dict(settings, samples_per_texel=64, shards=2))
             one, t1, snap1 = timed_bake(w0, sid, settings)
             two, t2, snap2 = timed_bake(c, sid, dict(settings, shards=2))
         log = coord.log()
@@ -89,8 +89,11 @@ def main():
         merged = log_fields(log, "shards_merged")
         previews = log_fields(log, "shards_watched")
         uploads = log_fields(log, "worker_scene_uploaded")
-        print(f"machine: {platform.processor() or platform.machine()}, "
-              f"{os.cpu_count()} cores; workers pinned to cores {args.cores}, PoCL 1 thread each")
+        model = next((line.split(":", 1)[1].strip() for line in
+                      pathlib.Path("/proc/cpuinfo").read_text().splitlines()
+                      if line.startswith("model name")), platform.machine())
+        print(f"machine: {model}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}; "
+              f"workers pinned to cores {args.cores}, PoCL 1 thread each")
         print(f"bake: {pathlib.Path(args.scene).name} {args.resolution}^2, {args.spp} spp uniform, "
               f"{one.progress.paths} paths")
         print(f"1 worker (its own engine):  {t1:.2f} s wall, first snapshot {snap1:.2f} s")

@@ -640,7 +640,7 @@ Result<pipeline::BakeResult> Run::execute() {
         return Status(
             StatusCode::kUnavailable,
             strprintf("settings.shards_auto: no worker resolved within %.0f s", options_.grace_s));
-      count = static_cast<uint32_t>(workers.size());
+      count = usable_shard_count(s, static_cast<uint32_t>(workers.size()), options_.limits);
     }
     count = std::max<uint32_t>(count, 1);
     remove_tree(dir_);

@@ -13,7 +13,7 @@ bool is_sharded(const v1::BakeSettings& s) {
 }
 
 Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
-                            const SettingsLimits& limits) {
+                            const SettingsLimits& limits, uint32_t auto_count) {
   if (!is_sharded(s)) return Status::ok();
   const char* field = s.shards_auto() ? "settings.shards_auto" : "settings.shards";
   if (!have_workers)
@@ -36,8 +36,18 @@ Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
         "settings.shard_count: set by the coordinator for its workers; not with shards");
   // What the workers will be asked (the engine's rules for shards, e.g. no
   // progressive solvers), refused here rather than FAILED on every worker.
-  auto engine = to_engine_settings(shard_settings(s, 0, 2), limits);
+  // The last shard has the smallest share of every texel's samples.
+  const uint32_t count = std::max<uint32_t>(2, s.shards_auto() ? auto_count : s.shards());
+  auto engine = to_engine_settings(shard_settings(s, count - 1, count), limits);
   return engine.status();
+}
+
+uint32_t usable_shard_count(const v1::BakeSettings& s, uint32_t wanted,
+                            const SettingsLimits& limits) {
+  uint32_t count = std::max<uint32_t>(wanted, 1);
+  while (count > 1 && !to_engine_settings(shard_settings(s, count - 1, count), limits).is_ok())
+    --count;
+  return count;
 }
 
 v1::BakeSettings shard_settings(const v1::BakeSettings& s, uint32_t index, uint32_t count) {

@@ -24,8 +24,14 @@ bool is_sharded(const v1::BakeSettings& s);
 // its part of every texel's sample indices; adaptive unset is off for them).
 // Then the engine's own rules for a shard of these settings (the
 // progressive least-squares solvers do not merge), as a worker would apply them.
+// `auto_count`: the shards shards_auto would make now (the workers resolved).
 Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
-                            const SettingsLimits& limits = {});
+                            const SettingsLimits& limits = {}, uint32_t auto_count = 2);
+
+// shards_auto: at most `wanted` shards, fewer where the engine would leave
+// the last shard without samples (samples are dealt in blocks).
+uint32_t usable_shard_count(const v1::BakeSettings& s, uint32_t wanted,
+                            const SettingsLimits& limits);
 
 // What worker `index` of `count` bakes: the whole bake's settings (all of
 // samples_per_texel: the engine takes shard index's share of it) with

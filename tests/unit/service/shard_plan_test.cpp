@@ -41,6 +41,14 @@ TEST(ShardPlan, RefusesWhatCannotBeSharded) {
   given.set_shard_count(2);
   EXPECT_NE(check_shard_settings(given, true).message().find("settings.shard_count"),
             std::string::npos);
+  // Samples are dealt in blocks: 16 per texel leave the second shard none.
+  v1::BakeSettings few = sharded(2);
+  few.set_samples_per_texel(16);
+  EXPECT_NE(check_shard_settings(few, true).message().find("shard"), std::string::npos);
+  EXPECT_EQ(usable_shard_count(few, 8, {}), 1u);
+  few.set_samples_per_texel(64);
+  EXPECT_EQ(usable_shard_count(few, 8, {}), 4u);
+  EXPECT_EQ(usable_shard_count(few, 3, {}), 3u);
   // The engine's rule for shards, applied at the coordinator's SubmitBake.
   v1::BakeSettings progressive = sharded(2);
   progressive.add_encodings(v1::ENCODING_SG6);
