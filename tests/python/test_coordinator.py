@@ -92,6 +92,13 @@ class Coordinator(unittest.TestCase):
         for i, w in enumerate(self.workers):
             if w.process.poll() is not None:
                 self.workers[i] = self.restart(w)
+        # A restarted worker resumes the shard bakes it ran when it was
+        # killed (the coordinator cancels them only while it can reach the
+        # worker during that bake): none may hold a worker for the next test.
+        for w in self.workers:
+            with Client(w.address) as client:
+                for b in client.list_bakes(["QUEUED", "RUNNING", "INTERRUPTED"]):
+                    client.cancel_bake(b.bake_id)
 
     def submit(self, client, **extra):
         scene = client.upload_scene(CORNELL)
@@ -153,6 +160,7 @@ class Coordinator(unittest.TestCase):
         with Client(self.coordinator.address) as c:
             for extra, field in ((dict(shards=2, target_error=0.01, samples_per_texel=0),
                                   "settings.target_error"),
+                                 (dict(shards=2, time_budget_s=5), "settings.time_budget_s"),
                                  (dict(shards=2, adaptive=True), "settings.adaptive")):
                 with self.assertRaises(Exception) as e:
                     self.submit(c, **extra)
@@ -161,6 +169,18 @@ class Coordinator(unittest.TestCase):
             with self.assertRaises(Exception) as e:
                 self.submit(w, shards=2)
             self.assertIn("no workers", str(e.exception))
+
+    def test_cancel_cancels_the_shard_bakes(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            self.assertEqual(state_name(c.cancel_bake(info.bake_id).state), "CANCELLED")
+            for shard in running.shards:
+                with Client(shard.worker) as w:
+                    deadline = time.monotonic() + 10
+                    while state_name(w.get_bake(shard.worker_bake_id).state) != "CANCELLED":
+                        self.assertLess(time.monotonic(), deadline, f"shard {shard.index} still runs")
+                        time.sleep(0.05)
 
     def test_worker_killed_shard_reassigned(self):
         with Client(self.coordinator.address) as c:

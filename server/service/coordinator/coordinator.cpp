@@ -72,6 +72,7 @@ class Run {
   void publish_progress();
   void publish_snapshot();
   void cancel_workers();
+  void cancel_abandoned();
   Result<pipeline::BakeResult> merge();
 
   std::string shard_path(uint32_t k) const { return dir_ + strprintf("/%u.bin", k); }
@@ -308,6 +309,7 @@ void Run::reassign(uint32_t k, const std::string& worker, const std::string& why
     ShardRecord& rec = plan_.shards[k];
     if (std::find(rec.bad_workers.begin(), rec.bad_workers.end(), worker) == rec.bad_workers.end())
       rec.bad_workers.push_back(worker);
+    if (!rec.worker_bake_id.empty()) plan_.abandoned.emplace_back(worker, rec.worker_bake_id);
     rec.worker.clear();
     rec.worker_bake_id.clear();
     snapshots_[k].Clear();
@@ -578,6 +580,37 @@ void Run::cancel_workers() {
   }
 }
 
+// Best effort, from the combining loop and at the end: a reassigned shard's
+// old bake would otherwise run to its end on a worker that comes back (a
+// restarted luxeld resumes its bakes), taking the worker from other shards.
+void Run::cancel_abandoned() {
+  std::vector<std::pair<std::string, std::string>> todo;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    todo = plan_.abandoned;
+  }
+  if (todo.empty()) return;
+  std::vector<std::pair<std::string, std::string>> done;
+  for (const auto& [worker, bake] : todo) {
+    grpc::ClientContext ctx;
+    pool_.prepare(ctx, 1);
+    v1::CancelBakeRequest req;
+    req.set_bake_id(bake);
+    v1::BakeInfo info;
+    grpc::Status st = pool_.stub(worker)->CancelBake(&ctx, req, &info);
+    if (st.ok() || st.error_code() == grpc::StatusCode::NOT_FOUND) {
+      done.emplace_back(worker, bake);
+      log_event("abandoned_shard_cancelled",
+                {{"bake", job_.bake_id}, {"worker", worker}, {"worker_bake", bake}});
+    }
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  for (const auto& d : done)
+    plan_.abandoned.erase(std::remove(plan_.abandoned.begin(), plan_.abandoned.end(), d),
+                          plan_.abandoned.end());
+  if (!done.empty()) (void)persist_locked();
+}
+
 Result<pipeline::BakeResult> Run::merge() {
   const auto t0 = Clock::now();
   std::vector<pipeline::BakeCheckpoint> parts;
@@ -690,7 +723,7 @@ Result<pipeline::BakeResult> Run::execute() {
       s.progress_interval_s() > 0 ? std::max(0.05, s.progress_interval_s()) : 1.0;
   const double snapshot_every =
       s.snapshot_interval_s() > 0 ? std::max(0.05, s.snapshot_interval_s()) : 5.0;
-  auto last_progress = Clock::now(), last_snapshot = Clock::now();
+  auto last_progress = Clock::now(), last_snapshot = Clock::now(), last_cleanup = Clock::now();
   uint64_t snapshots_seen = 0;
   bool all_done = false;
   while (!all_done) {
@@ -707,6 +740,10 @@ Result<pipeline::BakeResult> Run::execute() {
       for (auto& [k, ctx] : active_) ctx->TryCancel();
       wake_.notify_all();
       break;
+    }
+    if (seconds_since(last_cleanup) >= 1) {
+      cancel_abandoned();
+      last_cleanup = Clock::now();
     }
     if (seconds_since(last_progress) >= progress_every || all_done) {
       publish_progress();
@@ -727,6 +764,7 @@ Result<pipeline::BakeResult> Run::execute() {
     }
   }
   for (auto& t : threads) t.join();
+  cancel_abandoned();
   log_event(
       "shards_watched",
       {{"bake", job_.bake_id},

@@ -25,6 +25,15 @@ Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
     return invalid_argument(
         "settings.target_error: not with shards (each worker would stop on the error of its own "
         "share); use samples_per_texel or time_budget_s");
+  // The merge needs every texel at the whole bake's sample count
+  // (pipeline::finish_merged_bake): a shard stopped by time holds fewer.
+  if (s.time_budget_s() > 0)
+    return invalid_argument(
+        "settings.time_budget_s: not with shards (a shard stopped by time holds fewer samples "
+        "than the exact merge needs); use samples_per_texel");
+  if (s.samples_per_texel() == 0)
+    return invalid_argument(
+        "settings.samples_per_texel: a sharded bake needs a sample count to split (0: none)");
   if (!s.reference_bake_id().empty())
     return invalid_argument("settings.reference_bake_id: benchmark mode is not sharded");
   // Left unset it is off for a sharded bake (the engine's rule for shards).
@@ -112,6 +121,8 @@ std::string plan_to_json(const ShardPlan& plan) {
                            {"downloaded", r.downloaded},
                            {"sha256", r.sha256},
                            {"bad_workers", r.bad_workers}});
+  j["abandoned"] = nlohmann::json::array();
+  for (const auto& [worker, bake] : plan.abandoned) j["abandoned"].push_back({worker, bake});
   return j.dump(1) + "\n";
 }
 
@@ -131,6 +142,9 @@ Result<ShardPlan> plan_from_json(const std::string& text) {
       r.bad_workers = s.at("bad_workers").get<std::vector<std::string>>();
       plan.shards.push_back(std::move(r));
     }
+    if (j.contains("abandoned"))
+      for (const auto& a : j.at("abandoned"))
+        plan.abandoned.emplace_back(a.at(0).get<std::string>(), a.at(1).get<std::string>());
     if (plan.shards.size() != plan.count)
       return Status(StatusCode::kDataLoss, "shards.json: shard count does not match its list");
     for (uint32_t k = 0; k < plan.count; ++k)

@@ -19,12 +19,12 @@ bool is_sharded(const v1::BakeSettings& s);
 // SubmitBake's rules for sharded settings on this daemon (INVALID_ARGUMENT
 // naming the field): a coordinator (have_workers) is needed; target_error
 // is refused (each worker would stop on the error of its own share, not on
-// the merged one), so is benchmark mode (reference_bake_id lives on the
-// coordinator) and adaptive = true (shards sample uniformly, each tracing
-// its part of every texel's sample indices; adaptive unset is off for them).
-// Then the engine's own rules for a shard of these settings (the
-// progressive least-squares solvers do not merge), as a worker would apply them.
-// `auto_count`: the shards shards_auto would make now (the workers resolved).
+// the merged one), so are time_budget_s and samples_per_texel = 0 (the
+// exact merge needs every texel at the whole sample count), benchmark mode (reference_bake_id lives
+// on the coordinator) and adaptive = true (shards sample uniformly, each tracing its part of every
+// texel's sample indices; adaptive unset is off for them). Then the engine's own rules for a shard
+// of these settings (the progressive least-squares solvers do not merge), as a worker would apply
+// them. `auto_count`: the shards shards_auto would make now (the workers resolved).
 Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
                             const SettingsLimits& limits = {}, uint32_t auto_count = 2);
 
@@ -65,6 +65,9 @@ struct ShardRecord {
 struct ShardPlan {
   uint32_t count = 0;
   std::vector<ShardRecord> shards;
+  // Worker bakes of reassigned shards, {worker, bake id}, not yet cancelled
+  // (their worker was down): a worker that comes back would resume them.
+  std::vector<std::pair<std::string, std::string>> abandoned;
 };
 std::string plan_to_json(const ShardPlan& plan);
 Result<ShardPlan> plan_from_json(const std::string& text);

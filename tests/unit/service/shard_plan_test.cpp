@@ -31,6 +31,14 @@ TEST(ShardPlan, RefusesWhatCannotBeSharded) {
   error.set_target_error(0.01);
   EXPECT_NE(check_shard_settings(error, true).message().find("settings.target_error"),
             std::string::npos);
+  v1::BakeSettings timed = sharded(2);
+  timed.set_time_budget_s(10);
+  EXPECT_NE(check_shard_settings(timed, true).message().find("settings.time_budget_s"),
+            std::string::npos);
+  v1::BakeSettings no_samples = sharded(2);
+  no_samples.set_samples_per_texel(0);
+  EXPECT_NE(check_shard_settings(no_samples, true).message().find("settings.samples_per_texel"),
+            std::string::npos);
   v1::BakeSettings adaptive = sharded(2);
   adaptive.set_adaptive(true);
   EXPECT_NE(check_shard_settings(adaptive, true).message().find("settings.adaptive"),
@@ -110,6 +118,7 @@ TEST(ShardPlan, StateFileRoundTripAndGarbage) {
                  .downloaded = true,
                  .sha256 = "cd",
                  .bad_workers = {"127.0.0.1:2"}};
+  p.abandoned = {{"127.0.0.1:2", "ef"}};
   auto back = plan_from_json(plan_to_json(p));
   ASSERT_TRUE(back.is_ok()) << back.status().to_string();
   EXPECT_EQ(plan_to_json(back.value()), plan_to_json(p));
