@@ -155,6 +155,13 @@ class Coordinator(unittest.TestCase):
             self.assertTrue(any(e.HasField("snapshot") for e in events))
             self.assertEqual(sorted(c.server_status().workers),
                              sorted(w.address for w in self.workers))
+        # The comparison tells bakes apart: another seed (other sample
+        # sequences, same expectation) is outside its tolerance.
+        with Client(self.workers[1].address) as w:
+            other = w.bake(CORNELL, pathlib.Path(self.tmp.name) / "seed2", **dict(SETTINGS, seed=2))
+            got = read_exr(pathlib.Path(self.tmp.name) / "seed2" / "irradiance.exr")
+            self.assertFalse(np.allclose(got, self.reference, rtol=2e-4, atol=1e-5))
+            self.assertEqual(other.info.progress.paths, self.reference_info.progress.paths)
 
     def test_refusals_at_submit(self):
         with Client(self.coordinator.address) as c:
