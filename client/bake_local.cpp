@@ -18,7 +18,9 @@
 #include "pipeline/bake_outputs.h"
 #include "pipeline/resource_estimate.h"
 #include "progress_bar.h"
+#include "remote/scene_files.h"
 #include "scene/gltf_import.h"
+#include "service/settings_translate.h"
 
 namespace luxel::cli {
 namespace {
@@ -89,6 +91,14 @@ int run_bake(const std::vector<std::string>& args) {
               ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));
   pipeline::BakeHooks hooks;
+  if (a.settings.sharded()) {
+    // A shard's accumulators.bin carries the bake's fingerprint, as the
+    // daemon derives it (scene id + settings without the shard), so shards
+    // baked here and on daemons merge (pipeline/shard_merge.h).
+    remote::SceneFiles files;
+    if (remote::collect_scene_files(a.scene, files).ok())
+      hooks.fingerprint = service::bake_fingerprint(remote::scene_id(files), a.settings);
+  }
   hooks.on_layout = [](const std::string& line) {
     std::printf("uv         %s\n", line.c_str());
     std::fflush(stdout);

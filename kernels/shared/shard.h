@@ -20,7 +20,8 @@
  * only over seeds), with the error of far fewer effective samples
  * (docs/accuracy.md "Distributed bakes" measures it). B = 16 keeps
  * 4x4-stratified nets per shard while leaving the shards' loads within one
- * block of each other. */
+ * block of each other. Global indices are 32-bit like the sequence's: a shard
+ * without a samples rule wraps after about 2^32 / N samples per texel. */
 #ifndef LUXEL_SHARED_SHARD_H
 #define LUXEL_SHARED_SHARD_H
 

@@ -12,6 +12,7 @@
 
 #include "daemon_harness.h"
 #include "output/exr.h"
+#include "pipeline/checkpoint.h"
 
 namespace luxel::test {
 namespace {
@@ -333,6 +334,50 @@ TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
   ASSERT_TRUE(download(*daemon_, bake.bake_id(), "manifest.json", &bytes, &sha, &total).ok());
   EXPECT_NE(bytes.find("\"encodings\""), std::string::npos);
   EXPECT_NE(bytes.find("ambient-dice9"), std::string::npos);
+}
+
+// A shard of a distributed bake: adaptive left unset is off, and the
+// SUCCEEDED shard offers its accumulators (accumulators.bin, the checkpoint
+// format) for the coordinator's merge (pipeline/shard_merge.h).
+TEST_F(ServiceE2E, ShardBakeOffersItsAccumulators) {
+  v1::SceneInfo scene;
+  const std::string scene_id = upload_cornell(&scene);
+  auto stub = daemon_->stub();
+  v1::SubmitBakeRequest submit;
+  submit.set_scene_id(scene_id);
+  *submit.mutable_settings() = small_settings(40, 32);
+  submit.mutable_settings()->set_shard_index(1);
+  submit.mutable_settings()->set_shard_count(2);
+  submit.mutable_settings()->add_encodings(v1::ENCODING_SH2);
+  v1::BakeInfo bake;
+  auto ctx = daemon_->context();
+  ASSERT_TRUE(stub->SubmitBake(ctx.get(), submit, &bake).ok());
+  const v1::BakeInfo done =
+      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
+  ASSERT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+  // 40 samples = blocks of 16, 16 and 8: shard 1 of 2 traces the second.
+  EXPECT_EQ(done.progress().min_spp(), 16u);
+  const std::vector<std::string> names(done.artifacts().begin(), done.artifacts().end());
+  ASSERT_NE(std::find(names.begin(), names.end(), "accumulators.bin"), names.end());
+  std::string bytes, sha;
+  uint64_t total = 0;
+  ASSERT_TRUE(download(*daemon_, bake.bake_id(), "accumulators.bin", &bytes, &sha, &total).ok());
+  const std::string path = dir_->path() + "/accumulators.bin";
+  std::ofstream(path, std::ios::binary) << bytes;
+  auto state = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(state) << state.status().to_string();
+  EXPECT_EQ(state->shard_index, 1u);
+  EXPECT_EQ(state->shard_count, 2u);
+  EXPECT_FALSE(state->fingerprint.empty());
+  EXPECT_EQ(state->basis_layout.size(), 1u);
+  for (uint32_t n : state->spp) ASSERT_EQ(n, 16u);
+  // adaptive = true is refused for a shard, naming the field.
+  submit.mutable_settings()->set_adaptive(true);
+  v1::BakeInfo refused;
+  auto ctx2 = daemon_->context();
+  const grpc::Status st = stub->SubmitBake(ctx2.get(), submit, &refused);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(st.error_message().find("settings.adaptive"), std::string::npos) << st.error_message();
 }
 
 TEST_F(ServiceE2E, ReferenceBakeGivesTrueErrorInProgress) {

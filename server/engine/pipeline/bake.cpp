@@ -83,12 +83,18 @@ class Baker {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
     c.paths_done = paths_done_;
+    label_state(c);
+    return c;
+  }
+  // What a state record says beside the arrays: its shard and the layout of
+  // its encoding state (BakeCheckpoint::basis_layout).
+  void label_state(BakeCheckpoint& c) const {
     c.shard_index = settings_.sharded() ? settings_.shard_index : 0;
     c.shard_count = settings_.sharded() ? settings_.shard_count : 1;
+    c.basis_layout.clear();
     for (const cl::LuxEncoding& e : s_.plan.table)
       c.basis_layout.push_back(static_cast<uint32_t>(e.count) | static_cast<uint32_t>(e.solver)
                                                                     << 16);
-    return c;
   }
   // A state of every covered texel without a tile record (a merge of
   // shards, pipeline/shard_merge.h) restored into a tiled bake: tile
@@ -256,6 +262,7 @@ void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
 
 BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) const {
   BakeCheckpoint c = finished_;
+  label_state(c);
   c.width = current.width;
   c.height = current.height;
   c.paths_done = current.paths_done;
@@ -527,6 +534,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
       return invalid_argument("checkpoint belongs to another scene or other settings");
+    // Shards of one bake share the fingerprint, not their samples.
+    const uint32_t index = settings_.sharded() ? settings_.shard_index : 0;
+    const uint32_t count = settings_.sharded() ? settings_.shard_count : 1;
+    if (hooks.resume->shard_index != index || hooks.resume->shard_count != count)
+      return invalid_argument(strprintf("checkpoint is shard %u of %u, this bake shard %u of %u",
+                                        hooks.resume->shard_index, hooks.resume->shard_count, index,
+                                        count));
     auto tile = resume_tiles(*hooks.resume, result);
     if (!tile) return tile.status();
     first_tile = tile.value();
@@ -699,17 +713,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     BakeCheckpoint& f = *state;
     append_state(f, finished_);
     f.fingerprint = hooks.fingerprint;
-    f.shard_index = settings_.sharded() ? settings_.shard_index : 0;
-    f.shard_count = settings_.sharded() ? settings_.shard_count : 1;
+    label_state(f);
     f.width = static_cast<uint32_t>(s_.atlas.width);
     f.height = static_cast<uint32_t>(s_.atlas.height);
     f.paths_done = done_.paths;
     f.iteration = progress.iteration;
     f.elapsed_s = result.seconds;
     f.nonfinite = done_.nonfinite;
-    for (const cl::LuxEncoding& e : s_.plan.table)
-      f.basis_layout.push_back(static_cast<uint32_t>(e.count) | static_cast<uint32_t>(e.solver)
-                                                                    << 16);
     series_to_checkpoint(result.series, f);
     result.final_state = std::move(state);
   }

@@ -207,6 +207,14 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
       return bad("adaptive",
                  "adaptive sampling cannot be merged across shards (each shard would allocate by "
                  "its own error); sharded bakes sample uniformly (adaptive=false)");
+    // The Gaussian filter gathers a neighbour's paths only in iterations
+    // where the texel has a path of its own (kernels/bake/accumulate.h), so
+    // which samples a texel sees depends on how the shard's paths were
+    // batched: the shards would not add up to the single bake.
+    if (s.filter == Filter::kGaussian)
+      return bad("filter",
+                 "the gaussian filter's gathered samples depend on how each shard batches its "
+                 "paths, so shards do not merge exactly; sharded bakes use filter=box");
     // Progressive least squares (Listing 7.1) is Gauss-Seidel state that
     // depends on the order of the samples; projection state is running
     // means, which merge exactly.

@@ -113,11 +113,11 @@ struct BakeSettings {
 
   // Distributed bakes (pipeline/shard_merge.h): this bake is shard
   // shard_index of shard_count and traces only its part of every texel's
-  // sample sequence (kernels/sampling/shard.h); samples_per_texel stays the
+  // sample sequence (kernels/shared/shard.h); samples_per_texel stays the
   // whole bake's count, of which the shard traces shard_samples(). 0 or 1:
-  // the whole bake. Sharded bakes sample uniformly (adaptive off) and fit
-  // directional encodings by projection, so that the shards' accumulators
-  // merge exactly.
+  // the whole bake. Sharded bakes sample uniformly (adaptive off), use the
+  // box filter and fit directional encodings by projection, so that the
+  // shards' accumulators merge exactly.
   uint32_t shard_index = 0;
   uint32_t shard_count = 1;
   bool sharded() const { return shard_count > 1; }

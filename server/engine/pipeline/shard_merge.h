@@ -13,9 +13,10 @@
 // weights (sum w, sum w^2) of every texel, its sample count, and the
 // projection state of directional encodings (running means of the Monte
 // Carlo moments). What does not, and is refused at submit (validate_settings):
-// adaptive sampling (allocation by one machine's error estimates) and the
+// adaptive sampling (allocation by one machine's error estimates), the
 // progressive least-squares solvers (order-dependent Gauss-Seidel state,
-// Listing 7.1).
+// Listing 7.1) and the Gaussian filter (which neighbour paths a texel
+// gathers depends on the batching).
 #pragma once
 
 #include <vector>

@@ -13,10 +13,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <set>
 
+#include "common/hash.h"
 #include "device/context.h"
 #include "pipeline/bake.h"
+#include "pipeline/bake_outputs.h"
 #include "pipeline/checkpoint.h"
 #include "pipeline/settings_schema.h"
 #include "scene/gltf_import.h"
@@ -59,6 +62,48 @@ TEST(ShardSampleIndices, ShardsPartitionTheSequence) {
   for (uint32_t i = 0; i < 100; ++i) EXPECT_EQ(cl::lux_shard_sample_index(i, 0, 1), i);
 }
 
+// A version-3 checkpoint (before the shard fields) still reads: a whole
+// bake's state (shard 0 of 1) without an encoding layout.
+TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
+  std::string b = "LUXCKPT3";
+  auto pod = [&](const auto& v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  auto vec = [&](const auto& v) {
+    pod(static_cast<uint64_t>(v.size()));
+    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0]));
+  };
+  vec(std::string("fp"));
+  pod(uint32_t{2});
+  pod(uint32_t{1});
+  pod(uint64_t{6});  // paths
+  pod(uint32_t{3});  // iteration
+  pod(double{1.5});  // elapsed
+  pod(uint64_t{0});  // nonfinite
+  vec(std::vector<double>{});
+  vec(std::vector<cl::float4>{{1, 2, 3, 4}, {5, 6, 7, 8}});
+  vec(std::vector<cl::float4>{{0, 0, 0, 0}, {1, 1, 1, 1}});
+  vec(std::vector<cl::float2>{{3, 3}, {3, 3}});
+  vec(std::vector<uint32_t>{3, 3});
+  vec(std::vector<cl::float4>{});
+  vec(std::vector<double>{});
+  b += Hasher().add(b).hex();
+  const std::string path = ::testing::TempDir() + "/shard_merge_v3.ckpt";
+  std::ofstream(path, std::ios::binary) << b;
+  auto c = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(c) << c.status().to_string();
+  EXPECT_EQ(c->fingerprint, "fp");
+  EXPECT_EQ(c->shard_index, 0u);
+  EXPECT_EQ(c->shard_count, 1u);
+  EXPECT_TRUE(c->basis_layout.empty());
+  EXPECT_EQ(c->paths_done, 6u);
+  EXPECT_EQ(c->mean[1].y, 6.0f);
+  // Written back, it is a version-4 file with the same state.
+  ASSERT_TRUE(pipeline::write_checkpoint(path, c.value()).is_ok());
+  auto again = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(again) << again.status().to_string();
+  EXPECT_EQ(again->shard_count, 1u);
+  EXPECT_EQ(again->spp, c->spp);
+}
+
 std::string error_of(const Status& s) {
   return s.is_ok() ? "" : s.message();
 }
@@ -88,6 +133,9 @@ TEST(ShardSettings, RefusedCombinationsNameTheField) {
   s.encodings.names = {"sh2"};  // auto: projection
   s.encodings.solver = pipeline::EncodingSolver::kAuto;
   EXPECT_EQ(error_of(pipeline::validate_settings(s)), "");
+  s.filter = pipeline::Filter::kGaussian;
+  EXPECT_NE(error_of(pipeline::validate_settings(s)).find("settings.filter"), std::string::npos);
+  s.filter = pipeline::Filter::kBox;
   // 40 samples make 3 blocks: a 4th shard would have none.
   s.samples_per_texel = 40;
   s.shard_index = 3;
@@ -139,10 +187,11 @@ class ShardMergeTest : public ::testing::Test {
     return h;
   }
   // The final states of shards 0..count-1.
-  static std::vector<BakeCheckpoint> bake_shards(uint32_t count) {
+  static std::vector<BakeCheckpoint> bake_shards(uint32_t count,
+                                                 const BakeSettings& whole = settings()) {
     std::vector<BakeCheckpoint> states;
     for (uint32_t k = 0; k < count; ++k) {
-      BakeSettings s = settings();
+      BakeSettings s = whole;
       s.shard_index = k;
       s.shard_count = count;
       auto r = pipeline::bake(*scene_, s, *ctx_, hooks());
@@ -335,6 +384,187 @@ TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
   }
 }
 
+// A shard baked in device-memory tiles (pipeline/tile_plan.h) ends with
+// the state of every tile, the same bits as untiled; a merged state
+// finishes in tiles too, with the bits of the untiled finish.
+TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
+  // A budget leaving room for about a quarter of the per-texel state
+  // (tiled_bake_test's rule).
+  const double per_slot = 57.0 + static_cast<double>(single_->basis_bytes_per_texel);
+  const double state = per_slot * static_cast<double>(single_->covered_texels);
+  const double budget =
+      (static_cast<double>(single_->peak_device_bytes) - 0.75 * state) / 1048576.0;
+  std::vector<BakeCheckpoint> untiled = bake_shards(2);
+  ASSERT_EQ(untiled.size(), 2u);
+  BakeSettings s = settings();
+  s.shard_index = 1;
+  s.shard_count = 2;
+  s.device_memory_budget_mib = budget;
+  auto tiled = pipeline::bake(*scene_, s, *ctx_, hooks());
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  EXPECT_GE(tiled.value().tiles, 2u);
+  ASSERT_TRUE(tiled.value().final_state);
+  expect_same_bits(*tiled.value().final_state, untiled[1]);
+
+  auto merged = pipeline::merge_shard_states({untiled[0], *tiled.value().final_state});
+  ASSERT_TRUE(merged) << merged.status().to_string();
+  auto plain = finish(merged.value());
+  ASSERT_TRUE(plain) << plain.status().to_string();
+  BakeSettings whole = settings();
+  whole.device_memory_budget_mib = budget;
+  auto in_tiles = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(), hooks());
+  ASSERT_TRUE(in_tiles) << in_tiles.status().to_string();
+  EXPECT_GE(in_tiles.value().tiles, 2u);
+  EXPECT_EQ(in_tiles.value().paths, plain.value().paths);
+  EXPECT_EQ(in_tiles.value().irradiance, plain.value().irradiance);
+  EXPECT_EQ(in_tiles.value().rel_error, plain.value().rel_error);
+  EXPECT_EQ(in_tiles.value().samples, plain.value().samples);
+  EXPECT_EQ(in_tiles.value().encodings[0].coefficients, plain.value().encodings[0].coefficients);
+  EXPECT_EQ(in_tiles.value().min_spp, kSamples);
+  // The error summary sums per-tile partials in another order.
+  EXPECT_NEAR(in_tiles.value().error, plain.value().error, 1e-6 * plain.value().error);
+}
+
+// The weighted parts of the merge (sum w, sum w^2, Wa Wb / W), which box
+// bakes (unit weights) leave untouched: synthetic weighted samples
+// accumulated per shard with the kernel's float Welford update
+// (kernels/bake/accumulate.h lux_welford, West 1979), merged, against one
+// accumulator fed them all; the unweighted-mean merge must fail the check.
+void welford(const float* x, float w, cl::float4& mean, cl::float4& m2, cl::float2& weight) {
+  const float w_new = weight.x + w;
+  float* m = &mean.x;
+  float* v = &m2.x;
+  for (int c = 0; c < 4; ++c) {
+    const float delta = x[c] - m[c];
+    m[c] += delta * (w / w_new);
+    v[c] += w * delta * (x[c] - m[c]);
+  }
+  weight = {w_new, weight.y + w * w};
+}
+
+TEST(ShardMergeWeighted, WeightedWelfordStatesMergeToOneAccumulator) {
+  constexpr size_t kTexels = 64;
+  constexpr uint32_t kCount = 3;
+  uint64_t rng = 12345;
+  auto uniform = [&] {
+    rng = rng * 6364136223846793005ull + 1442695040888963407ull;
+    return static_cast<float>((rng >> 40) * 0x1p-24);
+  };
+  BakeCheckpoint one;
+  std::vector<BakeCheckpoint> shards(kCount);
+  for (uint32_t k = 0; k < kCount; ++k) {
+    shards[k].fingerprint = "synthetic";
+    shards[k].shard_index = k;
+    shards[k].shard_count = kCount;
+    shards[k].width = shards[k].height = 8;
+  }
+  for (BakeCheckpoint* c : {&one, &shards[0], &shards[1], &shards[2]}) {
+    c->mean.assign(kTexels, {});
+    c->m2.assign(kTexels, {});
+    c->weight.assign(kTexels, {});
+    c->spp.assign(kTexels, 0);
+  }
+  for (size_t t = 0; t < kTexels; ++t) {
+    const float level = 0.1f + 10.0f * uniform();
+    // Unequal shares (the shards' 16/16/8 blocks), samples with a heavy tail.
+    for (uint32_t i = 0; i < 40; ++i) {
+      const uint32_t k = i < 16 ? 0 : (i < 32 ? 1 : 2);
+      float x[4];
+      for (float& v : x) v = level * (uniform() < 0.1f ? 8.0f * uniform() : uniform());
+      const float w = 0.05f + 0.95f * uniform();
+      welford(x, w, one.mean[t], one.m2[t], one.weight[t]);
+      welford(x, w, shards[k].mean[t], shards[k].m2[t], shards[k].weight[t]);
+      ++one.spp[t];
+      ++shards[k].spp[t];
+      ++shards[k].paths_done;
+    }
+  }
+  auto merged = pipeline::merge_shard_states(shards);
+  ASSERT_TRUE(merged) << merged.status().to_string();
+  auto worst = [&](const BakeCheckpoint& m) {
+    double d = 0;
+    for (size_t t = 0; t < kTexels; ++t) {
+      for (int c = 0; c < 4; ++c) {
+        const double a = (&m.mean[t].x)[c], b = (&one.mean[t].x)[c];
+        d = std::max(d, std::abs(a - b) / (2e-4 * std::abs(b) + 1e-6));
+        const double va = (&m.m2[t].x)[c], vb = (&one.m2[t].x)[c];
+        d = std::max(d, std::abs(va - vb) / (2e-3 * std::abs(vb) + 1e-6));
+      }
+      for (int c = 0; c < 2; ++c) {
+        const double a = (&m.weight[t].x)[c], b = (&one.weight[t].x)[c];
+        d = std::max(d, std::abs(a - b) / (1e-5 * std::abs(b)));
+      }
+      EXPECT_EQ(m.spp[t], one.spp[t]);
+    }
+    return d;
+  };
+  const double right = worst(merged.value());
+  EXPECT_LE(right, 1.0);
+  // Negative control: the means averaged without weights.
+  BakeCheckpoint unweighted = merged.value();
+  for (size_t t = 0; t < kTexels; ++t)
+    for (int c = 0; c < 4; ++c) {
+      double sum = 0;
+      for (const BakeCheckpoint& s : shards) sum += (&s.mean[t].x)[c];
+      (&unweighted.mean[t].x)[c] = static_cast<float>(sum / kCount);
+    }
+  const double wrong = worst(unweighted);
+  EXPECT_GT(wrong, 10.0);
+  std::printf("weighted synthetic: deviation / tolerance %.3g; unweighted means %.3g\n", right,
+              wrong);
+}
+
+// A tiled shard checkpoints with its shard fields and resumes from a later
+// tile's checkpoint to the same final state; another shard may not resume it.
+TEST_F(ShardMergeTest, TiledShardResumesFromItsCheckpoint) {
+  BakeSettings s = settings();
+  s.shard_index = 1;
+  s.shard_count = 2;
+  s.paths_per_iteration = 1024;  // several iterations per tile
+  auto probe = pipeline::bake(*scene_, s, *ctx_, hooks());
+  ASSERT_TRUE(probe) << probe.status().to_string();
+  ASSERT_TRUE(probe.value().final_state);
+  const double per_slot = 57.0 + static_cast<double>(probe.value().basis_bytes_per_texel);
+  const double state = per_slot * static_cast<double>(probe.value().covered_texels);
+  s.device_memory_budget_mib =
+      (static_cast<double>(probe.value().peak_device_bytes) - 0.75 * state) / 1048576.0;
+  // Periodic checkpoints on the way, kept from the second tile on.
+  pipeline::BakeHooks h = hooks();
+  h.checkpoint_interval_s = 1e-9;
+  std::vector<BakeCheckpoint> checkpoints;
+  h.on_checkpoint = [&](const BakeCheckpoint& c) {
+    if (!c.tile.empty() && c.tile[pipeline::kTileIndex] >= 1) checkpoints.push_back(c);
+  };
+  auto tiled = pipeline::bake(*scene_, s, *ctx_, h);
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  EXPECT_GE(tiled.value().tiles, 2u);
+  ASSERT_TRUE(tiled.value().final_state);
+  const BakeCheckpoint& untiled = *probe.value().final_state;
+  expect_same_bits(*tiled.value().final_state, untiled);
+  // A shard resumed from a checkpoint of a later tile (through the file
+  // format) ends with the same state.
+  ASSERT_FALSE(checkpoints.empty());
+  const std::string path = ::testing::TempDir() + "/shard_merge_tiled.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, checkpoints.front()).is_ok());
+  auto read = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(read) << read.status().to_string();
+  EXPECT_EQ(read->shard_index, 1u);
+  EXPECT_EQ(read->shard_count, 2u);
+  pipeline::BakeHooks resume = hooks();
+  resume.resume = &read.value();
+  auto resumed = pipeline::bake(*scene_, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  ASSERT_TRUE(resumed.value().final_state);
+  expect_same_bits(*resumed.value().final_state, untiled);
+  // Another shard's checkpoint is refused.
+  BakeSettings other = s;
+  other.shard_index = 0;
+  auto refused = pipeline::bake(*scene_, other, *ctx_, resume);
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("checkpoint is shard 1 of 2"), std::string::npos)
+      << refused.status().message();
+}
+
 TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   const std::vector<BakeCheckpoint> good = bake_shards(3);
   ASSERT_EQ(good.size(), 3u);
@@ -380,9 +610,23 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
     refused(s, "shard 0 of 3 (input 0): holds progressive");
   }
   refused({}, "no shard states");
-  // A merge missing samples is refused when finishing.
   auto merged = pipeline::merge_shard_states(good);
   ASSERT_TRUE(merged);
+  // The finished merge goes through the denoiser and the output writer like
+  // any bake (the daemon's default denoise is atrous); no accumulators.bin.
+  BakeSettings denoised = settings();
+  denoised.denoise = pipeline::Denoise::kAtrous;
+  auto finished = pipeline::finish_merged_bake(*scene_, denoised, *ctx_, merged.value(), hooks());
+  ASSERT_TRUE(finished) << finished.status().to_string();
+  EXPECT_EQ(finished.value().irradiance_denoised.size(), finished.value().irradiance.size());
+  const std::string out = ::testing::TempDir() + "/shard_merge_outputs";
+  auto written = pipeline::write_bake_outputs(out, *scene_, denoised, finished.value());
+  ASSERT_TRUE(written) << written.status().to_string();
+  const auto& files = written.value().files;
+  EXPECT_NE(std::find(files.begin(), files.end(), "manifest.json"), files.end());
+  EXPECT_NE(std::find(files.begin(), files.end(), "sh2.exr"), files.end());
+  EXPECT_EQ(std::find(files.begin(), files.end(), "accumulators.bin"), files.end());
+  // A merge missing samples is refused when finishing.
   BakeSettings more = settings();
   more.samples_per_texel = kSamples + 16;
   auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(), hooks());

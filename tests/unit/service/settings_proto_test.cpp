@@ -204,6 +204,58 @@ TEST(SettingsProto, UnsetFieldsTakeTheApiDefaults) {
   EXPECT_EQ(s->progress_interval_s, 0.05);
 }
 
+// Distributed bakes: shards sample uniformly. adaptive left unset is off
+// for a shard; adaptive = true given is refused, naming the field; shards of
+// one bake share the fingerprint, which leaves the shard fields out.
+TEST(SettingsProto, ShardsAreUniformAndShareTheFingerprint) {
+  v1::BakeSettings p = base();
+  p.set_samples_per_texel(64);
+  p.set_shard_count(4);
+  p.set_shard_index(3);
+  auto s = to_engine_settings(p, SettingsLimits{});
+  ASSERT_TRUE(s) << s.status().message();
+  EXPECT_EQ(s->shard_count, 4u);
+  EXPECT_EQ(s->shard_index, 3u);
+  EXPECT_FALSE(s->adaptive);
+  EXPECT_EQ(s->shard_samples(), 16u);
+  v1::BakeSettings other = p;
+  other.set_shard_index(1);
+  auto s1 = to_engine_settings(other, SettingsLimits{});
+  ASSERT_TRUE(s1) << s1.status().message();
+  EXPECT_EQ(bake_fingerprint("scene", *s), bake_fingerprint("scene", *s1));
+  // The merged bake (shard_count 1, adaptive off) has the shards' fingerprint.
+  pipeline::BakeSettings whole = *s;
+  whole.shard_count = 1;
+  whole.shard_index = 0;
+  EXPECT_EQ(bake_fingerprint("scene", whole), bake_fingerprint("scene", *s));
+  // What the API sends back for a shard round-trips.
+  auto sent = to_proto_settings(*s);
+  ASSERT_TRUE(sent) << sent.status().message();
+  EXPECT_EQ(sent->shard_count(), 4u);
+  EXPECT_EQ(sent->shard_index(), 3u);
+
+  p.set_adaptive(true);
+  auto refused = to_engine_settings(p, SettingsLimits{});
+  ASSERT_FALSE(refused);
+  EXPECT_EQ(refused.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(refused.status().message().find("settings.adaptive"), std::string::npos);
+  p.set_adaptive(false);
+  p.set_shard_index(4);
+  refused = to_engine_settings(p, SettingsLimits{});
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("settings.shard_index"), std::string::npos);
+  p.set_shard_index(0);
+  p.set_shard_count(5000);
+  refused = to_engine_settings(p, SettingsLimits{});
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("settings.shard_count"), std::string::npos);
+  p.set_shard_count(2);
+  p.add_encodings(v1::ENCODING_SG12);
+  refused = to_engine_settings(p, SettingsLimits{});
+  ASSERT_FALSE(refused);
+  EXPECT_NE(refused.status().message().find("settings.solver"), std::string::npos);
+}
+
 TEST(SettingsProto, RoundTripThroughTheApiKeepsTheBake) {
   pipeline::BakeSettings s = pipeline::default_settings();
   s.samples_per_texel = 64;
