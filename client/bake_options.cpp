@@ -151,6 +151,7 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
       // settings.shards_auto (one shard per worker the coordinator resolves).
       a.remote_only.push_back(k);
       a.settings.job.shards_auto = true;
+      a.settings.adaptive = false;  // as --shards N > 1 implies
       ++i;
     } else if (const Setting* st = setting_for_flag(k)) {
       if (st->scope == SettingScope::kLocalOnly) a.local_only.push_back(k);

@@ -660,13 +660,19 @@ std::vector<Setting> make_schema() {
                .type = Type::kInt,
                .units = "",
                .help = "split the bake across this many worker daemons of a coordinator luxeld "
-                       "(--workers); 0 or 1: one machine. `--shards auto`: one per worker",
+                       "(--workers); 0 or 1: one machine. `--shards auto`: one per worker "
+                       "(implies --no-adaptive)",
                .flag = "--shards",
                .metavar = "N|auto",
                .default_value = SettingValue::of(0),
                .min = 0,
                .max = 1024,
                .scope = Scope::kApiOnly,
+               // Shards sample uniformly (their accumulators merge exactly).
+               .implies =
+                   [](BakeSettings& s) {
+                     if (s.job.shards > 1) s.adaptive = false;
+                   },
                LUXEL_NUMBER(job.shards)});
   t.push_back({.name = "shards_auto",
                .type = Type::kBool,

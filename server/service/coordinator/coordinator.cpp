@@ -673,7 +673,13 @@ Result<pipeline::BakeResult> Run::execute() {
         return Status(
             StatusCode::kUnavailable,
             strprintf("settings.shards_auto: no worker resolved within %.0f s", options_.grace_s));
-      count = usable_shard_count(s, static_cast<uint32_t>(workers.size()), options_.limits);
+      // At least two: one worker then runs both in turn (a shard bake of
+      // shard_count 1 would be a whole bake, without accumulators.bin).
+      count =
+          usable_shard_count(s, std::max<uint32_t>(2, uint32_t(workers.size())), options_.limits);
+      if (count < 2)
+        return invalid_argument(
+            "settings.samples_per_texel: too few samples to split into 2 shards");
     }
     count = std::max<uint32_t>(count, 1);
     remove_tree(dir_);
@@ -764,6 +770,7 @@ Result<pipeline::BakeResult> Run::execute() {
     }
   }
   for (auto& t : threads) t.join();
+  publish_progress();
   cancel_abandoned();
   log_event(
       "shards_watched",
