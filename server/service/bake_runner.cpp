@@ -291,7 +291,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     return finish_failed(bake_id, result.status());
   }
   const pipeline::BakeResult& r = result.value();
-  paths_traced_ += r.paths - std::min(r.paths, last_paths);
+  // The workers traced a sharded bake's paths (and count them themselves).
+  if (!sharded) paths_traced_ += r.paths - std::min(r.paths, last_paths);
   traced_s = r.seconds;
 
   if (r.termination == pipeline::Termination::kCancelled) {
