@@ -146,7 +146,14 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) 
       ok = text(a.snapshots_dir);
     else if (k == "--idempotency-key")
       ok = text(a.idempotency_key);
-    else if (const Setting* st = setting_for_flag(k)) {
+    else if (k == "--shards" && i + 1 < args.size() && args[i + 1] == "auto") {
+      // The one setting whose option takes a word besides a number: "auto" is
+      // settings.shards_auto (one shard per worker the coordinator resolves).
+      a.remote_only.push_back(k);
+      a.settings.job.shards_auto = true;
+      a.settings.adaptive = false;  // as --shards N > 1 implies
+      ++i;
+    } else if (const Setting* st = setting_for_flag(k)) {
       if (st->scope == SettingScope::kLocalOnly) a.local_only.push_back(k);
       if (st->scope == SettingScope::kApiOnly) a.remote_only.push_back(k);
       // A switch turns its setting away from the default (--no-compaction).

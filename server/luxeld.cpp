@@ -21,6 +21,7 @@
 #include "device/context.h"
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
+#include "service/coordinator/coordinator.h"
 #include "service/daemon_config.h"
 #include "service/data_dir_lock.h"
 #include "service/files.h"
@@ -101,6 +102,23 @@ int run(const DaemonConfig& config) {
   ro.device_spec = config.device;
   ro.checkpoint_interval_s = config.checkpoint_interval_s;
   ro.limits.max_resolution = config.max_resolution;
+  // Coordinator mode: sharded bakes go to the workers (the same token).
+  std::unique_ptr<coordinator::Coordinator> coord;
+  if (!config.workers.empty() || !config.workers_dns.empty()) {
+    coordinator::CoordinatorOptions co;
+    co.workers = {config.workers, config.workers_dns, config.token};
+    co.grace_s = config.worker_grace_s;
+    co.stall_s = config.worker_stall_s;
+    co.limits = ro.limits;
+    coord = std::make_unique<coordinator::Coordinator>(*bakes.value(), co);
+    ro.coordinator = coord.get();
+    const auto workers = coord->pool().resolve();
+    std::string list;
+    for (const auto& w : workers) list += (list.empty() ? "" : ",") + w;
+    log_event(
+        "coordinator",
+        {{"workers", list}, {"dns", config.workers_dns}, {"grace_s", strprintf("%g", co.grace_s)}});
+  }
   BakeRunner runner(*scenes.value(), *bakes.value(), queue, ro);
   if (Status st = runner.recover(); !st.is_ok()) {
     log_event("fatal", {{"error", st.to_string()}});
@@ -117,6 +135,7 @@ int run(const DaemonConfig& config) {
   so.streams = config.streams;
   so.upload_deadlines = {config.upload_idle_timeout_s, config.upload_timeout_s};
   so.metrics = &metrics;
+  so.workers = coord ? &coord->pool() : nullptr;
   LuxelService service(*scenes.value(), *bakes.value(), queue, runner, so);
   runner_ptr = &runner;
   service_ptr = &service;

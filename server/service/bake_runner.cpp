@@ -7,6 +7,8 @@
 #include "output/reference_exr.h"
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
+#include "service/coordinator/coordinator.h"
+#include "service/coordinator/shard_plan.h"
 #include "service/files.h"
 #include "service/log.h"
 #include "service/metrics.h"
@@ -271,13 +273,26 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     std::function<void()> f;
     ~OnExit() { f(); }
   } end_on_exit{report_end};
-  auto result = pipeline::bake(*scene.value(), settings.value(), *ctx, hooks);
+  const bool sharded = options_.coordinator && coordinator::is_sharded(info->settings());
+  coordinator::ShardedJob job{.bake_id = bake_id,
+                              .info = info.value(),
+                              .scene = scene.value().get(),
+                              .scene_main_file = scenes_.main_file_path(scene_info.value()),
+                              .scene_name = scene_info.value().name(),
+                              .settings = &settings.value(),
+                              .ctx = ctx.get(),
+                              .cancel = &running.cancel,
+                              .by_user = &running.by_user,
+                              .stopping = &shutting_down_};
+  auto result = sharded ? options_.coordinator->run(job)
+                        : pipeline::bake(*scene.value(), settings.value(), *ctx, hooks);
   if (!result) {
     ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
     return finish_failed(bake_id, result.status());
   }
   const pipeline::BakeResult& r = result.value();
-  paths_traced_ += r.paths - std::min(r.paths, last_paths);
+  // The workers traced a sharded bake's paths (and count them themselves).
+  if (!sharded) paths_traced_ += r.paths - std::min(r.paths, last_paths);
   traced_s = r.seconds;
 
   if (r.termination == pipeline::Termination::kCancelled) {

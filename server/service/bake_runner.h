@@ -37,6 +37,9 @@
 namespace luxel::service {
 
 class Metrics;
+namespace coordinator {
+class Coordinator;
+}
 
 struct RunnerOptions {
   int max_concurrent_bakes = 1;
@@ -44,6 +47,9 @@ struct RunnerOptions {
   double checkpoint_interval_s = 10;  // 0: no checkpoints
   SettingsLimits limits;
   Metrics* metrics = nullptr;  // progress and finished bakes (metrics.h); may be null
+  // Coordinator mode (--workers): sharded bakes run through it instead of the
+  // local engine (coordinator/coordinator.h); null on a plain daemon.
+  coordinator::Coordinator* coordinator = nullptr;
 };
 
 class BakeRunner {

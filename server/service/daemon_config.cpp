@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "service/coordinator/worker_pool.h"
 #include "service/files.h"
 #include "service/metrics.h"
 
@@ -52,7 +53,16 @@ const char* kDaemonUsage =
     "                            0 = no limit)\n"
     "  --metrics-listen HOST:PORT  serve Prometheus metrics at http://HOST:PORT/metrics\n"
     "                            (numeric address, e.g. 127.0.0.1:9464; default off)\n"
-    "  --log-format text|json    log lines on stderr: key=value (default) or JSON objects\n";
+    "  --log-format text|json    log lines on stderr: key=value (default) or JSON objects\n"
+    "  --workers HOST:PORT,...   coordinator mode: bakes with settings.shards > 1 are split\n"
+    "                            across these worker luxelds and merged exactly\n"
+    "  --workers-dns NAME[:PORT] coordinator mode with the workers at every A/AAAA address\n"
+    "                            of NAME (a Kubernetes headless Service), resolved again\n"
+    "                            whenever a shard needs a worker (default port 50051)\n"
+    "  --worker-grace S          a worker that stops answering is retried this long before\n"
+    "                            its shard goes to another worker (default 60)\n"
+    "  --worker-stall-timeout S  a running shard with no new paths this long goes to another\n"
+    "                            worker (default 300)\n";
 
 Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
                                        const char* token_env) {
@@ -139,11 +149,28 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
       if (v != "text" && v != "json")
         return invalid_argument("--log-format: expected 'text' or 'json', got '" + v + "'");
       c.log_json = v == "json";
+    } else if (k == "--workers") {
+      LUXEL_RETURN_IF_ERROR(value());
+      auto list = coordinator::parse_worker_list(v);
+      if (!list) return list.status();
+      c.workers = list.value();
+    } else if (k == "--workers-dns") {
+      LUXEL_RETURN_IF_ERROR(value());
+      if (v.empty()) return invalid_argument("--workers-dns: needs a name");
+      c.workers_dns = v;
+    } else if (k == "--worker-grace") {
+      LUXEL_RETURN_IF_ERROR(number(0, 1e6, &x));
+      c.worker_grace_s = x;
+    } else if (k == "--worker-stall-timeout") {
+      LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x));
+      c.worker_stall_s = x;
     } else
       return invalid_argument(strprintf("unknown option '%s'", k.c_str()));
   }
   if (c.help) return c;
   if (c.data_dir.empty()) return invalid_argument("--data-dir: required");
+  if (!c.workers.empty() && !c.workers_dns.empty())
+    return invalid_argument("--workers and --workers-dns: give one");
   if (c.tls_cert.empty() != c.tls_key.empty())
     return invalid_argument("--tls-cert and --tls-key go together");
   if (token_env != nullptr) {

@@ -28,6 +28,12 @@ struct DaemonConfig {
   double upload_timeout_s = 3600;     // an upload not complete after this ends; 0: none
   std::string metrics_listen;         // Prometheus /metrics HOST:PORT ("" = off)
   bool log_json = false;              // --log-format json (one JSON object per line)
+  // Coordinator mode (server/service/coordinator/): sharded bakes go to these
+  // worker daemons. --workers host:port,... or --workers-dns NAME[:PORT].
+  std::vector<std::string> workers;
+  std::string workers_dns;
+  double worker_grace_s = 60;   // --worker-grace: a lost worker is retried this long
+  double worker_stall_s = 300;  // --worker-stall-timeout: no progress this long = lost
   bool help = false;
 };
 

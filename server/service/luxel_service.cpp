@@ -8,6 +8,8 @@
 
 #include "common/sha256.h"
 #include "luxel_version.h"
+#include "service/coordinator/shard_plan.h"
+#include "service/coordinator/worker_pool.h"
 #include "service/files.h"
 #include "service/log.h"
 #include "service/metrics.h"
@@ -154,6 +156,11 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
   // The one validation of the settings (the runner only translates them).
   auto settings = to_engine_settings(req->settings(), options_.settings);
   if (!settings) return to_grpc(settings.status());
+  if (Status st = coordinator::check_shard_settings(
+          req->settings(), options_.workers != nullptr, options_.settings,
+          options_.workers ? uint32_t(options_.workers->last_resolved().size()) : 0);
+      !st.is_ok())
+    return to_grpc(st);
 
   std::lock_guard<std::mutex> lock(submit_mu_);
   if (auto existing = bakes_.find_by_key(req->idempotency_key())) {
@@ -337,6 +344,8 @@ grpc::Status LuxelService::GetServerStatus(grpc::ServerContext* ctx,
   response->set_watchers(slots_.open(StreamKind::kWatch));
   response->set_uploads(slots_.open(StreamKind::kUpload));
   response->set_downloads(slots_.open(StreamKind::kDownload));
+  if (options_.workers)
+    for (const std::string& w : options_.workers->last_resolved()) response->add_workers(w);
   return grpc::Status::OK;
 }
 

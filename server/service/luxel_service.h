@@ -27,6 +27,10 @@
 
 namespace luxel::service {
 
+namespace coordinator {
+class WorkerPool;
+}
+
 class Metrics;
 
 struct ServiceOptions {
@@ -43,6 +47,9 @@ struct ServiceOptions {
   // How often watchers look for a new bake state and uploads for deadlines.
   std::chrono::milliseconds pump_period{50};
   Metrics* metrics = nullptr;  // download bytes (metrics.h); may be null
+  // Coordinator mode (--workers / --workers-dns): the workers sharded bakes
+  // go to; null on a plain daemon, which refuses sharded bakes.
+  coordinator::WorkerPool* workers = nullptr;
 };
 
 grpc::Status to_grpc(const Status& status);

@@ -50,6 +50,8 @@ struct JobSettings {
   int snapshot_max_side = 512;     // PNG snapshot longest side, pixels
   std::string reference_bake_id;   // benchmark mode on the daemon
   bool denoise_snapshots = false;  // snapshots denoised (with settings.denoise) for previews
+  uint32_t shards = 0;             // coordinator mode: worker daemons to split across (0, 1: none)
+  bool shards_auto = false;        // coordinator mode: one shard per resolved worker
 };
 
 // Lightmap placement of one glTF node dictated by the client (an editor

@@ -655,6 +655,34 @@ std::vector<Setting> make_schema() {
                .scope = Scope::kApiOnly,
                .api_note = "0 (unset) means 512",
                LUXEL_NUMBER(job.snapshot_max_side)});
+  // Coordinator mode (server/service/coordinator/): the daemon splits the bake
+  // by sample index across worker daemons; the merged result is the one-machine
+  // result, so neither setting shapes the result (nor the fingerprint).
+  t.push_back({.name = "shards",
+               .type = Type::kInt,
+               .units = "",
+               .help = "split the bake across this many worker daemons of a coordinator luxeld "
+                       "(--workers); 0 or 1: one machine. `--shards auto`: one per worker "
+                       "(implies --no-adaptive)",
+               .flag = "--shards",
+               .metavar = "N|auto",
+               .default_value = SettingValue::of(0),
+               .min = 0,
+               .max = 1024,
+               .scope = Scope::kApiOnly,
+               // Shards sample uniformly (their accumulators merge exactly).
+               .implies =
+                   [](BakeSettings& s) {
+                     if (s.job.shards > 1) s.adaptive = false;
+                   },
+               LUXEL_NUMBER(job.shards)});
+  t.push_back({.name = "shards_auto",
+               .type = Type::kBool,
+               .units = "",
+               .help = "one shard per worker the coordinator resolves when the bake starts",
+               .default_value = SettingValue::of(0),
+               .scope = Scope::kApiOnly,
+               LUXEL_BOOL(job.shards_auto)});
   return t;
 }
 

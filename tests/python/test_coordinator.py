@@ -1,0 +1,264 @@
+"""Coordinator mode: one bake sharded across worker luxelds and merged exactly.
+
+Real daemons on loopback, each with its own data dir: two workers and a
+coordinator (--workers). Every sharded bake is compared texel by texel with
+one bake of the same settings on one machine (float tolerance: the merge adds
+per-texel means in another order than one machine accumulates them). Faults
+are real: kill -9 of a worker or of the coordinator, and a worker bake of
+other settings put in a shard's place.
+
+    LUXELD=build/server/service/luxeld LUXEL_CACHE_DIR=build/cl-cache \
+    PYTHONPATH=client/python:build/python:tests/python /usr/bin/python3 -m unittest -v \
+    tests/python/test_coordinator.py
+"""
+
+import json
+import os
+import pathlib
+import re
+import subprocess
+import tempfile
+import time
+import unittest
+
+import numpy as np
+
+from luxel_client import Client, luxel_pb2, state_name
+from luxeld_process import Luxeld
+
+SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
+                                     pathlib.Path(__file__).resolve().parents[2] / "scenes"))
+CORNELL = SCENES / "cornell_box.gltf"
+# Uniform sampling (shards never sample adaptively), small batches so a bake
+# runs for a few seconds on PoCL and a fault can land in its middle.
+SETTINGS = dict(resolution=40, samples_per_texel=1024, paths_per_iteration=4096, adaptive=False,
+                max_bounces=2, snapshot_interval_s=0.2, progress_interval_s=0.1,
+                snapshot_format="exr")
+GRACE_S = 4
+
+
+def read_exr(path):
+    """The pixels of an EXR (rows, columns, channels), through oiiotool
+    --dumpdata (9 decimals): Debian's python3 has no OpenImageIO module."""
+    text = subprocess.run(["oiiotool", "--dumpdata", str(path)], check=True, capture_output=True,
+                          text=True).stdout
+    size = re.search(r":\s+(\d+)\s+x\s+(\d+),\s+(\d+) channel", text)
+    w, h, c = (int(x) for x in size.groups())
+    pixels = np.zeros((h, w, c))
+    for m in re.finditer(r"Pixel \((\d+), (\d+)\):([^\n]*)", text):
+        pixels[int(m.group(2)), int(m.group(1))] = [float(v) for v in m.group(3).split()]
+    return pixels
+
+
+class Coordinator(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.binary = os.environ["LUXELD"]
+        cls.tmp = tempfile.TemporaryDirectory(prefix="luxel_coordinator_")
+        # Replaced daemons own the temporary folders their successors' data
+        # dirs live in: kept until the end.
+        cls.replaced = []
+        worker_args = ["--checkpoint-interval", "0.3"]
+        cls.workers = [Luxeld(cls.binary, worker_args).start() for _ in range(2)]
+        cls.coordinator = cls.start_coordinator()
+        # The reference: the same bake on one machine (a worker's own engine).
+        with Client(cls.workers[0].address) as w:
+            out = pathlib.Path(cls.tmp.name) / "reference"
+            done = w.bake(CORNELL, out, **SETTINGS)
+            cls.reference_info = done.info
+            cls.reference = read_exr(out / "irradiance.exr")
+            cls.reference_samples = read_exr(out / "samples.exr")
+
+    @classmethod
+    def restart(cls, daemon):
+        cls.replaced.append(daemon)
+        return Luxeld(cls.binary, daemon.extra_args, data_dir=daemon.data_dir).start(
+            address=daemon.address)
+
+    @classmethod
+    def start_coordinator(cls):
+        args = ["--workers", ",".join(w.address for w in cls.workers), "--worker-grace",
+                str(GRACE_S), "--checkpoint-interval", "0.3"]
+        return Luxeld(cls.binary, args).start()
+
+    @classmethod
+    def tearDownClass(cls):
+        for d in [cls.coordinator, *cls.workers, *cls.replaced]:
+            d.cleanup()
+        cls.tmp.cleanup()
+
+    def setUp(self):
+        # A test that killed a worker leaves it restarted for the next one.
+        for i, w in enumerate(self.workers):
+            if w.process.poll() is not None:
+                self.workers[i] = self.restart(w)
+        # A restarted worker resumes the shard bakes it ran when it was
+        # killed (the coordinator cancels them only while it can reach the
+        # worker during that bake): none may hold a worker for the next test.
+        for w in self.workers:
+            with Client(w.address) as client:
+                for b in client.list_bakes(["QUEUED", "RUNNING", "INTERRUPTED"]):
+                    client.cancel_bake(b.bake_id)
+
+    def submit(self, client, **extra):
+        scene = client.upload_scene(CORNELL)
+        return client.submit_bake(scene.scene_id, **dict(SETTINGS, **extra))
+
+    def wait_running(self, client, bake_id, min_paths=1, timeout=60):
+        """Until every shard runs on a worker and has traced paths."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            info = client.get_bake(bake_id)
+            downloaded = luxel_pb2.SHARD_STATE_DOWNLOADED
+            self.assertFalse(any(s.state == downloaded for s in info.shards),
+                             f"a shard finished before the fault (bake too short?): {info}")
+            if (len(info.shards) >= 2 and all(s.worker_bake_id and s.progress.paths >= min_paths
+                                              for s in info.shards)):
+                return info
+            self.assertNotIn(state_name(info.state), ("SUCCEEDED", "FAILED"),
+                             f"bake ended before the fault: {info}")
+            time.sleep(0.05)
+        self.fail(f"shards not running after {timeout} s: {client.get_bake(bake_id)}")
+
+    def finish_and_compare(self, client, bake_id, timeout=120):
+        info = client.wait(bake_id)
+        deadline = time.monotonic() + timeout
+        while state_name(info.state) not in ("SUCCEEDED", "FAILED", "CANCELLED") and \
+                time.monotonic() < deadline:
+            time.sleep(0.2)
+            info = client.wait(bake_id)
+        self.assertEqual(state_name(info.state), "SUCCEEDED", f"{info.error_message}\n{info.notes}")
+        out = pathlib.Path(self.tmp.name) / bake_id
+        for name in ("irradiance.exr", "samples.exr", "manifest.json"):
+            client.download(bake_id, name, out / name)
+        got = read_exr(out / "irradiance.exr")
+        self.assertEqual(got.shape, self.reference.shape)
+        np.testing.assert_allclose(got, self.reference, rtol=2e-4, atol=1e-5)
+        np.testing.assert_array_equal(read_exr(out / "samples.exr"), self.reference_samples)
+        self.assertEqual(info.progress.paths, self.reference_info.progress.paths)
+        return info
+
+    def test_sharded_bake_equals_one_machine(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            events = []
+            done = c.wait(info.bake_id, on_event=events.append)
+            self.assertEqual(state_name(done.state), "SUCCEEDED", f"{done.error_message} {done.notes}")
+            final = self.finish_and_compare(c, info.bake_id)
+            self.assertEqual(len(final.shards), 2)
+            self.assertEqual({s.worker for s in final.shards}, {w.address for w in self.workers})
+            self.assertTrue(all(s.attempts == 1 for s in final.shards), final.shards)
+            self.assertTrue(any("sharded into 2 shards" in n for n in final.notes), final.notes)
+            # Progress merged from both workers; previews came as EXR.
+            paths = [e.info.progress.paths for e in events]
+            self.assertEqual(paths, sorted(paths))
+            self.assertTrue(any(e.HasField("snapshot") for e in events))
+            self.assertEqual(sorted(c.server_status().workers),
+                             sorted(w.address for w in self.workers))
+        # The comparison tells bakes apart: another seed (other sample
+        # sequences, same expectation) is outside its tolerance.
+        with Client(self.workers[1].address) as w:
+            other = w.bake(CORNELL, pathlib.Path(self.tmp.name) / "seed2", **dict(SETTINGS, seed=2))
+            got = read_exr(pathlib.Path(self.tmp.name) / "seed2" / "irradiance.exr")
+            self.assertFalse(np.allclose(got, self.reference, rtol=2e-4, atol=1e-5))
+            self.assertEqual(other.info.progress.paths, self.reference_info.progress.paths)
+
+    def test_refusals_at_submit(self):
+        with Client(self.coordinator.address) as c:
+            for extra, field in ((dict(shards=2, target_error=0.01, samples_per_texel=0),
+                                  "settings.target_error"),
+                                 (dict(shards=2, time_budget_s=5), "settings.time_budget_s"),
+                                 (dict(shards=2, adaptive=True), "settings.adaptive")):
+                with self.assertRaises(Exception) as e:
+                    self.submit(c, **extra)
+                self.assertIn(field, str(e.exception))
+        with Client(self.workers[0].address) as w:
+            with self.assertRaises(Exception) as e:
+                self.submit(w, shards=2)
+            self.assertIn("no workers", str(e.exception))
+
+    def test_cancel_cancels_the_shard_bakes(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            self.assertEqual(state_name(c.cancel_bake(info.bake_id).state), "CANCELLED")
+            for shard in running.shards:
+                with Client(shard.worker) as w:
+                    deadline = time.monotonic() + 10
+                    while state_name(w.get_bake(shard.worker_bake_id).state) != "CANCELLED":
+                        self.assertLess(time.monotonic(), deadline, f"shard {shard.index} still runs")
+                        time.sleep(0.05)
+
+    def test_worker_killed_shard_reassigned(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            victim = next(w for w in self.workers if w.address == running.shards[1].worker)
+            victim.process.kill()
+            victim.process.wait()
+            final = self.finish_and_compare(c, info.bake_id)
+            notes = "\n".join(final.notes)
+            self.assertIn("lost", notes)
+            self.assertIn("reassigned", notes)
+            self.assertEqual(final.shards[1].attempts, 2, final.shards)
+            self.assertNotEqual(final.shards[1].worker, victim.address)
+
+    def test_worker_restarted_within_grace_reattached(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            # The shard furthest from done: its worker dies mid-shard.
+            shard = min(running.shards, key=lambda s: s.progress.paths)
+            i = next(i for i, w in enumerate(self.workers) if w.address == shard.worker)
+            victim = self.workers[i]
+            victim.process.kill()
+            victim.process.wait()
+            # Back on the same data dir: it resumes the shard from its checkpoint.
+            self.workers[i] = self.restart(victim)
+            final = self.finish_and_compare(c, info.bake_id)
+            notes = "\n".join(final.notes)
+            self.assertIn("re-attached", notes)
+            self.assertEqual(final.shards[shard.index].attempts, 1, notes)
+
+    def test_coordinator_killed_and_restarted(self):
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            self.wait_running(c, info.bake_id)
+        self.coordinator.process.kill()
+        self.coordinator.process.wait()
+        type(self).coordinator = self.restart(self.coordinator)
+        with Client(self.coordinator.address) as c:
+            final = self.finish_and_compare(c, info.bake_id)
+            self.assertTrue(any("coordinator restarted" in n for n in final.notes), final.notes)
+            # Re-attached, not submitted again: one worker bake per shard.
+            self.assertTrue(all(s.attempts == 1 for s in final.shards), final.shards)
+
+    def test_mismatched_accumulators_rejected(self):
+        # An impostor: a finished shard bake of other settings (another seed)
+        # on the worker that runs shard 1, put in shard 1's place in the
+        # coordinator's state while the coordinator is down.
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+        self.coordinator.process.kill()
+        self.coordinator.process.wait()
+        worker = running.shards[1].worker
+        with Client(worker) as w:
+            impostor = self.submit(w, seed=7, shard_index=1, shard_count=2)
+            impostor = w.wait(impostor.bake_id)
+            self.assertEqual(state_name(impostor.state), "SUCCEEDED", impostor.error_message)
+        plan_path = self.coordinator.data_dir / "bakes" / info.bake_id / "shards.json"
+        plan = json.loads(plan_path.read_text())
+        plan["shards"][1].update(worker=worker, worker_bake_id=impostor.bake_id, downloaded=False)
+        plan_path.write_text(json.dumps(plan))
+        type(self).coordinator = self.restart(self.coordinator)
+        with Client(self.coordinator.address) as c:
+            final = self.finish_and_compare(c, info.bake_id)
+            notes = "\n".join(final.notes)
+            self.assertIn("rejected", notes)
+            self.assertIn("fingerprint", notes)
+            self.assertEqual(final.shards[1].attempts, 2, notes)
+
+
+if __name__ == "__main__":
+    unittest.main()
