@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pipeline/probe_spec.h"
 #include "pipeline/settings_schema.h"
 
 namespace luxel::pipeline {
@@ -143,6 +144,15 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))
     return bad("samples_per_texel",
                "no stopping rule: set samples, a time budget or a target error");
+  if (!s.probes.empty()) {
+    auto spec = probes::parse_probe_spec(s.probes);
+    if (!spec) return spec.status();
+  }
+  if (s.probe_window != "none" && s.probe_window != "hanning" && s.probe_window != "lanczos")
+    return bad("probe_window",
+               strprintf("'%s' is not one of none, hanning, lanczos", s.probe_window.c_str()));
+  if (!s.lightmap && s.probes.empty())
+    return bad("lightmap", "off bakes nothing without settings.probes");
   const bool has_reference = s.reference || !s.job.reference_bake_id.empty();
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",
