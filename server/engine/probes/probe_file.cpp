@@ -122,6 +122,20 @@ std::string encode_probe_json(const ProbeBake& b) {
   return j.dump(1);
 }
 
+std::string describe_probes_json(const ProbeBake& b) {
+  nlohmann::json j;
+  j["files"] = {"probes.bin", "probes.json"};
+  j["layout"] = nlohmann::json::parse(b.layout.describe_json());
+  j["basis"] = b.sh_count == 9 ? "sh2" : "sh1";
+  j["window"] = sh_window_name(b.window);
+  j["negative_irradiance"] = {{"raw", b.negative_raw}, {"windowed", b.negative_windowed}};
+  j["paths"] = b.bake.paths;
+  j["seconds"] = b.bake.seconds;
+  j["error"] = b.bake.error;
+  j["termination"] = pipeline::termination_name(b.bake.termination);
+  return j.dump();
+}
+
 Status write_probe_files(const ProbeBake& b, const std::string& dir) {
   for (const auto& [name, bytes] :
        {std::pair<std::string, std::string>{"probes.bin", encode_probe_bin(b)},
@@ -131,6 +145,20 @@ Status write_probe_files(const ProbeBake& b, const std::string& dir) {
     f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     if (!f) return internal_error("cannot write " + path);
   }
+  // The lightmap's manifest describes the probe layout too.
+  const std::string manifest = dir + "/manifest.json";
+  std::ifstream in(manifest);
+  if (!in) return Status::ok();
+  nlohmann::json m;
+  try {
+    m = nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    return internal_error("cannot read " + manifest + ": " + e.what());
+  }
+  m["probes"] = nlohmann::json::parse(describe_probes_json(b));
+  std::ofstream out(manifest, std::ios::binary | std::ios::trunc);
+  out << m.dump(2);
+  if (!out) return internal_error("cannot write " + manifest);
   return Status::ok();
 }
 
