@@ -301,13 +301,14 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     if (!window) return finish_failed(bake_id, window.status());
     ps.window = window.value();
     pipeline::BakeHooks probe_hooks = hooks;
+    // A probe set is no image: no snapshots of it.
+    probe_hooks.on_snapshot = nullptr;
+    probe_hooks.snapshot_interval_s = 0;
     if (lightmap) {
       probe_hooks.resume = nullptr;
       probe_hooks.on_checkpoint = nullptr;
       probe_hooks.checkpoint_interval_s = 0;
       probe_hooks.checkpoint_now = nullptr;
-      probe_hooks.on_snapshot = nullptr;
-      probe_hooks.snapshot_interval_s = 0;
       last_paths = 0;
     }
     auto pb = probes::bake_probes(*scene.value(), settings.value(), ps, *ctx, probe_hooks);

@@ -477,6 +477,29 @@ TEST_F(ProbeTest, VisibilityStopsLeaksThroughAThinWall) {
   std::printf("  SDK query with visibility: %.0f ns per query (checksum %g)\n", ns, double(acc));
 }
 
+TEST_F(ProbeTest, ProgressiveSolverAndErrorStopRule) {
+  // The progressive least-squares solver (Listing 7.1) on the sphere
+  // converges to the projection's answer for SH (an orthonormal basis);
+  // the target-error rule stops a probe bake as it stops a lightmap.
+  const scene::Scene s = sky_only();
+  auto st = settings(0, 1);
+  st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
+  st.lights.sky.intensity = 1.0f;
+  st.target_error = 0.01;
+  st.encodings.solver = pipeline::EncodingSolver::kProgressive;
+  const auto p = scatter(32, {-1, -1, -1}, {1, 1, 1});
+  const probes::ProbeBake b = bake(s, st, file_probes(p));
+  ASSERT_EQ(b.count(), p.size());
+  EXPECT_EQ(b.bake.termination, pipeline::Termination::kError);
+  EXPECT_LE(b.bake.error, 0.01);
+  const MeanTest m = mean_test(
+      b.count(), [&](size_t i) { return double(b.sh(i)[0]); },
+      [&](size_t) { return std::sqrt(4 * M_PI); });
+  std::printf("  progressive c00 ratio %.5f z %.2f after %.0f samples per probe (error %.4f)\n",
+              m.mean_ratio, m.z, b.bake.mean_spp, b.bake.error);
+  EXPECT_NEAR(m.mean_ratio, 1.0, 0.01);
+}
+
 TEST_F(ProbeTest, ProbeFilesRoundTripThroughTheSdk) {
   const scene::Scene s = sky_only();
   auto st = settings(64, 1);
