@@ -1,6 +1,7 @@
 #include "probes/probe_file.h"
 
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -137,6 +138,9 @@ std::string describe_probes_json(const ProbeBake& b) {
 }
 
 Status write_probe_files(const ProbeBake& b, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return internal_error("cannot create " + dir + ": " + ec.message());
   for (const auto& [name, bytes] :
        {std::pair<std::string, std::string>{"probes.bin", encode_probe_bin(b)},
         {"probes.json", encode_probe_json(b)}}) {

@@ -47,7 +47,7 @@ std::string encode_probe_bin(const ProbeBake& b);
 // probes.json: the layout, conventions, units, window, negative-irradiance
 // figures and every probe's position, flags, irradiance and coefficients.
 std::string encode_probe_json(const ProbeBake& b);
-// Writes both files into `dir`, and when `dir` holds a lightmap's
+// Writes both files into `dir` (created if needed), and when `dir` holds a lightmap's
 // manifest.json, adds a "probes" object to it (layout, files, basis,
 // window); INTERNAL naming the file on an I/O error.
 Status write_probe_files(const ProbeBake& b, const std::string& dir);
