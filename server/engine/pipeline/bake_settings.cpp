@@ -71,6 +71,18 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   // Only when not the default: bake fingerprints (checkpoint resume) and
   // manifests of default bakes stay what they were before the setting.
   if (direct != DirectLight::kSampled) m["direct"] = direct_light_name(direct);
+  if (!probes.empty()) {
+    m["probes"] = probes;
+    m["probe_sh_order"] = std::to_string(probe_sh_order);
+    m["probe_window"] = probe_window;
+    if (!probe_positions.empty()) {
+      // FNV-1a of the positions: fingerprints see a changed list.
+      uint64_t h = 1469598103934665603ull;
+      for (unsigned char c : probe_positions) h = (h ^ c) * 1099511628211ull;
+      m["probe_positions_fnv1a"] = strprintf("%016llx", static_cast<unsigned long long>(h));
+    }
+  }
+  if (!lightmap) m["lightmap"] = "off";
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
   if (!node_placements.empty()) {
