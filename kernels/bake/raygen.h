@@ -95,6 +95,11 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   path.seed = seed;
   path.depth = 0;
   path.sample_pos = (float2)((float)tx + offset.x, (float)ty + offset.y);
+#if LUX_PROBES
+  /* The first hit's distance, set by shade; a path that never gets there
+   * counts as a miss. */
+  path.sample_pos.x = INFINITY;
+#endif
   path.pad = (uint)tri;
   path.radiance = (float4)(0.0f);
   path.prev_pos = (float4)(s.p, 0.0f);
