@@ -505,6 +505,29 @@ TEST_F(ProbeTest, ProgressiveSolverAndErrorStopRule) {
             4.5);
 }
 
+TEST_F(ProbeTest, ProbeStateBakedInTilesUnderASmallBudget) {
+  // 4096 probes x 4.3 KB of state do not fit an 8 MiB budget beside the
+  // path buffers: the probes are baked in tiles, one after another, as
+  // lightmap texels are (pipeline/tile_plan.h), and stay right.
+  const float a = 0.3f;
+  const scene::Scene s = testing::furnace_box(a, 1.0f);
+  auto st = settings(32, 8);
+  st.paths_per_iteration = 8192;
+  st.device_memory_budget_mib = 8;
+  probes::ProbeBakeSettings ps;
+  ps.placement = probes::parse_probe_spec("grid:0.1:box=-0.75,-0.75,-0.75,0.75,0.75,0.75").value();
+  const probes::ProbeBake b = bake(s, st, ps);
+  ASSERT_EQ(b.count(), 4096u);
+  std::printf("  %zu probes in %zu tiles\n", b.count(), b.bake.tiles);
+  EXPECT_GT(b.bake.tiles, 1u);
+  EXPECT_EQ(b.bake.min_spp, 32u);
+  const MeanTest c = mean_test(
+      b.count(), [&](size_t i) { return double(b.sh(i)[0]); },
+      [&](size_t) { return std::sqrt(4 * M_PI) / (1 - a); });
+  std::printf("  tiled furnace c00 ratio %.5f z %.2f\n", c.mean_ratio, c.z);
+  EXPECT_LT(std::fabs(c.z), 4.5);
+}
+
 TEST_F(ProbeTest, ProbeFilesRoundTripThroughTheSdk) {
   const scene::Scene s = sky_only();
   auto st = settings(64, 1);
