@@ -19,6 +19,7 @@
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
 #include "pipeline/resource_estimate.h"
+#include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
 #include "progress_bar.h"
@@ -117,6 +118,17 @@ static int run_probes(const BakeArgs& a, const scene::Scene& scene, device::Cont
       return 1;
     }
     ps.placement.file_contents = text.str();
+  }
+  if (ps.placement.mode == probes::PlacementMode::kNodes) {
+    std::ifstream f(a.scene, std::ios::binary);
+    std::stringstream bytes;
+    bytes << f.rdbuf();
+    auto nodes = probes::probe_nodes_json(bytes.str());
+    if (!nodes) {
+      std::fprintf(stderr, "luxel bake: %s\n", nodes.status().message().c_str());
+      return 2;
+    }
+    ps.placement.file_contents = nodes.value();
   }
   ps.basis = a.settings.probe_sh_order == 1 ? "sh1" : "sh2";
   ps.window = probes::parse_sh_window(a.settings.probe_window).value();

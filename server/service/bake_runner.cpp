@@ -8,6 +8,7 @@
 #include "output/reference_exr.h"
 #include "pipeline/bake.h"
 #include "pipeline/bake_outputs.h"
+#include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
 #include "service/files.h"
@@ -296,6 +297,14 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     probes::ProbeBakeSettings ps;
     ps.placement = spec.value();
     ps.placement.file_contents = settings->probe_positions;
+    if (ps.placement.mode == probes::PlacementMode::kNodes) {
+      // The nodes tagged in the stored scene file.
+      auto file = read_whole_file(scenes_.main_file_path(scene_info.value()));
+      if (!file) return finish_failed(bake_id, file.status());
+      auto nodes = probes::probe_nodes_json(file.value());
+      if (!nodes) return finish_failed(bake_id, nodes.status());
+      ps.placement.file_contents = nodes.value();
+    }
     ps.basis = settings->probe_sh_order == 1 ? "sh1" : "sh2";
     auto window = probes::parse_sh_window(settings->probe_window);
     if (!window) return finish_failed(bake_id, window.status());

@@ -124,5 +124,38 @@ TEST(ServiceProbes, LightmapAndProbesInOneJob) {
   EXPECT_NE(st.error_message().find("settings.probes"), std::string::npos) << st.error_message();
 }
 
+TEST(ServiceProbes, ProbesAtTaggedGltfNodes) {
+  // The Cornell box with two nodes tagged extras.luxelProbe: the daemon
+  // reads them from the stored scene file.
+  TempDir dir;
+  Daemon daemon(dir.path() + "/data");
+  json doc = json::parse(read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"));
+  const size_t n = doc["nodes"].size();
+  doc["nodes"].push_back({{"translation", {0, 1, 0}}, {"extras", {{"luxelProbe", true}}}});
+  doc["nodes"].push_back({{"translation", {0.2, 0.5, -0.2}}, {"extras", {{"luxelProbe", true}}}});
+  doc["scenes"][doc.value("scene", 0)]["nodes"].push_back(n);
+  doc["scenes"][doc.value("scene", 0)]["nodes"].push_back(n + 1);
+  v1::SceneInfo info;
+  auto up =
+      upload_scene(daemon, "cb_probes.gltf", v1::SCENE_FORMAT_GLTF, doc.dump(),
+                   {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
+  ASSERT_TRUE(up.ok()) << up.error_message();
+  v1::BakeSettings s = small_settings(32);
+  s.set_probes("nodes");
+  s.set_lightmap(false);
+  const v1::BakeInfo a = submit_bake(daemon, info.scene_id(), s);
+  const v1::BakeInfo ra = wait_for_bake(daemon, a.bake_id(), is_finished);
+  ASSERT_EQ(ra.state(), v1::BAKE_STATE_SUCCEEDED) << ra.error_message() << daemon.log();
+  const json meta = json::parse(fetch(daemon, a.bake_id(), "probes.json"));
+  EXPECT_EQ(meta["layout"]["mode"], "nodes");
+  ASSERT_EQ(meta["probes"].size(), 2u);
+  // The untagged Cornell box: the bake fails and names the setting.
+  const std::string plain = upload_cornell_box(daemon);
+  const v1::BakeInfo b = submit_bake(daemon, plain, s);
+  const v1::BakeInfo rb = wait_for_bake(daemon, b.bake_id(), is_finished);
+  EXPECT_EQ(rb.state(), v1::BAKE_STATE_FAILED);
+  EXPECT_NE(rb.error_message().find("luxelProbe"), std::string::npos) << rb.error_message();
+}
+
 }  // namespace
 }  // namespace luxel::test

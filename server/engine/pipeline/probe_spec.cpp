@@ -14,6 +14,8 @@ const char* placement_mode_name(PlacementMode m) {
       return "file";
     case PlacementMode::kAdaptive:
       return "adaptive";
+    case PlacementMode::kNodes:
+      return "nodes";
   }
   return "?";
 }
@@ -21,8 +23,9 @@ const char* placement_mode_name(PlacementMode m) {
 namespace {
 
 Status bad_spec(const std::string& spec, const std::string& why) {
-  return invalid_argument("settings.probes: '" + spec + "': " + why +
-                          " (grid:S, grid:S:box=x0,y0,z0,x1,y1,z1, file:P.json, adaptive:S)");
+  return invalid_argument(
+      "settings.probes: '" + spec + "': " + why +
+      " (grid:S, grid:S:box=x0,y0,z0,x1,y1,z1, file:P.json, adaptive:S, nodes)");
 }
 
 Result<float> parse_float(const std::string& text) {
@@ -40,6 +43,10 @@ Result<float> parse_float(const std::string& text) {
 
 Result<PlacementSettings> parse_probe_spec(const std::string& spec) {
   PlacementSettings s;
+  if (spec == "nodes") {
+    s.mode = PlacementMode::kNodes;
+    return s;
+  }
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) return bad_spec(spec, "no mode");
   const std::string mode = spec.substr(0, colon), rest = spec.substr(colon + 1);
@@ -80,6 +87,7 @@ Result<PlacementSettings> parse_probe_spec(const std::string& spec) {
 
 std::string describe_probe_spec(const PlacementSettings& s) {
   if (s.mode == PlacementMode::kFile) return "file:" + s.file;
+  if (s.mode == PlacementMode::kNodes) return "nodes";
   std::string out = strprintf("%s:%g", placement_mode_name(s.mode), double(s.spacing));
   if (s.has_box)
     out +=

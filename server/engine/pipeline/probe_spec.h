@@ -11,18 +11,22 @@
 
 namespace luxel::probes {
 
-enum class PlacementMode { kGrid, kFile, kAdaptive };
-const char* placement_mode_name(PlacementMode m);  // "grid", "file", "adaptive"
+enum class PlacementMode { kGrid, kFile, kAdaptive, kNodes };
+// "grid", "file", "adaptive", "nodes"
+const char* placement_mode_name(PlacementMode m);
 
 struct PlacementSettings {
   PlacementMode mode = PlacementMode::kGrid;
   float spacing = 0.5f;  // grid and adaptive: world units between probes
   bool has_box = false;  // grid and adaptive: over `box` instead of the scene bounds
   Bounds3 box;
-  std::string file;           // file mode: the path as given (for the manifest)
-  std::string file_contents;  // file mode: the JSON (the CLI reads the file, the service ships it)
-  float keep_distance = 0;    // adaptive: 0 = 1.5 x spacing
-  int test_rays = 128;        // classification rays per probe
+  std::string file;  // file mode: the path as given (for the manifest)
+  // file mode: the JSON (the CLI reads the file, the service ships it);
+  // nodes mode: the same list, of the glTF nodes tagged extras.luxelProbe
+  // (probes/gltf_nodes.h, filled by whoever holds the scene file).
+  std::string file_contents;
+  float keep_distance = 0;  // adaptive: 0 = 1.5 x spacing
+  int test_rays = 128;      // classification rays per probe
   float inside_fraction = 0.25f;
   size_t max_probes = size_t{1} << 20;
 };

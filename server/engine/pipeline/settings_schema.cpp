@@ -567,7 +567,8 @@ std::vector<Setting> make_schema() {
                .help = "light probes baked with (or instead of) the lightmap: grid:S (spacing S "
                        "over the scene bounds), grid:S:box=x0,y0,z0,x1,y1,z1, file:P.json (a "
                        "list of [x,y,z]), adaptive:S (grid kept near geometry, probes moved out "
-                       "of closed geometry); empty: none",
+                       "of closed geometry), nodes (glTF nodes with extras.luxelProbe); empty: "
+                       "none",
                .flag = "--probes",
                .metavar = "SPEC",
                .default_value = SettingValue::of_text(""),

@@ -114,7 +114,9 @@ class Classifier {
 };
 
 Status read_file_positions(const PlacementSettings& s, std::vector<Vec3>& out) {
-  const std::string where = "settings.probes file '" + s.file + "'";
+  const std::string where = s.mode == PlacementMode::kNodes
+                                ? std::string("settings.probes 'nodes'")
+                                : "settings.probes file '" + s.file + "'";
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(s.file_contents);
@@ -148,7 +150,7 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
   ProbeLayout out;
   out.mode = s.mode;
   float cap = s.spacing * 2.0f;
-  if (s.mode == PlacementMode::kFile) {
+  if (s.mode == PlacementMode::kFile || s.mode == PlacementMode::kNodes) {
     LUXEL_RETURN_IF_ERROR(read_file_positions(s, out.positions));
     if (out.positions.size() > s.max_probes)
       return resource_exhausted(strprintf("settings.probes: %zu probes, at most %zu",

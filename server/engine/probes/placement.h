@@ -5,6 +5,8 @@
 //   grid:S:box=x0,y0,z0,x1,y1,z1   the same over a given box;
 //   file:P.json       user positions: [[x,y,z], ...], or {"probes": [...]}
 //                     whose entries are [x,y,z] or {"position": [x,y,z]};
+//   nodes             the glTF nodes tagged extras.luxelProbe = true
+//                     (gltf_nodes.h; the caller fills file_contents);
 //   adaptive:S        the grid of spacing S, keeping only probes within
 //                     keep_distance (default 1.5 S) of geometry, and moving
 //                     probes that sit inside closed geometry out of it.

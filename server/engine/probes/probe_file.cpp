@@ -19,7 +19,17 @@ void put(std::string& out, T v) {
 }
 
 uint32_t mode_code(PlacementMode m) {
-  return m == PlacementMode::kGrid ? 0u : (m == PlacementMode::kFile ? 1u : 2u);
+  switch (m) {
+    case PlacementMode::kGrid:
+      return 0u;
+    case PlacementMode::kFile:
+      return 1u;
+    case PlacementMode::kAdaptive:
+      return 2u;
+    case PlacementMode::kNodes:
+      return 3u;
+  }
+  return 0u;
 }
 
 const char* kConventions =

@@ -14,7 +14,7 @@
 //     f32   spacing        grid spacing, world units
 //     u32   window         0 none, 1 hanning, 2 lanczos (applied at evaluation)
 //     f32   sigma[3]       the window's sigma_0..2
-//     u32   mode           0 grid, 1 file, 2 adaptive
+//     u32   mode           0 grid, 1 file, 2 adaptive, 3 nodes (glTF extras)
 //     u32   record_bytes   bytes of one probe record
 //     u32   reserved[3]    0
 //   grid: i32 grid_index[dims0 * dims1 * dims2]   probe of cell i + d0 (j + d1 k), or -1

@@ -23,10 +23,12 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <nlohmann/json.hpp>
 
 #include "device/context.h"
 #include "luxel_lightmap.h"
 #include "pipeline/bake.h"
+#include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
 #include "shared/bases.h"
@@ -144,6 +146,33 @@ TEST(ProbeSpec, ParsesEveryModeAndNamesTheField) {
     ASSERT_FALSE(r) << bad;
     EXPECT_NE(r.status().message().find("settings.probes"), std::string::npos) << bad;
   }
+}
+
+TEST(ProbeNodes, TaggedGltfNodesGiveWorldPositions) {
+  // Parent translated by (1, 0, 0) and rotated 90 degrees about +z; its
+  // tagged child at local (0, 2, 0) lands at (1, 0, 0) + Rz(90)(0, 2, 0) =
+  // (-1, 0, 0); a tagged node given by matrix; an untagged node.
+  const double h = std::sqrt(0.5);
+  const std::string gltf = strprintf(
+      R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0,2,3]}],"nodes":[
+      {"translation":[1,0,0],"rotation":[0,0,%.17g,%.17g],"children":[1]},
+      {"translation":[0,2,0],"extras":{"luxelProbe":true}},
+      {"matrix":[1,0,0,0, 0,1,0,0, 0,0,1,0, 3,4,5,1],"extras":{"luxelProbe":true}},
+      {"translation":[9,9,9],"extras":{"luxelProbe":false}}]})",
+      h, h);
+  auto j = probes::probe_nodes_json(gltf);
+  ASSERT_TRUE(j) << j.status().to_string();
+  const auto list = nlohmann::json::parse(j.value());
+  ASSERT_EQ(list.size(), 2u) << j.value();
+  // Depth-first from the last root: the matrix node, then the child.
+  EXPECT_NEAR(list[0][0].get<double>(), 3, 1e-9);
+  EXPECT_NEAR(list[0][2].get<double>(), 5, 1e-9);
+  EXPECT_NEAR(list[1][0].get<double>(), -1, 1e-9);
+  EXPECT_NEAR(list[1][1].get<double>(), 0, 1e-9);
+  EXPECT_NEAR(list[1][2].get<double>(), 0, 1e-9);
+  EXPECT_FALSE(probes::probe_nodes_json(R"({"scenes":[{"nodes":[0]}],"nodes":[{}]})"));
+  EXPECT_FALSE(probes::probe_nodes_json("not json"));
+  EXPECT_EQ(probes::parse_probe_spec("nodes").value().mode, probes::PlacementMode::kNodes);
 }
 
 TEST(ShWindow, SigmaFactorsFollowSloan) {
