@@ -339,4 +339,204 @@ LUXEL_FN float luxel_ad_lut_sample(LUXEL_PTR const float* lut, int size_ndotv, i
   return (a + (b - a) * fu) + ((c + (d - c) * fu) - (a + (b - a) * fu)) * fw;
 }
 
+/* ------------------------------------------------------------ light probes
+ * Irradiance from a baked probe set (probes.bin, documented in the bake's
+ * probes.json and server/engine/probes/probe_file.h), DDGI style (Majercik
+ * et al. 2019, "Dynamic Diffuse Global Illumination with Ray-Traced
+ * Irradiance Fields"): the 8 probes of the grid cell around the point,
+ * trilinear weights, a smooth back-face weight, and with use_visibility the
+ * Chebyshev test of the point's distance against each probe's distance
+ * moments in the point's direction (so light does not leak through walls).
+ * Probes flagged inside geometry, and cells adaptive placement left empty,
+ * get weight 0; the rest renormalise. Layouts without a grid (user
+ * positions) weigh every probe by 1 / d^2 instead of trilinearly.
+ * C and C++ only (the parser reads host memory). */
+#ifndef LUXEL_OPENCL
+#include <stddef.h>
+#include <string.h>
+
+#define LUXEL_PROBE_INSIDE 2u
+
+typedef struct LuxelProbeSet {
+  unsigned count, sh_count, vis_side, is_grid, window, mode, record_floats;
+  int dims[3];
+  float origin[3], spacing, sigma[3];
+  const int* grid_index; /* dims[0] * dims[1] * dims[2] entries, or NULL */
+  const float* records;  /* count * record_floats: see luxel_probe_* below */
+} LuxelProbeSet;
+
+/* Parses probes.bin held in memory (4-byte aligned; the set points into it).
+ * Returns 0, or -1 for a wrong magic/version/size. */
+LUXEL_FN int luxel_probes_parse(const void* data, size_t bytes, LuxelProbeSet* set) {
+  const unsigned char* b = (const unsigned char*)data;
+  unsigned h[24];
+  if (bytes < 96 || memcmp(b, "LUXPROBE", 8) != 0) return -1;
+  memcpy(h, b + 8, 88);
+  if (h[0] != 1u || h[1] != 96u) return -1;
+  set->count = h[2];
+  set->sh_count = h[3];
+  set->vis_side = h[4];
+  set->is_grid = h[5] & 1u;
+  memcpy(set->dims, &h[6], 12);
+  memcpy(set->origin, &h[9], 12);
+  memcpy(&set->spacing, &h[12], 4);
+  set->window = h[13];
+  memcpy(set->sigma, &h[14], 12);
+  set->mode = h[17];
+  set->record_floats = h[18] / 4u;
+  {
+    const size_t cells =
+        set->is_grid ? (size_t)set->dims[0] * (size_t)set->dims[1] * (size_t)set->dims[2] : 0;
+    const size_t need = 96 + cells * 4 + (size_t)set->count * set->record_floats * 4;
+    if (bytes < need ||
+        set->record_floats != 10u + 3u * set->sh_count + 2u * set->vis_side * set->vis_side)
+      return -1;
+    set->grid_index = set->is_grid ? (const int*)(const void*)(b + 96) : (const int*)0;
+    set->records = (const float*)(const void*)(b + 96 + cells * 4);
+  }
+  return 0;
+}
+
+LUXEL_FN const float* luxel_probe_record(const LuxelProbeSet* set, unsigned probe) {
+  return set->records + (size_t)probe * set->record_floats;
+}
+
+/* The probe's irradiance about n (RGB), with the file's SH window. */
+LUXEL_FN void luxel_probe_sh_irradiance(const LuxelProbeSet* set, unsigned probe, float nx,
+                                        float ny, float nz, float rgb[3]) {
+  const float* sh = luxel_probe_record(set, probe) + 10;
+  int c, i;
+  for (c = 0; c < 3; ++c) {
+    float e = 0.0f;
+    for (i = 0; i < (int)set->sh_count; ++i) {
+      const int l = i == 0 ? 0 : (i < 4 ? 1 : 2);
+      const float a = l == 0 ? LUXEL_PI : (l == 1 ? 2.0f * LUXEL_PI / 3.0f : 0.25f * LUXEL_PI);
+      e += set->sigma[l] * a * sh[i * 3 + c] * luxel_sh_basis(i, nx, ny, nz);
+    }
+    rgb[c] = e;
+  }
+}
+
+/* The octahedral bin (z up) of unit direction d, as the bake's shared/probe.h. */
+LUXEL_FN int luxel_probe_vis_bin(float x, float y, float z, int side) {
+  const float l1 = fabsf(x) + fabsf(y) + fabsf(z);
+  float px = l1 > 0.0f ? x / l1 : 0.0f, py = l1 > 0.0f ? y / l1 : 0.0f;
+  int ix, iy;
+  if (z < 0.0f) {
+    const float qx = (1.0f - fabsf(py)) * (px >= 0.0f ? 1.0f : -1.0f);
+    const float qy = (1.0f - fabsf(px)) * (py >= 0.0f ? 1.0f : -1.0f);
+    px = qx;
+    py = qy;
+  }
+  ix = (int)((px * 0.5f + 0.5f) * (float)side);
+  iy = (int)((py * 0.5f + 0.5f) * (float)side);
+  ix = ix < 0 ? 0 : (ix > side - 1 ? side - 1 : ix);
+  iy = iy < 0 ? 0 : (iy > side - 1 ? side - 1 : iy);
+  return iy * side + ix;
+}
+
+/* DDGI's weight of one probe for shading point p with normal n (trilinear
+ * or distance weight `base` applied by the caller). */
+LUXEL_FN float luxel_probe_weight(const LuxelProbeSet* set, unsigned probe, float px, float py,
+                                  float pz, float nx, float ny, float nz, float bias,
+                                  int use_visibility) {
+  const float* r = luxel_probe_record(set, probe);
+  unsigned flags;
+  float dx, dy, dz, d, w, wb;
+  memcpy(&flags, &r[3], 4);
+  if (flags & LUXEL_PROBE_INSIDE) return 0.0f;
+  dx = r[0] - px;
+  dy = r[1] - py;
+  dz = r[2] - pz;
+  d = LUXEL_SQRT(dx * dx + dy * dy + dz * dz);
+  /* Smooth back-face term: probes behind the surface count less. */
+  wb = d > 0.0f ? (luxel_dot(dx, dy, dz, nx, ny, nz) / d + 1.0f) * 0.5f : 1.0f;
+  w = wb * wb + 0.2f;
+  if (use_visibility) {
+    /* From the probe to the point, lifted off the surface by `bias`. */
+    const float qx = px + nx * bias - r[0], qy = py + ny * bias - r[1], qz = pz + nz * bias - r[2];
+    const float dq = LUXEL_SQRT(qx * qx + qy * qy + qz * qz);
+    if (dq > 0.0f) {
+      const int side = (int)set->vis_side;
+      const float* vis = r + 10 + 3 * set->sh_count;
+      const int bin = luxel_probe_vis_bin(qx / dq, qy / dq, qz / dq, side);
+      const float mean = vis[bin * 2], mean2 = vis[bin * 2 + 1];
+      if (dq > mean) {
+        const float var = fabsf(mean2 - mean * mean);
+        const float t = dq - mean;
+        float cheb = var / (var + t * t);
+        cheb = cheb * cheb * cheb;
+        w *= cheb;
+      }
+    }
+    w = w > 1e-6f ? w : 1e-6f;
+    /* DDGI's crush of weights under 0.2 (a light cut). */
+    if (w < 0.2f) w *= w * w / (0.2f * 0.2f);
+  }
+  return w;
+}
+
+/* Irradiance (RGB, W/m^2) at point p with unit normal n. Returns the sum of
+ * weights (0: no usable probe; rgb is then 0). */
+LUXEL_FN float luxel_probes_irradiance(const LuxelProbeSet* set, float px, float py, float pz,
+                                       float nx, float ny, float nz, int use_visibility,
+                                       float rgb[3]) {
+  float sum = 0.0f, e[3];
+  unsigned k;
+  rgb[0] = rgb[1] = rgb[2] = 0.0f;
+  if (set->is_grid) {
+    const float p[3] = {px, py, pz};
+    int base[3], a;
+    float f[3];
+    for (a = 0; a < 3; ++a) {
+      float u = (p[a] - set->origin[a]) / set->spacing;
+      int i;
+      const int hi = set->dims[a] > 1 ? set->dims[a] - 2 : 0;
+      i = (int)floorf(u);
+      i = i < 0 ? 0 : (i > hi ? hi : i);
+      u -= (float)i;
+      f[a] = set->dims[a] > 1 ? (u < 0.0f ? 0.0f : (u > 1.0f ? 1.0f : u)) : 0.0f;
+      base[a] = i;
+    }
+    for (k = 0; k < 8; ++k) {
+      const int c[3] = {base[0] + (int)(k & 1u), base[1] + (int)((k >> 1) & 1u),
+                        base[2] + (int)((k >> 2) & 1u)};
+      float tri = 1.0f, w;
+      int probe;
+      if (c[0] >= set->dims[0] || c[1] >= set->dims[1] || c[2] >= set->dims[2]) continue;
+      for (a = 0; a < 3; ++a) tri *= (k >> a) & 1u ? f[a] : 1.0f - f[a];
+      probe = set->grid_index[c[0] + set->dims[0] * (c[1] + set->dims[1] * c[2])];
+      if (probe < 0 || tri <= 0.0f) continue;
+      w = tri * luxel_probe_weight(set, (unsigned)probe, px, py, pz, nx, ny, nz,
+                                   0.1f * set->spacing, use_visibility);
+      if (w <= 0.0f) continue;
+      luxel_probe_sh_irradiance(set, (unsigned)probe, nx, ny, nz, e);
+      rgb[0] += w * e[0];
+      rgb[1] += w * e[1];
+      rgb[2] += w * e[2];
+      sum += w;
+    }
+  } else {
+    for (k = 0; k < set->count; ++k) {
+      const float* r = luxel_probe_record(set, k);
+      const float dx = r[0] - px, dy = r[1] - py, dz = r[2] - pz;
+      const float d2 = dx * dx + dy * dy + dz * dz + 1e-8f;
+      const float w = luxel_probe_weight(set, k, px, py, pz, nx, ny, nz, 0.0f, use_visibility) / d2;
+      if (w <= 0.0f) continue;
+      luxel_probe_sh_irradiance(set, k, nx, ny, nz, e);
+      rgb[0] += w * e[0];
+      rgb[1] += w * e[1];
+      rgb[2] += w * e[2];
+      sum += w;
+    }
+  }
+  if (sum > 0.0f) {
+    rgb[0] /= sum;
+    rgb[1] /= sum;
+    rgb[2] /= sum;
+  }
+  return sum;
+}
+#endif /* !LUXEL_OPENCL */
+
 #endif /* LUXEL_LIGHTMAP_H */

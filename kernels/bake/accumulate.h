@@ -10,6 +10,7 @@
 #if LUX_BASIS
 #include "bake/basis.h"
 #endif
+#include "shared/probe.h"
 
 /* One work-item per covered texel: exclusive access, so the running mean and
  * variance use Welford's algorithm (weighted form, West 1979) without atomics.
@@ -49,7 +50,13 @@ inline int lux_path_sample(__global const LuxPath* paths,
 #if LUX_BASIS
   const LuxBasisSample bs = basis_samples[p];
   *nee = bs.nee.xyz * bs.nee.w;
+#if LUX_PROBES
+  /* A probe's scalar irradiance (the integral of L over the sphere, the
+   * L0 moment times sqrt(4 pi)): the figure its error estimate follows. */
+  *irradiance = *l * LUX_BASIS_MEASURE + *nee * LUX_BASIS_NEE_SCALE;
+#else
   *irradiance = *l * (LUX_TWO_PI_F * bs.dir_world.w) + *nee * fmax(bs.nee_world.w, 0.0f);
+#endif
   if (!lux_finite3(*irradiance) || !lux_finite3(*nee)) return 0;
 #else
   *nee = (float3)(0.0f);
@@ -93,6 +100,23 @@ inline uint lux_covered_slot(__global const uint* covered, uint n, uint texel) {
       hi = mid;
   }
   return lo < n && covered[lo] == texel ? lo : 0xFFFFFFFFu;
+}
+#endif
+
+#if LUX_PROBES
+/* DDGI visibility moments of a probe (shared/probe.h): the distance to the
+ * first hit along the path's first direction, capped at the probe's maximum
+ * distance (probes[].w; a miss counts as that cap), into its direction bin:
+ * running means of t and t^2 and the bin's sample count. The bins follow
+ * the encodings in the probe's state record. */
+inline void lux_probe_visibility(__global float4* bins, float3 dir, float t, float cap) {
+  const float d = fmin(t, cap);
+  __global float4* b = bins + lux_probe_vis_bin(dir.x, dir.y, dir.z, LUX_PROBE_VIS_SIDE);
+  float4 v = *b;
+  v.z += 1.0f;
+  v.x += (d - v.x) / v.z;
+  v.y += (d * d - v.y) / v.z;
+  *b = v;
 }
 #endif
 
@@ -156,6 +180,11 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
   if (!touched && !own) return;
 #else
   for (uint p = first; p < end; ++p) {
+#if LUX_PROBES
+    lux_probe_visibility(
+        basis_state + (size_t)c * params.basis_stride + params.basis_stride - LUX_PROBE_VIS_BINS,
+        basis_samples[p].dir_world.xyz, paths[p].sample_pos.x, probes[texel].w);
+#endif
     float3 e, l, nee;
     if (!lux_path_sample(paths, basis_samples, p, params.clamp_luminance, &e, &l, &nee)) {
       ++dropped;

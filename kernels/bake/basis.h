@@ -27,6 +27,22 @@
 
 #define LUX_TWO_PI_F 6.28318530717958647692f
 
+/* The measure of the sampled domain and the scale of the light sample's
+ * moment. Texels: the hemisphere (2 pi), light sample as is. Probes
+ * (raygen.h): each path estimates the hemisphere of a random normal, twice
+ * which is an unbiased estimate over the sphere, so first segments weigh
+ * 4 pi (their directions are uniform over the sphere) and the light sample
+ * twice. */
+#if LUX_PROBES
+#define LUX_BASIS_MEASURE (2.0f * LUX_TWO_PI_F)
+#define LUX_BASIS_NEE_SCALE 2.0f
+#define LUX_PROBE_DOMAIN 1
+#else
+#define LUX_PROBE_DOMAIN 0
+#define LUX_BASIS_MEASURE LUX_TWO_PI_F
+#define LUX_BASIS_NEE_SCALE 1.0f
+#endif
+
 /* The texel's tangent axis: the world direction of increasing lightmap u on
  * the triangle (dP/du from its atlas UVs), projected onto the tangent plane
  * of n. A triangle degenerate in UV space keeps `fallback`. */
@@ -106,8 +122,8 @@ inline void lux_basis_accumulate(__global float4* state, __global const LuxEncod
       head.x += w;
       const float scale = w / head.x;
       for (int i = 0; i < e.count; ++i) {
-        float3 moment = LUX_TWO_PI_F * bd[i] * l;
-        if (has_nee) moment += bl[i] * nee;
+        float3 moment = LUX_BASIS_MEASURE * bd[i] * l;
+        if (has_nee) moment += (LUX_BASIS_NEE_SCALE * bl[i]) * nee;
         float4 lobe = st[1 + i];
         lobe.xyz += (moment - lobe.xyz) * scale;
         lobe.w += (bd[i] * bd[i] - lobe.w) * scale;
@@ -118,9 +134,10 @@ inline void lux_basis_accumulate(__global float4* state, __global const LuxEncod
     }
     float3 extra[LUX_ENC_MAX_LOBES];
     for (int i = 0; i < e.count; ++i)
-      extra[i] = has_nee ? bl[i] * nee * (1.0f / LUX_TWO_PI_F) : (float3)(0.0f);
+      extra[i] = has_nee ? bl[i] * nee * (LUX_BASIS_NEE_SCALE / LUX_BASIS_MEASURE) : (float3)(0.0f);
     lux_progressive_step(st, &e, bd, l, extra, w, acceleration);
-    if (!e.hemisphere_fit) {
+    /* Probes sample the whole sphere already. */
+    if (!e.hemisphere_fit && !LUX_PROBE_DOMAIN) {
       /* The sphere fit sees a zero-radiance sample in the opposite direction
        * after each real one (§7.3.1, last paragraph). */
       for (int i = 0; i < e.count; ++i) extra[i] = (float3)(0.0f);

@@ -10,6 +10,7 @@
 #include "bake/surface.h"
 #include "primitives/offset_buffer.h"
 #include "shared/bake_args.h"
+#include "shared/probe.h"
 #include "shared/sample_info.h"
 #include "shared/shard.h"
 #if LUX_BASIS
@@ -30,6 +31,32 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
       lux_shard_sample_index(spp[slot] + (gid - first), params.shard_index, params.shard_count);
   const uint seed = lux_texel_seed(texel, params.bake_seed);
 
+#if LUX_PROBES
+  /* Probe domain: the "texel" is a probe, a point in free space whose
+   * domain is the whole sphere. Each path draws a random sensor normal n,
+   * uniform over the sphere, and is then exactly the texel estimator of the
+   * directional encodings about n: first segment uniform over n's
+   * hemisphere, NEE with MIS against it. That path estimates the moments
+   * over H(n); since every direction lies in H(n) with probability 1/2, twice
+   * it is an unbiased estimate over the sphere (basis.h, accumulate.h), and
+   * the first directions are uniform over the sphere. Keeping the texel
+   * sensor keeps every MIS weight of scatter.h and shade.h consistent. */
+  const float4 probe = probes[texel];
+  const float3 probe_n =
+      lux_uniform_sphere(lux_sample_2d(index, LUX_DIM_TEXEL_SAMPLE, seed ^ 0x68bc21ebu));
+  const int tri = 0;
+  const uint tx = texel, ty = 0;
+  const float2 offset = (float2)(0.5f, 0.5f);
+  LuxSurface s;
+  s.p = probe.xyz;
+  s.ng = probe_n;
+  s.ng_front = probe_n;
+  s.ns = probe_n;
+  s.uv = (float2)(0.0f, 0.0f);
+  s.uv1 = s.uv;
+  s.material = 0;
+  s.light = -1;
+#else
   /* Listing 4.2: choose one of the texel's valid Hammersley positions. */
   const uint word_offset = sample_offsets[slot];
   const uint valid = popcount(sample_words[word_offset]) + popcount(sample_words[word_offset + 1]);
@@ -50,6 +77,7 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
                          tx, ty, offset, &w0, &w1, &w2);
   const float2 bary = (float2)(w1, w2);
   LuxSurface s = lux_surface_at(tris, tri, bary.x, bary.y);
+#endif
 #if LUX_NORMAL_MAP && !LUX_BASIS
   /* Irradiance lightmaps integrate about the normal-mapped normal, what the
    * surface's shading sees; directional encodings record the light arriving
@@ -70,6 +98,11 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   path.seed = seed;
   path.depth = 0;
   path.sample_pos = (float2)((float)tx + offset.x, (float)ty + offset.y);
+#if LUX_PROBES
+  /* The first hit's distance, set by shade; a path that never gets there
+   * counts as a miss. */
+  path.sample_pos.x = INFINITY;
+#endif
   path.pad = (uint)tri;
   path.radiance = (float4)(0.0f);
   path.prev_pos = (float4)(s.p, 0.0f);
@@ -124,8 +157,13 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   const float2 u_dir = lux_sample_2d(index, dim + LUX_DIM_DIRECTION, seed);
 #if LUX_BASIS
   /* The texel's tangent frame, reproducible by an engine: x follows the
-   * lightmap's +u on the surface, z the shading normal. */
+   * lightmap's +u on the surface, z the shading normal. Probes have no
+   * surface: their encodings are in the world frame only. */
+#if LUX_PROBES
+  const float3 tn = t;
+#else
   const float3 tn = lux_lightmap_tangent(tris[tri], uvt, s.ns, t);
+#endif
   t = tn;
   b = cross(s.ns, tn);
   const float3 dir_local = lux_uniform_hemisphere(u_dir);

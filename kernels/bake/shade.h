@@ -26,6 +26,12 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   const float3 dir = ray.dir_tmax.xyz;
   float3 throughput = path.throughput.xyz;
   const float prev_pdf = path.throughput.w;
+#if LUX_PROBES
+  /* The probe's first segment: its distance to the first hit (infinite on a
+   * miss) for the visibility moments (shared/probe.h); the probe domain has
+   * no texel-space sample position to keep there. */
+  if (path.depth == 0u) path.sample_pos.x = hit.prim < 0 ? INFINITY : hit.t;
+#endif
 
   if (hit.prim < 0) {
 #if LUX_SKY || LUX_SKY_IMAGE

@@ -36,7 +36,8 @@
   X(buffer, uint, instance_first, "instance table")                  \
   X(buffer, uint, covered, "covered texels")                         \
   X(buffer, uint, sample_offsets, "sample-info offsets") /* §4.2 */ \
-  X(buffer, uint, sample_words, "sample-info words")
+  X(buffer, uint, sample_words, "sample-info words")                 \
+  X(buffer, float4, probes, "probe positions") /* probe domain */
 
 /* Lights (§6.1): the light table with its selection alias table, and the sky. */
 #define LUX_GROUP_lights(X)                                 \

@@ -191,6 +191,30 @@ def test_main_flow(d):
     return bake_id
 
 
+def test_probes(d):
+    """Light probes from a positions file: the remote CLI sends the positions,
+    the daemon serves probes.bin/json only (lightmap off), and they equal the
+    in-process bake's bit for bit."""
+    s = ["--server", d.server]
+    positions = os.path.join(ARGS.work, "probes_in.json")
+    with open(positions, "w") as f:
+        json.dump({"probes": [[0, 1, 0], {"position": [0.2, 0.5, -0.1]}, [-0.3, 1.2, 0.3]]}, f)
+    args = ["--probes", "file:" + positions, "--no-lightmap", "--samples", 32]
+    remote = os.path.join(ARGS.work, "probes_remote")
+    out, _ = luxel("bake", ARGS.scene, *args, "--out", remote, "--json", *s)
+    lines = json_lines(out)
+    check(lines[-1]["bake"]["state"] == "BAKE_STATE_SUCCEEDED", f"probe bake: {lines[-1]}")
+    names = {l["name"] for l in lines if l["type"] == "artifact"}
+    check(names == {"probes.bin", "probes.json"}, f"probe artifacts: {names}")
+    local = os.path.join(ARGS.work, "probes_local")
+    luxel("bake", ARGS.scene, *args, "--out", local, "--local")
+    check(sha256_file(os.path.join(remote, "probes.bin")) ==
+          sha256_file(os.path.join(local, "probes.bin")), "remote and local probes.bin differ")
+    with open(os.path.join(remote, "probes.json")) as f:
+        meta = json.load(f)
+    check(meta["layout"]["mode"] == "file" and len(meta["probes"]) == 3, f"probes.json: {meta['layout']}")
+
+
 def test_changed_buffer_is_uploaded(d, original_id):
     """The same .gltf beside a changed .bin is another scene: `luxel bake`
     must upload it rather than reuse the stored scene with the old buffer."""
@@ -306,6 +330,7 @@ def main():
     try:
         d.wait_ready()
         test_main_flow(d)
+        test_probes(d)
         test_changed_buffer_is_uploaded(d, expected_scene_id(ARGS.scene))
         test_errors(d)
     finally:

@@ -36,8 +36,9 @@ double seconds_since(Clock::time_point t0) {
 
 class Baker {
  public:
-  Baker(const LightmapLayout& layout, const BakeSettings& settings, device::Context& ctx)
-      : scene_(*layout.scene), layout_(layout), settings_(settings), ctx_(ctx) {}
+  Baker(const LightmapLayout& layout, const BakeSettings& settings, device::Context& ctx,
+        const ProbeDomain* probes = nullptr)
+      : scene_(*layout.scene), layout_(layout), settings_(settings), ctx_(ctx), probes_(probes) {}
 
   Result<BakeResult> run(const BakeHooks& hooks);
 
@@ -112,6 +113,7 @@ class Baker {
   const LightmapLayout& layout_;
   const BakeSettings& settings_;
   device::Context& ctx_;
+  const ProbeDomain* probes_;  // null: the lightmap's texel domain
 
   BakeSetup s_;
   BakeBuffers b_;
@@ -158,7 +160,7 @@ Result<std::vector<float>> Baker::denoise(const std::vector<float>& rgba,
 }
 
 Status Baker::setup() {
-  auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_);
+  auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_, probes_);
   if (!setup) return setup.status();
   s_ = std::move(setup.value());
   auto sort = RadixSort::create(ctx_, s_.capacity);
@@ -781,6 +783,21 @@ Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
   }
   result.value().setup_s += layout_s;
   return result;
+}
+
+Result<BakeResult> bake_probe_domain(const scene::Scene& scene, const BakeSettings& settings,
+                                     const ProbeDomain& probes, device::Context& ctx,
+                                     const BakeHooks& hooks) {
+  if (probes.max_distance.size() != probes.positions.size())
+    return invalid_argument("probe domain: one visibility cap per probe");
+  // Texel-space features have no meaning for points in free space.
+  if (settings.filter == Filter::kGaussian)
+    return invalid_argument("settings.filter: probes take the box filter only");
+  if (settings.adaptive) return invalid_argument("settings.adaptive: not supported for probes");
+  LightmapLayout layout;
+  layout.scene = &scene;
+  Baker baker(layout, settings, ctx, &probes);
+  return baker.run(hooks);
 }
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,

@@ -22,6 +22,7 @@
 #include "common/status.h"
 #include "device/context.h"
 #include "pipeline/bake_settings.h"
+#include "pipeline/bake_setup.h"
 #include "pipeline/checkpoint.h"
 #include "pipeline/lightmap_layout.h"
 #include "scene/scene.h"
@@ -98,7 +99,10 @@ struct BakeResult {
   uint64_t nonfinite_dropped = 0;
   std::vector<ErrorSample> series;
   std::vector<EncodedLightmap> encodings;  // directional encodings, in the requested order
-  size_t basis_bytes_per_texel = 0;        // device state of all encodings per texel
+  // Probe domain only: per probe LUX_PROBE_VIS_BINS bins (shared/probe.h) of
+  // (mean distance, mean squared distance, samples, 0); empty for lightmaps.
+  std::vector<float> probe_visibility;
+  size_t basis_bytes_per_texel = 0;  // device state of all encodings per texel
 
   // Distributed bakes (settings.shard_count > 1, pipeline/shard_merge.h):
   // the shard's final per-texel accumulators, every covered texel (all
@@ -163,6 +167,19 @@ struct BakeHooks {
 
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const BakeHooks& hooks);
+
+// The same wavefront over a probe domain (light probes, pipeline/probes/):
+// each probe is a "texel" (i, 0) of a probes x 1 result whose domain is the
+// whole sphere. `irradiance` holds each probe's scalar irradiance (the
+// integral of radiance over the sphere, W/m^2; A = 1), `encodings` its SH
+// radiance coefficients in the world frame (settings.encodings: sh1/sh2),
+// `probe_visibility` its DDGI distance moments. Progress, error estimate,
+// stop rules, snapshots, checkpoints and resume work as for lightmaps.
+// INVALID_ARGUMENT for the Gaussian filter, adaptive sampling or a non-SH
+// encoding.
+Result<BakeResult> bake_probe_domain(const scene::Scene& scene, const BakeSettings& settings,
+                                     const ProbeDomain& probes, device::Context& ctx,
+                                     const BakeHooks& hooks = {});
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const ProgressFn& on_progress = {});
 

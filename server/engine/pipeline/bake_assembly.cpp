@@ -4,6 +4,8 @@
 #include <bit>
 #include <cmath>
 
+#include "shared/probe.h"
+
 namespace luxel::pipeline {
 
 void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean, size_t begin,
@@ -65,6 +67,21 @@ void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t beg
   fill_rel_error(setup, state, begin, r.rel_error);
   r.nonfinite_dropped += state.nonfinite;
   const EncodingPlan& plan = setup.plan;
+  if (!setup.probes.empty()) {
+    // The visibility bins close each probe's record (bake_setup.cpp).
+    constexpr size_t kBins = LUX_PROBE_VIS_BINS;
+    r.probe_visibility.resize(setup.probes.size() * kBins * 4, 0.0f);
+    for (size_t slot = 0; slot < state.spp.size(); ++slot) {
+      const cl::float4* bins = &state.basis[(slot + 1) * plan.stride - kBins];
+      float* out = &r.probe_visibility[covered[begin + slot] * kBins * 4];
+      for (size_t b = 0; b < kBins; ++b) {
+        out[b * 4 + 0] = bins[b].x;
+        out[b * 4 + 1] = bins[b].y;
+        out[b * 4 + 2] = bins[b].z;
+        out[b * 4 + 3] = 0.0f;
+      }
+    }
+  }
   for (size_t k = 0; k < plan.encodings.size(); ++k) {
     EncodedLightmap& e = r.encodings[k];
     extract_coefficients(plan, k, state.basis, covered.data() + begin, state.spp.size(),

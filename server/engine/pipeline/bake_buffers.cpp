@@ -66,6 +66,8 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   LUXEL_RETURN_IF_ERROR(a.alloc(g.covered, cap.slots * 4, "covered texels"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.sample_offsets, cap.slots * 4, "sample-info offsets"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.sample_words, cap.words * 4, "sample-info words"));
+  // Probe domain: the probes' positions and visibility caps (shared/probe.h).
+  LUXEL_RETURN_IF_ERROR(a.upload(g.probes, s.probes, "probe positions", !s.probes.empty()));
 
   // Lights, sky and textures only when the features use them.
   LightArgs& l = args.lights;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "pipeline/probe_spec.h"
 #include "pipeline/settings_schema.h"
 #include "shared/shard.h"
 
@@ -78,6 +79,18 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   // Only when not the default: bake fingerprints (checkpoint resume) and
   // manifests of default bakes stay what they were before the setting.
   if (direct != DirectLight::kSampled) m["direct"] = direct_light_name(direct);
+  if (!probes.empty()) {
+    m["probes"] = probes;
+    m["probe_sh_order"] = std::to_string(probe_sh_order);
+    m["probe_window"] = probe_window;
+    if (!probe_positions.empty()) {
+      // FNV-1a of the positions: fingerprints see a changed list.
+      uint64_t h = 1469598103934665603ull;
+      for (unsigned char c : probe_positions) h = (h ^ c) * 1099511628211ull;
+      m["probe_positions_fnv1a"] = strprintf("%016llx", static_cast<unsigned long long>(h));
+    }
+  }
+  if (!lightmap) m["lightmap"] = "off";
   m["intersector"] = accel::intersector_name(intersector);
   m["uv"] = uv_mode_name(uv);
   if (!node_placements.empty()) {
@@ -151,6 +164,15 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   if (s.samples_per_texel == 0 && !(s.time_budget_s > 0) && !(s.target_error > 0))
     return bad("samples_per_texel",
                "no stopping rule: set samples, a time budget or a target error");
+  if (!s.probes.empty()) {
+    auto spec = probes::parse_probe_spec(s.probes);
+    if (!spec) return spec.status();
+  }
+  if (s.probe_window != "none" && s.probe_window != "hanning" && s.probe_window != "lanczos")
+    return bad("probe_window",
+               strprintf("'%s' is not one of none, hanning, lanczos", s.probe_window.c_str()));
+  if (!s.lightmap && s.probes.empty())
+    return bad("lightmap", "off bakes nothing without settings.probes");
   const bool has_reference = s.reference || !s.job.reference_bake_id.empty();
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",

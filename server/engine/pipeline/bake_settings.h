@@ -138,6 +138,15 @@ struct BakeSettings {
   bool seam_stitch = false;          // output: make texels agree across UV seams (seam_stitch.h)
   JobSettings job;                   // daemon only
 
+  // Light probes (server/engine/probes/): "" = none, else the placement of
+  // pipeline/probe_spec.h ("grid:0.5", "grid:0.5:box=...", "file:P.json",
+  // "adaptive:0.5"), baked after the lightmap in the same job.
+  std::string probes;
+  std::string probe_positions;           // file mode: the JSON list (the CLI reads the file)
+  int probe_sh_order = 2;                // 1: L1 (4 coefficients), 2: L2 (9)
+  std::string probe_window = "hanning";  // ringing control at evaluation: none, hanning, lanczos
+  bool lightmap = true;                  // false: the job bakes probes only
+
   // The settings as "key=value" strings, for manifests and reports.
   std::map<std::string, std::string> describe() const;
 };

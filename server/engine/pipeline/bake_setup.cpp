@@ -6,16 +6,46 @@
 #include "pipeline/bake_features.h"
 #include "pipeline/iteration_stops.h"
 #include "pipeline/resource_estimate.h"
+#include "shared/probe.h"
 
 namespace luxel::pipeline {
 
 Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
-                               const BakeSettings& settings, device::Context& ctx) {
+                               const BakeSettings& settings, device::Context& ctx,
+                               const ProbeDomain* probes) {
   BakeSetup s;
-  s.atlas = std::move(atlas);
-  auto info = atlas::build_sample_info(scene, s.atlas);
-  if (!info) return info.status();
-  s.info = std::move(info.value());
+  if (probes) {
+    // The probe domain: probe i is "texel" (i, 0) of a probes x 1 atlas,
+    // every probe covered. The sample info is a stand-in (all 64 sample
+    // positions valid, so the outputs' coverage is 1); the probe raygen
+    // (kernels/bake/raygen.h) reads the probe buffer instead.
+    const size_t n = probes->positions.size();
+    if (n == 0) return invalid_argument("settings.probes: no probe to bake");
+    if (n >= kSlotMask) return resource_exhausted("settings.probes: too many probes");
+    s.atlas.width = static_cast<int>(n);
+    s.atlas.height = 1;
+    s.info.width = s.atlas.width;
+    s.info.height = 1;
+    s.info.offsets.resize(n);
+    s.info.covered_texels.resize(n);
+    s.info.words.reserve(n * 6);
+    s.probes.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      s.info.offsets[i] = static_cast<uint32_t>(i * 6);
+      s.info.covered_texels[i] = static_cast<uint32_t>(i);
+      s.info.words.insert(s.info.words.end(),
+                          {0xFFFFFFFFu, 0xFFFFFFFFu, 0xFFFFFFFFu, 0xFFFFFFFFu, 0u, 0u});
+      const Vec3 p = probes->positions[i];
+      s.probes[i] = {p.x, p.y, p.z, probes->max_distance[i]};
+    }
+    s.info.valid_samples = n * 64;
+    s.info.records = n;
+  } else {
+    s.atlas = std::move(atlas);
+    auto info = atlas::build_sample_info(scene, s.atlas);
+    if (!info) return info.status();
+    s.info = std::move(info.value());
+  }
   if (s.info.covered_texels.empty())
     return invalid_argument(strprintf(
         "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
@@ -46,7 +76,17 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   auto plan = plan_encodings(settings.encodings);
   if (!plan) return plan.status();
   s.plan = std::move(plan.value());
+  if (probes) {
+    for (const Encoding& e : s.plan.encodings)
+      if (e.tangent_frame || e.basis.describe().name.rfind("sh", 0) != 0)
+        return invalid_argument(strprintf(
+            "settings.encodings: probes take SH (sh1, sh2) only, not '%s'", e.name().c_str()));
+    if (s.plan.empty()) return invalid_argument("settings.encodings: probes need sh1 or sh2");
+    // The visibility bins follow the encodings in each probe's record.
+    s.plan.stride += LUX_PROBE_VIS_BINS;
+  }
   s.features = derive_bake_features(settings, s.lights, s.data, s.plan);
+  if (probes) s.features.set("PROBES");
 
   // Batch size: the paths-per-iteration budget (the device's for auto,
   // resource_estimate.h), at most the device's iteration cap

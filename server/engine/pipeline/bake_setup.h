@@ -34,6 +34,16 @@ struct BakeSetup {
   device::FeatureSet features;  // bake.cl's (the tracer's are its own)
   cl::LuxBakeParams params{};   // per-bake constants; paths/first_path set per iteration
   size_t capacity = 0;          // path slots per iteration
+  // Probe domain (bake_probe_domain in bake.h): one float4 per probe, the
+  // position and the visibility cap in w; the atlas is then probes x 1
+  // "texels" and the sample info a stand-in. Empty for lightmaps.
+  std::vector<cl::float4> probes;
+};
+
+// The probe domain a bake traces instead of the lightmap's texels.
+struct ProbeDomain {
+  std::vector<Vec3> positions;
+  std::vector<float> max_distance;  // per probe: the visibility cap (a miss counts as it)
 };
 
 // Slot ids share a word with the 3-bit octant tag of direction sorting (§5.4).
@@ -44,7 +54,10 @@ inline constexpr int kTagShift = 29;
 // INVALID_ARGUMENT when no texel of the lightmap holds a sample;
 // RESOURCE_EXHAUSTED past 2^29 covered texels; errors of the BVH, light
 // table, encodings and tracer as they come.
+// probes: a probe domain instead of the atlas's texels (then `atlas` is
+// ignored); its settings.encodings must be SH in the world frame.
 Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
-                               const BakeSettings& settings, device::Context& ctx);
+                               const BakeSettings& settings, device::Context& ctx,
+                               const ProbeDomain* probes = nullptr);
 
 }  // namespace luxel::pipeline

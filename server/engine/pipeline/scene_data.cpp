@@ -161,7 +161,10 @@ Result<SceneData> prepare_scene_data(const scene::Scene& scene, const accel::Tri
         const Vec2 u1 = mesh.material_uvs(1).empty() ? Vec2{0, 0} : mesh.material_uvs(1)[vi];
         (&out.material_uv1[t].uv0)[k] = {u1.x, u1.y};
       }
-      const Vec2 a = atlas.to_atlas(inst, mesh.uv1[vi]);
+      // The probe domain has no lightmap (no placements, maybe no UV set 1).
+      const Vec2 a = atlas.placements.empty() || mesh.uv1.empty()
+                         ? Vec2{0, 0}
+                         : atlas.to_atlas(inst, mesh.uv1[vi]);
       *atlas_uv[k] = {a.x, a.y};
     }
     out.atlas_uvs[t].pad = {0, 0};

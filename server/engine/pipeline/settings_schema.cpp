@@ -591,6 +591,58 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of(0),
                .api_note = "unset means off",
                LUXEL_BOOL(seam_stitch)});
+  // ------------------------------------------------------------ light probes
+  t.push_back({.name = "probes",
+               .type = Type::kText,
+               .units = "",
+               .help = "light probes baked with (or instead of) the lightmap: grid:S (spacing S "
+                       "over the scene bounds), grid:S:box=x0,y0,z0,x1,y1,z1, file:P.json (a "
+                       "list of [x,y,z]), adaptive:S (grid kept near geometry, probes moved out "
+                       "of closed geometry), nodes (glTF nodes with extras.luxelProbe); empty: "
+                       "none",
+               .flag = "--probes",
+               .metavar = "SPEC",
+               .default_value = SettingValue::of_text(""),
+               LUXEL_TEXT(probes)});
+  t.push_back({.name = "probe_sh_order",
+               .type = Type::kInt,
+               .units = "",
+               .help = "SH order of the probes' radiance: 1 (L1, 4 coefficients) or 2 (L2, 9)",
+               .flag = "--probe-sh-order",
+               .metavar = "L",
+               .default_value = SettingValue::of(2),
+               .min = 1,
+               .max = 2,
+               .api_note = "0 (unset) means 2",
+               LUXEL_NUMBER(probe_sh_order)});
+  t.push_back({.name = "probe_window",
+               .type = Type::kText,
+               .units = "",
+               .help = "SH ringing control applied when probes are evaluated (recorded in "
+                       "probes.bin/json): none, hanning, lanczos",
+               .flag = "--probe-window",
+               .metavar = "W",
+               .default_value = SettingValue::of_text("hanning"),
+               .api_note = "empty (unset) means hanning",
+               LUXEL_TEXT(probe_window)});
+  t.push_back({.name = "lightmap",
+               .type = Type::kBool,
+               .units = "",
+               .help = "bake the lightmap (off: probes only, needs --probes)",
+               .flag = "--no-lightmap",
+               .default_value = SettingValue::of(1),
+               .api_note = "unset means on",
+               LUXEL_BOOL(lightmap)});
+  t.push_back({.name = "probe_positions",
+               .type = Type::kText,
+               .units = "",
+               .help = "probes file:... mode: the JSON list of positions (luxel bake reads the "
+                       "file named in --probes)",
+               .flag = "--probe-positions",
+               .metavar = "JSON",
+               .default_value = SettingValue::of_text(""),
+               .scope = Scope::kApiOnly,
+               LUXEL_TEXT(probe_positions)});
   // ------------------------------------------------------------ the daemon's job
   t.push_back({.name = "priority",
                .type = Type::kInt,

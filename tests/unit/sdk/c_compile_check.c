@@ -21,6 +21,13 @@ float luxel_c_compile_check(const float* coeffs, float nx, float ny, float nz) {
   unused += luxel_sg_irradiance(coeffs, 1, luxel_ad9_directions, 9, 3.4f, nx, ny, nz);
   unused += luxel_sg_radiance(coeffs, 1, luxel_ad9_directions, 9, 3.4f, nx, ny, nz);
   unused += luxel_ad_radiance(coeffs, 1, luxel_ad9_directions, 9, nx, ny, nz);
+  {
+    /* Light probes: a parse that fails (no bytes), then a query. */
+    LuxelProbeSet set;
+    float rgb[3];
+    if (luxel_probes_parse(coeffs, 0, &set) == 0)
+      unused += luxel_probes_irradiance(&set, 0.0f, 0.0f, 0.0f, nx, ny, nz, 1, rgb);
+  }
   (void)unused;
   return luxel_ad_irradiance(coeffs, 1, luxel_ad12_directions, 12, nx, ny, nz);
 }
