@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <grpcpp/generic/generic_stub.h>
 #include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <openssl/evp.h>
 #include <signal.h>
@@ -276,6 +277,15 @@ v1::BakeSettings small_settings(uint32_t spp, uint32_t resolution) {
   s.set_progress_interval_s(0.1);
   s.set_snapshot_max_side(32);
   return s;
+}
+
+std::string upload_cornell(const Daemon& d) {
+  v1::SceneInfo info;
+  auto st = upload_scene(
+      d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
+      {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  return info.scene_id();
 }
 
 }  // namespace luxel::test

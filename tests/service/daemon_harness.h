@@ -63,6 +63,8 @@ grpc::Status upload_scene(const Daemon& d, const std::string& name, v1::SceneFor
                           v1::SceneInfo* out, const UploadOptions& options = {});
 
 std::string read_file(const std::string& path);
+// Uploads the bundled Cornell box (glTF + buffer); returns its scene id.
+std::string upload_cornell(const Daemon& d);
 std::string sha256_hex(const std::string& bytes);
 
 // Polls GetBake until `done(info)` or the timeout; returns the last info.

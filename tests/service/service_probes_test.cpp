@@ -16,15 +16,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-std::string upload_cornell_box(const Daemon& d) {
-  v1::SceneInfo info;
-  auto st = upload_scene(
-      d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-      {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info.scene_id();
-}
-
 v1::BakeInfo submit_bake(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
   v1::SubmitBakeRequest req;
   req.set_scene_id(scene_id);
@@ -56,7 +47,7 @@ TEST(ServiceProbes, ProbesOnlyBakeResumesAfterKillDashNine) {
   const std::string data = dir.path() + "/data";
   const std::vector<std::string> flags = {"--checkpoint-interval", "0.3"};
   auto daemon = std::make_unique<Daemon>(data, flags);
-  const std::string scene_id = upload_cornell_box(*daemon);
+  const std::string scene_id = upload_cornell(*daemon);
   v1::BakeSettings s = small_settings(2048);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
   s.set_probes("grid:0.5");
@@ -96,7 +87,7 @@ TEST(ServiceProbes, ProbesOnlyBakeResumesAfterKillDashNine) {
 TEST(ServiceProbes, LightmapAndProbesInOneJob) {
   TempDir dir;
   Daemon daemon(dir.path() + "/data");
-  const std::string scene_id = upload_cornell_box(daemon);
+  const std::string scene_id = upload_cornell(daemon);
   v1::BakeSettings s = small_settings(16);
   s.set_probes("adaptive:1");
   s.set_probe_sh_order(1);
@@ -150,7 +141,7 @@ TEST(ServiceProbes, ProbesAtTaggedGltfNodes) {
   EXPECT_EQ(meta["layout"]["mode"], "nodes");
   ASSERT_EQ(meta["probes"].size(), 2u);
   // The untagged Cornell box: the bake fails and names the setting.
-  const std::string plain = upload_cornell_box(daemon);
+  const std::string plain = upload_cornell(daemon);
   const v1::BakeInfo b = submit_bake(daemon, plain, s);
   const v1::BakeInfo rb = wait_for_bake(daemon, b.bake_id(), is_finished);
   EXPECT_EQ(rb.state(), v1::BAKE_STATE_FAILED);

@@ -21,15 +21,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-std::string upload_cornell(const Daemon& d) {
-  v1::SceneInfo info;
-  auto st = upload_scene(
-      d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-      {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info.scene_id();
-}
-
 v1::BakeInfo submit(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
   v1::SubmitBakeRequest req;
   req.set_scene_id(scene_id);

@@ -23,15 +23,6 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string upload_cornell(const Daemon& d) {
-  v1::SceneInfo info;
-  auto st = upload_scene(
-      d, "cornell_box.gltf", v1::SCENE_FORMAT_GLTF, read_file(LUXEL_SCENES_DIR "/cornell_box.gltf"),
-      {{"cornell_box.bin", read_file(LUXEL_SCENES_DIR "/cornell_box.bin")}}, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info.scene_id();
-}
-
 grpc::Status submit(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s,
                     v1::BakeInfo* info) {
   v1::SubmitBakeRequest req;
