@@ -32,7 +32,7 @@ void usage(FILE* out) {
       "  status BAKE           state, progress, ETA and artifacts of a bake\n"
       "  list [--state S] | --scenes   bakes (optionally in state S) or scenes\n"
       "  watch BAKE [--snapshots DIR]  follow a bake; write its snapshots to DIR\n"
-      "  cancel BAKE           cancel a queued or running bake\n"
+      "  cancel BAKE           cancel a queued or running bake (--finish: keep it, end now)\n"
       "  fetch BAKE --out DIR [--artifact NAME]   download (and verify) results\n"
       "  report DIR|BAKE [--csv F] [--plot F.png]   error against time of a bake\n"
       "  settings [--json]     every bake setting: option, default, range, units\n"

@@ -100,6 +100,9 @@ int run(const DaemonConfig& config) {
   ro.metrics = &metrics;
   ro.max_concurrent_bakes = config.max_concurrent_bakes;
   ro.device_spec = config.device;
+  ro.auto_intersector = config.intersector == "embree"   ? accel::IntersectorKind::kEmbree
+                        : config.intersector == "opencl" ? accel::IntersectorKind::kOpenCl
+                                                         : accel::IntersectorKind::kAuto;
   ro.checkpoint_interval_s = config.checkpoint_interval_s;
   ro.limits.max_resolution = config.max_resolution;
   // Coordinator mode: sharded bakes go to the workers (the same token).

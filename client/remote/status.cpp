@@ -40,11 +40,12 @@ int parse_common(const char* cmd, const char* usage, const std::vector<std::stri
 auto no_extra = [](const std::vector<std::string>&, size_t&) { return false; };
 
 // Status and cancel: one BAKE id, one unary call returning BakeInfo.
-template <typename Call>
-int bake_call(const char* cmd, const char* usage, const std::vector<std::string>& args, Call call) {
+template <typename Call, typename Extra = decltype(no_extra)>
+int bake_call(const char* cmd, const char* usage, const std::vector<std::string>& args, Call call,
+              Extra extra = no_extra) {
   ConnectionOptions copt = default_connection_options();
   std::vector<std::string> pos;
-  if (int rc = parse_common(cmd, usage, args, copt, pos, no_extra); rc >= 0) return rc;
+  if (int rc = parse_common(cmd, usage, args, copt, pos, extra); rc >= 0) return rc;
   if (pos.size() != 1) {
     std::fprintf(stderr, "luxel %s: exactly one BAKE id is required\n%s", cmd, usage);
     return kExitUsage;
@@ -78,16 +79,26 @@ int run_status(const std::vector<std::string>& args) {
 }
 
 int run_cancel(const std::vector<std::string>& args) {
-  return bake_call("cancel",
-                   "usage: luxel cancel BAKE [connection options]\n"
-                   "  cancels a queued or running bake (a finished one is left as it is)\n",
-                   args,
-                   [](Connection& c, grpc::ClientContext& ctx, const std::string& id,
-                      luxel::v1::BakeInfo& info) {
-                     luxel::v1::CancelBakeRequest req;
-                     req.set_bake_id(id);
-                     return c.stub().CancelBake(&ctx, req, &info);
-                   });
+  bool finish = false;
+  return bake_call(
+      "cancel",
+      "usage: luxel cancel BAKE [--finish] [connection options]\n"
+      "  cancels a queued or running bake (a finished one is left as it is);\n"
+      "  --finish: stop tracing and complete the bake from the samples it has\n"
+      "  (SUCCEEDED, termination \"stopped\"; results download as usual)\n",
+      args,
+      [&](Connection& c, grpc::ClientContext& ctx, const std::string& id,
+          luxel::v1::BakeInfo& info) {
+        luxel::v1::CancelBakeRequest req;
+        req.set_bake_id(id);
+        req.set_finish(finish);
+        return c.stub().CancelBake(&ctx, req, &info);
+      },
+      [&](const std::vector<std::string>& a, size_t& i) {
+        if (a[i] != "--finish") return false;
+        finish = true;
+        return true;
+      });
 }
 
 int run_list(const std::vector<std::string>& args) {

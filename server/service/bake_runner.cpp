@@ -75,12 +75,20 @@ void BakeRunner::shutdown() {
   bakes_.wake_all();
 }
 
-Result<v1::BakeInfo> BakeRunner::cancel(const std::string& bake_id) {
+Result<v1::BakeInfo> BakeRunner::cancel(const std::string& bake_id, bool finish) {
   {
     std::lock_guard<std::mutex> lock(mu_);
     auto info = bakes_.get(bake_id);
     if (!info) return info.status();
     if (is_terminal(info->state())) return info;
+    if (finish) {
+      // On disk first: a bake that starts (or restarts) later reads it there.
+      LUXEL_RETURN_IF_ERROR(bakes_.update(
+          bake_id, [](v1::BakeInfo& b) { b.set_finish_requested(true); }, true));
+      if (auto it = running_.find(bake_id); it != running_.end()) it->second->finish = true;
+      log_event("bake_finish_requested", {{"bake", bake_id}});
+      return bakes_.get(bake_id);
+    }
     if (auto it = running_.find(bake_id); it != running_.end()) {
       it->second->by_user = true;
       it->second->cancel = true;
@@ -182,6 +190,9 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
 
   // Resume from the last checkpoint when there is a usable one.
   const std::string fingerprint = bake_fingerprint(info->scene_id(), settings.value());
+  // After the fingerprint, which keeps "auto": the daemon's choice for it.
+  if (settings->intersector == accel::IntersectorKind::kAuto)
+    settings->intersector = options_.auto_intersector;
   const std::string ckpt_path = bakes_.checkpoint_path(bake_id);
   std::optional<pipeline::BakeCheckpoint> resume;
   std::string note;
@@ -218,6 +229,8 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   hooks.fingerprint = fingerprint;
   hooks.resume = resume ? &*resume : nullptr;
   hooks.cancel = &running.cancel;
+  if (info->finish_requested()) running.finish = true;
+  hooks.finish_now = &running.finish;
   hooks.device_turn = &device_turn_;  // concurrent bakes take turns on the one device
   hooks.on_progress = [&](const pipeline::BakeProgress& p) {
     paths_traced_ += p.paths - std::min(p.paths, last_paths);
@@ -287,6 +300,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
                               .ctx = ctx.get(),
                               .cancel = &running.cancel,
                               .by_user = &running.by_user,
+                              .finish = &running.finish,
                               .stopping = &shutting_down_};
   // The lightmap (unless settings.lightmap is off), then the light probes
   // (settings.probes) over the same device. A probes-only job checkpoints

@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "accel/intersector.h"
 #include "device/context.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
@@ -44,6 +45,10 @@ class Coordinator;
 struct RunnerOptions {
   int max_concurrent_bakes = 1;
   std::string device_spec;            // device::choose_device spec ("" = default)
+  // What settings.intersector = auto runs on (luxeld --intersector); the
+  // fingerprint keeps "auto", so shards of one bake may run on workers with
+  // other backends and still merge.
+  accel::IntersectorKind auto_intersector = accel::IntersectorKind::kAuto;
   double checkpoint_interval_s = 10;  // 0: no checkpoints
   SettingsLimits limits;
   Metrics* metrics = nullptr;  // progress and finished bakes (metrics.h); may be null
@@ -62,7 +67,11 @@ class BakeRunner {
   void start();
   // Cancels a queued or running bake; a finished one is returned unchanged.
   // Waits up to 5 s for a running bake to stop. NOT_FOUND for an unknown id.
-  Result<v1::BakeInfo> cancel(const std::string& bake_id);
+  // finish: keep the bake instead; it stops after its current iteration and
+  // completes from what it has traced (pipeline::BakeHooks::finish_now), or,
+  // queued, as soon as it starts. Recorded (BakeInfo.finish_requested) so a
+  // restart honours it; returns at once.
+  Result<v1::BakeInfo> cancel(const std::string& bake_id, bool finish = false);
   // Graceful stop: no new bakes start; running ones checkpoint and stop
   // (INTERRUPTED). Returns when every worker has exited.
   void shutdown();
@@ -74,6 +83,7 @@ class BakeRunner {
   struct Running {
     std::atomic<bool> cancel{false};
     std::atomic<bool> by_user{false};  // CancelBake, as opposed to shutdown
+    std::atomic<bool> finish{false};   // CancelBake with finish: end with what is traced
   };
   void worker_loop();
   void run_bake(const std::string& bake_id, std::unique_ptr<device::Context>& ctx,

@@ -30,6 +30,8 @@ const char* kDaemonUsage =
     "  --data-dir DIR            scenes, bake records, checkpoints and results (required)\n"
     "  --max-concurrent-bakes N  bakes running at once (default 1)\n"
     "  --device SPEC             OpenCL device: gpu, cpu, P:D or a name substring\n"
+    "  --intersector auto|embree|opencl  ray queries of bakes whose settings say auto\n"
+    "                            (default auto: Embree on CPU devices, OpenCL on GPUs)\n"
     "  --token-file FILE         require \"authorization: Bearer TOKEN\" on every call, TOKEN\n"
     "                            read from FILE (trailing newline ignored); or set the\n"
     "                            LUXELD_TOKEN environment variable. Never on the command\n"
@@ -99,6 +101,11 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--device") {
       LUXEL_RETURN_IF_ERROR(value());
       c.device = v;
+    } else if (k == "--intersector") {
+      LUXEL_RETURN_IF_ERROR(value());
+      if (v != "auto" && v != "embree" && v != "opencl")
+        return invalid_argument("--intersector: auto, embree or opencl, got '" + v + "'");
+      c.intersector = v;
     } else if (k == "--token") {
       // A token in argv shows in ps and /proc/PID/cmdline to every user.
       return invalid_argument(

@@ -16,6 +16,9 @@ struct DaemonConfig {
   std::string data_dir;                    // required
   int max_concurrent_bakes = 1;
   std::string device;             // OpenCL device spec ("" = LUXEL_DEVICE, then default)
+  // What settings.intersector = auto means on this daemon: "auto" (Embree on
+  // CPU devices, the OpenCL kernels on GPUs), "embree" or "opencl".
+  std::string intersector = "auto";
   std::string token;              // bearer token ("" = no authentication)
   std::string tls_cert, tls_key;  // PEM files; both or neither
   uint64_t max_upload_bytes = uint64_t{1} << 30;

@@ -246,7 +246,7 @@ grpc::Status LuxelService::CancelBake(grpc::ServerContext* ctx, const v1::Cancel
                                       v1::BakeInfo* response) {
   if (auto st = authenticate(ctx, "CancelBake"); !st.ok()) return st;
   if (auto st = check_id(req->bake_id(), "bake_id", 32); !st.ok()) return st;
-  auto info = runner_.cancel(req->bake_id());
+  auto info = runner_.cancel(req->bake_id(), req->finish());
   if (!info) return to_grpc(info.status());
   *response = info.value();
   return grpc::Status::OK;

@@ -59,7 +59,7 @@ class Metrics {
   void bake_progress(const std::string& bake_id, uint64_t paths, double elapsed_s,
                      uint64_t device_bytes);
   // The bake left the device; `outcome` labels the duration histogram
-  // ("samples", "time", "error", "cancelled", "interrupted", "failed").
+  // ("samples", "time", "error", "stopped", "cancelled", "interrupted", "failed").
   void bake_ended(const std::string& bake_id, const std::string& outcome, double seconds);
 
   // Text exposition of every metric (what a scrape returns).

@@ -228,8 +228,12 @@ class Client:
         request = luxel_pb2.ListBakesRequest(states=[state_value(s) for s in states or []])
         return list(self._unary(self._stub.ListBakes, request).bakes)
 
-    def cancel_bake(self, bake_id):
-        return self._unary(self._stub.CancelBake, luxel_pb2.CancelBakeRequest(bake_id=bake_id))
+    def cancel_bake(self, bake_id, finish=False):
+        """Cancels a queued or running bake. finish=True keeps it instead: the
+        bake stops tracing and completes from the samples it has (SUCCEEDED,
+        termination "stopped"); the call returns at once."""
+        return self._unary(self._stub.CancelBake,
+                           luxel_pb2.CancelBakeRequest(bake_id=bake_id, finish=finish))
 
     def watch_bake(self, bake_id, latest_only=False):
         """A BakeWatch over the bake's events (iterate it; cancel() to stop).

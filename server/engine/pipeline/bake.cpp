@@ -598,6 +598,10 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       if (whole_state_) LUXEL_RETURN_IF_ERROR(restore_whole_state(tile.begin, tile.end));
     }
     for (;;) {
+      if (hooks.finish_now && hooks.finish_now->load()) {
+        why = Termination::kStopped;
+        break;
+      }
       const uint64_t batch = tile_policy.next_batch(s_.capacity, paths_done_);
       // Resumed with the samples already traced (a merge of shards): the
       // outputs come from the restored state, no iteration runs.

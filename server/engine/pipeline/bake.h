@@ -43,7 +43,10 @@ struct BakeProgress {
   size_t device_bytes = 0;  // device buffers the bake holds (BVH included)
 };
 
-enum class Termination { kSamples, kTime, kError, kCancelled };
+// kStopped: the host asked the bake to finish with what it has traced
+// (BakeHooks::finish_now; CancelBake with finish, or a coordinator's stop
+// rule across shards): a complete result, like kTime.
+enum class Termination { kSamples, kTime, kError, kCancelled, kStopped };
 const char* termination_name(Termination t);
 
 // One point of the error-against-time series (reported with every bake).
@@ -155,6 +158,10 @@ struct BakeHooks {
   std::string fingerprint;                            // stored in checkpoints (scene + settings)
   const BakeCheckpoint* resume = nullptr;             // continue from this state
   const std::atomic<bool>* cancel = nullptr;          // set to stop after the current iteration
+  // Set: stop after the current iteration (or before the first, when set
+  // already) and finish with the samples traced so far: outputs, encodings
+  // and BakeResult::final_state as for any stopping rule (Termination::kStopped).
+  const std::atomic<bool>* finish_now = nullptr;
   // Held around every iteration's device work. Bakes that share one device
   // (a daemon running several at once) pass the same mutex, so they take
   // turns on the device instead of oversubscribing it (two PoCL contexts on

@@ -15,6 +15,8 @@ const char* termination_name(Termination t) {
       return "error";
     case Termination::kCancelled:
       return "cancelled";
+    case Termination::kStopped:
+      return "stopped";
   }
   return "?";
 }

@@ -26,15 +26,6 @@ bool finite4(const cl::float4& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z) && std::isfinite(v.w);
 }
 
-struct Acc4 {
-  double v[4] = {0, 0, 0, 0};
-  void set(const cl::float4& f) { v[0] = f.x, v[1] = f.y, v[2] = f.z, v[3] = f.w; }
-  cl::float4 get() const {
-    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]),
-            static_cast<float>(v[3])};
-  }
-};
-
 // The checks of one shard on its own; `who` names it in errors.
 Status check_shard(const BakeCheckpoint& s, const std::string& who) {
   auto bad = [&](const std::string& why) {
@@ -133,107 +124,199 @@ Result<BakeCheckpoint> merge_shard_states(std::vector<BakeCheckpoint> shards) {
   std::sort(shards.begin(), shards.end(), [](const BakeCheckpoint& a, const BakeCheckpoint& b) {
     return a.shard_index < b.shard_index;
   });
-
-  const size_t n = first.mean.size();
-  const size_t stride = first.basis.empty() ? 0 : first.basis.size() / n;
-  BakeCheckpoint out;
-  out.fingerprint = shards[0].fingerprint;
-  out.shard_index = 0;
-  out.shard_count = 1;
-  out.width = shards[0].width;
-  out.height = shards[0].height;
-  out.basis_layout = shards[0].basis_layout;
-  out.mean.resize(n);
-  out.m2.resize(n);
-  out.weight.resize(n);
-  out.spp.assign(n, 0);
-  out.basis.resize(n * stride);
-  for (const BakeCheckpoint& s : shards) {
-    out.paths_done += s.paths_done;
-    out.nonfinite += s.nonfinite;
-    out.iteration = std::max(out.iteration, s.iteration);
-    out.elapsed_s = std::max(out.elapsed_s, s.elapsed_s);
+  ShardMerger merger;
+  for (size_t i = 0; i < shards.size(); ++i) {
+    LUXEL_RETURN_IF_ERROR(merger.add(shards[i]));
+    shards[i] = BakeCheckpoint{};  // its memory back as the fold goes on
   }
-  for (size_t t = 0; t < n; ++t) {
-    Acc4 mean, m2;
-    double w = 0, w2 = 0;
-    uint64_t spp = 0;
-    for (const BakeCheckpoint& s : shards) {
-      const double wb = s.weight[t].x;
-      spp += s.spp[t];
-      w2 += s.weight[t].y;
-      if (!(wb > 0)) continue;  // nothing accumulated here
-      const double wa = w;
-      w = wa + wb;
-      const float* mb = &s.mean[t].x;
-      const float* m2b = &s.m2[t].x;
-      for (int c = 0; c < 4; ++c) {
-        const double d = double{mb[c]} - mean.v[c];
-        mean.v[c] += d * (wb / w);
-        m2.v[c] += double{m2b[c]} + d * d * (wa * wb / w);
-      }
+  return merger.finish();
+}
+
+// Per texel the fold keeps, in double: mean[4], M2[4], sum w, sum w^2
+// (kTexelDoubles), and the sample count; per encoding value four running
+// means, and per encoding the weight total. The arithmetic per texel is the
+// same, in the same shard order, as a loop over all shards at once.
+constexpr size_t kTexelDoubles = 10;
+
+Status ShardMerger::add(const BakeCheckpoint& s) {
+  const std::string who = strprintf("shard %u of %u", s.shard_index, s.shard_count);
+  auto bad = [&](const std::string& why) {
+    return invalid_argument(strprintf("%s: %s", who.c_str(), why.c_str()));
+  };
+  if (s.shard_count == 0 || s.shard_count > 4096) return bad("invalid shard_count");
+  LUXEL_RETURN_IF_ERROR(check_shard(s, who));
+  if (added_ == 0) {
+    out_ = BakeCheckpoint{};
+    out_.fingerprint = s.fingerprint;
+    out_.shard_index = 0;
+    out_.shard_count = s.shard_count;
+    out_.width = s.width;
+    out_.height = s.height;
+    out_.basis_layout = s.basis_layout;
+    texels_ = s.mean.size();
+    stride_ = s.basis.empty() ? 0 : s.basis.size() / texels_;
+    acc_.assign(texels_ * kTexelDoubles, 0.0);
+    spp_.assign(texels_, 0);
+    basis_.assign(texels_ * stride_ * 4, 0.0);
+    totals_.assign(texels_ * out_.basis_layout.size(), 0.0);
+  } else {
+    if (s.fingerprint != out_.fingerprint)
+      return bad(strprintf("belongs to another bake (fingerprint %s, shard 0 has %s)",
+                           s.fingerprint.c_str(), out_.fingerprint.c_str()));
+    if (s.shard_count != out_.shard_count)
+      return bad(strprintf("is one of %u shards, shard 0 one of %u", s.shard_count,
+                           out_.shard_count));
+    if (s.width != out_.width || s.height != out_.height || s.mean.size() != texels_)
+      return bad(strprintf("is a %ux%u lightmap with %zu covered texels, shard 0 %ux%u with %zu",
+                           s.width, s.height, s.mean.size(), out_.width, out_.height, texels_));
+    if (s.basis_layout != out_.basis_layout || s.basis.size() != texels_ * stride_)
+      return bad("has other directional encodings than shard 0");
+  }
+  if (s.shard_index != added_)
+    return bad(strprintf("arrives out of order: shard %u is next (shards fold in index order)",
+                         added_));
+  out_.paths_done += s.paths_done;
+  out_.nonfinite += s.nonfinite;
+  out_.iteration = std::max(out_.iteration, s.iteration);
+  out_.elapsed_s = std::max(out_.elapsed_s, s.elapsed_s);
+  for (size_t t = 0; t < texels_; ++t) {
+    double* a = &acc_[t * kTexelDoubles];  // mean[4], m2[4], w, w2
+    const double wb = s.weight[t].x;
+    spp_[t] += s.spp[t];
+    a[9] += s.weight[t].y;
+    if (!(wb > 0)) continue;  // nothing accumulated here
+    const double wa = a[8];
+    const double w = wa + wb;
+    a[8] = w;
+    const float* mb = &s.mean[t].x;
+    const float* m2b = &s.m2[t].x;
+    for (int c = 0; c < 4; ++c) {
+      const double d = double{mb[c]} - a[c];
+      a[c] += d * (wb / w);
+      a[4 + c] += double{m2b[c]} + d * d * (wa * wb / w);
     }
-    if (spp > 0xFFFFFFFFull)
-      return invalid_argument(
-          strprintf("shard merge: texel slot %zu would hold %llu samples, past 2^32 - 1", t,
-                    static_cast<unsigned long long>(spp)));
-    out.mean[t] = mean.get();
-    out.m2[t] = m2.get();
-    out.weight[t] = {static_cast<float>(w), static_cast<float>(w2)};
-    out.spp[t] = static_cast<uint32_t>(spp);
-    // Encodings: per encoding, the header's weight sum adds, every other
-    // value (running means) is the weight-sum-weighted mean.
-    size_t offset = t * stride;
-    for (uint32_t e : out.basis_layout) {
-      const size_t values = 1 + (e & 0xFFFFu);
-      std::vector<Acc4> acc(values);
-      double total = 0;
-      for (const BakeCheckpoint& s : shards) {
-        const cl::float4* st = &s.basis[offset];
-        const double wb = st[0].x;
-        if (!(wb > 0)) continue;
+  }
+  // Encodings: per encoding, the header's weight sum adds, every other
+  // value (running means) is the weight-sum-weighted mean.
+  for (size_t t = 0; t < texels_ && stride_ > 0; ++t) {
+    size_t offset = t * stride_;
+    for (size_t e = 0; e < out_.basis_layout.size(); ++e) {
+      const size_t values = 1 + (out_.basis_layout[e] & 0xFFFFu);
+      const cl::float4* st = &s.basis[offset];
+      const double wb = st[0].x;
+      double& total = totals_[t * out_.basis_layout.size() + e];
+      if (wb > 0) {
         total += wb;
         const double f = wb / total;
+        double* acc = &basis_[offset * 4];
         const float* h = &st[0].x;
-        for (int c = 1; c < 4; ++c) acc[0].v[c] += (double{h[c]} - acc[0].v[c]) * f;
+        for (int c = 1; c < 4; ++c) acc[c] += (double{h[c]} - acc[c]) * f;
         for (size_t k = 1; k < values; ++k) {
           const float* l = &st[k].x;
-          for (int c = 0; c < 4; ++c) acc[k].v[c] += (double{l[c]} - acc[k].v[c]) * f;
+          for (int c = 0; c < 4; ++c) acc[k * 4 + c] += (double{l[c]} - acc[k * 4 + c]) * f;
         }
       }
-      acc[0].v[0] = total;
-      for (size_t k = 0; k < values; ++k) out.basis[offset + k] = acc[k].get();
       offset += values;
     }
   }
-  return out;
+  ++added_;
+  return Status::ok();
+}
+
+Result<BakeCheckpoint> ShardMerger::finish() {
+  if (added_ == 0) return invalid_argument("shard merge: no shard states given");
+  if (added_ < out_.shard_count) {
+    const Status missing =
+        invalid_argument(strprintf("shard merge: shard %u of %u is missing (%u of %u given)",
+                                   added_, out_.shard_count, added_, out_.shard_count));
+    reset();
+    return missing;
+  }
+  out_.mean.resize(texels_);
+  out_.m2.resize(texels_);
+  out_.weight.resize(texels_);
+  out_.spp.resize(texels_);
+  out_.basis.resize(texels_ * stride_);
+  auto f4 = [](const double* v) {
+    return cl::float4{static_cast<float>(v[0]), static_cast<float>(v[1]),
+                      static_cast<float>(v[2]), static_cast<float>(v[3])};
+  };
+  for (size_t t = 0; t < texels_; ++t) {
+    const double* a = &acc_[t * kTexelDoubles];
+    if (spp_[t] > 0xFFFFFFFFull)
+      return invalid_argument(
+          strprintf("shard merge: texel slot %zu would hold %llu samples, past 2^32 - 1", t,
+                    static_cast<unsigned long long>(spp_[t])));
+    out_.mean[t] = f4(a);
+    out_.m2[t] = f4(a + 4);
+    out_.weight[t] = {static_cast<float>(a[8]), static_cast<float>(a[9])};
+    out_.spp[t] = static_cast<uint32_t>(spp_[t]);
+  }
+  for (size_t t = 0; t < texels_ && stride_ > 0; ++t) {
+    size_t offset = t * stride_;
+    for (size_t e = 0; e < out_.basis_layout.size(); ++e) {
+      const size_t values = 1 + (out_.basis_layout[e] & 0xFFFFu);
+      basis_[offset * 4] = totals_[t * out_.basis_layout.size() + e];
+      for (size_t k = 0; k < values; ++k) out_.basis[offset + k] = f4(&basis_[(offset + k) * 4]);
+      offset += values;
+    }
+  }
+  BakeCheckpoint merged = std::move(out_);
+  merged.shard_count = 1;
+  reset();
+  return merged;
+}
+
+void ShardMerger::reset() {
+  out_ = BakeCheckpoint{};
+  added_ = 0;
+  acc_ = {};
+  spp_ = {};
+  basis_ = {};
+  totals_ = {};
 }
 
 Result<BakeResult> finish_merged_bake(const scene::Scene& scene, const BakeSettings& settings,
                                       device::Context& ctx, const BakeCheckpoint& merged,
-                                      const BakeHooks& hooks) {
+                                      Termination why, const BakeHooks& hooks) {
   if (merged.shard_count != 1)
     return invalid_argument(
         strprintf("finish_merged_bake: the state is shard %u of %u, not a merge of all shards",
                   merged.shard_index, merged.shard_count));
+  if (why == Termination::kCancelled)
+    return invalid_argument("finish_merged_bake: a cancelled bake has no result to finish");
   BakeSettings whole = settings;
   whole.shard_index = 0;
   whole.shard_count = 1;
   whole.adaptive = false;
-  if (whole.samples_per_texel == 0)
-    return invalid_argument(
-        "settings.samples_per_texel: a merged bake needs the whole bake's sample count (0 would "
-        "trace on)");
-  for (size_t t = 0; t < merged.spp.size(); ++t)
-    if (merged.spp[t] != whole.samples_per_texel)
-      return invalid_argument(strprintf(
-          "settings.samples_per_texel: texel slot %zu of the merged state holds %u samples, the "
-          "bake asks for %u (a shard missing, stopped early, or from another bake)",
-          t, merged.spp[t], whole.samples_per_texel));
+  if (why == Termination::kSamples) {
+    if (whole.samples_per_texel == 0)
+      return invalid_argument(
+          "settings.samples_per_texel: a bake that ended on its sample count needs that count "
+          "(0: none)");
+    for (size_t t = 0; t < merged.spp.size(); ++t)
+      if (merged.spp[t] != whole.samples_per_texel)
+        return invalid_argument(strprintf(
+            "settings.samples_per_texel: texel slot %zu of the merged state holds %u samples, "
+            "the bake asks for %u (a shard missing, stopped early, or from another bake)",
+            t, merged.spp[t], whole.samples_per_texel));
+  } else {
+    if (whole.samples_per_texel > 0)
+      for (size_t t = 0; t < merged.spp.size(); ++t)
+        if (merged.spp[t] > whole.samples_per_texel)
+          return invalid_argument(strprintf(
+              "settings.samples_per_texel: texel slot %zu of the merged state holds %u samples, "
+              "more than the bake's %u (shards of another bake)",
+              t, merged.spp[t], whole.samples_per_texel));
+  }
+  static const std::atomic<bool> kFinishNow{true};
   BakeHooks h = hooks;
   h.fingerprint = merged.fingerprint;
   h.resume = &merged;
-  return bake(scene, whole, ctx, h);
+  h.finish_now = &kFinishNow;
+  auto result = bake(scene, whole, ctx, h);
+  if (result) result.value().termination = why;
+  return result;
 }
 
 }  // namespace luxel::pipeline

@@ -42,15 +42,45 @@ namespace luxel::pipeline {
 // progressive encoding state. Never crashes on bad input.
 Result<BakeCheckpoint> merge_shard_states(std::vector<BakeCheckpoint> shards);
 
+// The same merge as a fold, for a coordinator that reads one shard at a
+// time: add() the states in shard-index order (0, 1, ...), then finish().
+// It holds one set of double accumulators (88 B per covered texel, plus
+// 32 B per encoding value) instead of every shard's state, and gives the
+// same bits as merge_shard_states. add() refuses, naming the shard, what
+// merge_shard_states refuses, and a shard out of order; finish() a missing
+// one. The merger can be reused after finish().
+class ShardMerger {
+ public:
+  Status add(const BakeCheckpoint& shard);
+  Result<BakeCheckpoint> finish();
+  uint32_t added() const { return added_; }
+
+ private:
+  void reset();
+  BakeCheckpoint out_;  // header fields, then the result
+  uint32_t added_ = 0;
+  size_t texels_ = 0, stride_ = 0;
+  std::vector<double> acc_;     // per texel: mean[4], m2[4], sum w, sum w^2
+  std::vector<uint64_t> spp_;   // per texel
+  std::vector<double> basis_;   // per encoding value: 4 running means
+  std::vector<double> totals_;  // per texel and encoding: the weight total
+};
+
 // Outputs of a merged state: bake() resumed from `merged` with settings.shard_count = 1,
-// tracing nothing more (the merged sample count already meets settings.samples_per_texel).
+// tracing nothing more; the result's termination is `why`, the rule that
+// ended the shards.
 //
 // `settings` are the whole bake's (shard fields ignored, adaptive off); the
-// hooks' fingerprint and resume are set from `merged`. INVALID_ARGUMENT when
-// settings.samples_per_texel is 0 or is not what every texel of `merged`
-// holds (the bake would trace more or be incomplete).
+// hooks' fingerprint, resume and finish_now are set here. With why =
+// kSamples every texel of `merged` must hold settings.samples_per_texel
+// (a shard missing or stopped early otherwise); with a stop by time, error
+// or request the shards stopped where they were, so texels may hold fewer
+// (never more) and differ: the merged state is still exactly the union of
+// the sample indices the shards traced (possibly none: a bake finished
+// before it started). INVALID_ARGUMENT otherwise.
 Result<BakeResult> finish_merged_bake(const scene::Scene& scene, const BakeSettings& settings,
                                       device::Context& ctx, const BakeCheckpoint& merged,
+                                      Termination why = Termination::kSamples,
                                       const BakeHooks& hooks = {});
 
 }  // namespace luxel::pipeline

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -68,11 +69,16 @@ class Run {
   Status download(uint32_t k, const std::string& worker, const std::string& worker_bake,
                   std::string* sha256);
 
+  // ---- stop rules across shards
+  void decide_stop(const v1::BakeProgress& combined);
+  void ask_to_finish(uint32_t k, const std::string& worker, const std::string& worker_bake);
+
   // ---- the combining loop
-  void publish_progress();
+  v1::BakeProgress publish_progress();
   void publish_snapshot();
   void cancel_workers();
   void cancel_abandoned();
+  Status fold_downloaded();
   Result<pipeline::BakeResult> merge();
 
   std::string shard_path(uint32_t k) const { return dir_ + strprintf("/%u.bin", k); }
@@ -94,6 +100,13 @@ class Run {
   double preview_s_ = 0;                             // seconds spent decoding and averaging them
   std::map<uint32_t, grpc::ClientContext*> active_;  // open WatchBake calls (TryCancel on stop)
   std::optional<Status> failure_;
+  std::set<std::string> finish_sent_;  // worker bakes asked to finish (this process)
+  bool stop_rules_ = false;            // the bake has a time budget or target error
+  // The merge as a fold (pipeline::ShardMerger), in shard order, as shards
+  // arrive: shard k is folded once shards 0..k are downloaded. Only the
+  // combining loop's thread touches it.
+  pipeline::ShardMerger merger_;
+  double fold_read_s_ = 0, fold_merge_s_ = 0;
   std::atomic<bool> stop_{false};
   std::condition_variable wake_;
 };
@@ -278,6 +291,8 @@ Run::WatchEnd Run::watch(uint32_t k, const std::string& worker, const std::strin
     {
       std::lock_guard<std::mutex> lock(mu_);
       *status_[k].mutable_progress() = info.progress();
+      // The combining loop judges the time and error rules on every report.
+      if (stop_rules_) wake_.notify_all();
       if (ev.has_snapshot() && ev.snapshot().format() == v1::SNAPSHOT_FORMAT_EXR) {
         snapshots_[k] = ev.snapshot();
         ++snapshot_changes_;
@@ -442,6 +457,7 @@ void Run::finished(uint32_t k, const std::string& worker, const v1::BakeInfo& te
   ShardRecord& rec = plan_.shards[k];
   rec.downloaded = true;
   rec.sha256 = sha;
+  rec.termination = terminal.termination();
   *status_[k].mutable_progress() = terminal.progress();
   status_[k].set_state(v1::SHARD_STATE_DOWNLOADED);
   if (Status p = persist_locked(); !p.is_ok())
@@ -475,6 +491,7 @@ void Run::drive(uint32_t k) {
       sleep_for(0.5);
       continue;
     }
+    ask_to_finish(k, worker, worker_bake);
     v1::BakeInfo terminal;
     grpc::Status why;
     switch (watch(k, worker, worker_bake, &terminal, &why)) {
@@ -497,7 +514,7 @@ void Run::drive(uint32_t k) {
   }
 }
 
-void Run::publish_progress() {
+v1::BakeProgress Run::publish_progress() {
   std::vector<v1::BakeProgress> parts;
   std::vector<v1::ShardStatus> shards;
   {
@@ -514,6 +531,68 @@ void Run::publish_progress() {
         for (const auto& s : shards) *b.add_shards() = s;
       },
       false);
+  return combined;
+}
+
+// Called by the combining loop with the shards' summed progress. Once a rule
+// is reached it is recorded (a restarted coordinator keeps it) and every
+// shard bake is asked to finish; shards assigned later are asked as soon as
+// they are submitted (drive()).
+void Run::decide_stop(const v1::BakeProgress& combined) {
+  const v1::BakeSettings& s = job_.info.settings();
+  std::string rule, why;
+  if (job_.finish && job_.finish->load()) {
+    rule = "stopped";
+    why = "CancelBake asked to finish";
+  } else if (s.target_error() > 0 && combined.error() <= s.target_error()) {
+    rule = "error";
+    why = strprintf("the shards' combined error estimate %.4g reached the target %.4g",
+                    combined.error(), s.target_error());
+  } else if (s.time_budget_s() > 0 && combined.elapsed_s() >= s.time_budget_s()) {
+    rule = "time";
+    why = strprintf("the shards traced for %.2f s of the %.2f s budget", combined.elapsed_s(),
+                    s.time_budget_s());
+  }
+  if (rule.empty()) return;
+  std::vector<ShardRecord> recs;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (!plan_.stop.empty()) return;
+    plan_.stop = rule;
+    if (Status st = persist_locked(); !st.is_ok())
+      log_event("coordinator_persist_failed", {{"error", st.to_string()}});
+    recs = plan_.shards;
+  }
+  note(strprintf("stop rule \"%s\": %s; every shard asked to finish with what it traced",
+                 rule.c_str(), why.c_str()));
+  for (const ShardRecord& r : recs)
+    if (!r.downloaded && !r.worker_bake_id.empty()) ask_to_finish(r.index, r.worker, r.worker_bake_id);
+}
+
+// CancelBake with finish on a shard bake, once per bake and process, when a
+// stop rule is decided. A failed call is not retried here: the shard's
+// watcher calls again after its next re-attach.
+void Run::ask_to_finish(uint32_t k, const std::string& worker, const std::string& worker_bake) {
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    if (plan_.stop.empty() || finish_sent_.count(worker_bake)) return;
+  }
+  grpc::ClientContext ctx;
+  pool_.prepare(ctx, 5);
+  v1::CancelBakeRequest req;
+  req.set_bake_id(worker_bake);
+  req.set_finish(true);
+  v1::BakeInfo info;
+  grpc::Status st = pool_.stub(worker)->CancelBake(&ctx, req, &info);
+  if (!st.ok()) {
+    log_event("shard_finish_failed", {{"bake", job_.bake_id},
+                                      {"shard", std::to_string(k)},
+                                      {"worker", worker},
+                                      {"error", grpc_text(st)}});
+    return;
+  }
+  std::lock_guard<std::mutex> lock(mu_);
+  finish_sent_.insert(worker_bake);
 }
 
 // The shards' newest EXR snapshots, averaged per texel weighted by each
@@ -611,32 +690,50 @@ void Run::cancel_abandoned() {
   if (!done.empty()) (void)persist_locked();
 }
 
-Result<pipeline::BakeResult> Run::merge() {
-  const auto t0 = Clock::now();
-  std::vector<pipeline::BakeCheckpoint> parts;
-  for (uint32_t k = 0; k < plan_.count; ++k) {
+// Folds every downloaded shard whose predecessors are folded: the merge
+// overlaps the downloads of later shards and holds one shard's state at a
+// time (not all of them).
+Status Run::fold_downloaded() {
+  for (;;) {
+    const uint32_t k = merger_.added();
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      if (k >= plan_.count || !plan_.shards[k].downloaded) return Status::ok();
+    }
+    const auto t0 = Clock::now();
     auto c = pipeline::read_checkpoint(shard_path(k));
     if (!c)
       return Status(c.status().code(), strprintf("shard %u: %s", k, c.status().message().c_str()));
-    parts.push_back(std::move(c.value()));
+    fold_read_s_ += seconds_since(t0);
+    const auto t1 = Clock::now();
+    LUXEL_RETURN_IF_ERROR(merger_.add(c.value()));
+    fold_merge_s_ += seconds_since(t1);
   }
-  const double read_s = seconds_since(t0);
-  const auto t1 = Clock::now();
-  auto merged = pipeline::merge_shard_states(std::move(parts));
+}
+
+Result<pipeline::BakeResult> Run::merge() {
+  LUXEL_RETURN_IF_ERROR(fold_downloaded());
+  auto merged = merger_.finish();
   if (!merged) return merged.status();
-  const double merge_s = seconds_since(t1);
   const auto t2 = Clock::now();
   pipeline::BakeHooks hooks;
   hooks.on_layout = [&](const std::string& line) {
     (void)bakes_.update(
         job_.bake_id, [&](v1::BakeInfo& b) { b.set_lightmap_layout(line); }, false);
   };
-  auto result =
-      pipeline::finish_merged_bake(*job_.scene, *job_.settings, *job_.ctx, merged.value(), hooks);
+  const pipeline::Termination why = merged_termination(plan_);
+  auto result = pipeline::finish_merged_bake(*job_.scene, *job_.settings, *job_.ctx,
+                                             merged.value(), why, hooks);
+  if (result && why != pipeline::Termination::kSamples)
+    note(strprintf("merged %llu paths of the shards (ended on %s): mean %.1f samples per texel, "
+                   "minimum %u, error estimate %.4g",
+                   static_cast<unsigned long long>(result.value().paths),
+                   pipeline::termination_name(why), result.value().mean_spp,
+                   result.value().min_spp, result.value().error));
   log_event("shards_merged", {{"bake", job_.bake_id},
                               {"shards", std::to_string(plan_.count)},
-                              {"read_s", strprintf("%.4f", read_s)},
-                              {"merge_s", strprintf("%.4f", merge_s)},
+                              {"read_s", strprintf("%.4f", fold_read_s_)},
+                              {"merge_s", strprintf("%.4f", fold_merge_s_)},
                               {"finish_s", strprintf("%.4f", seconds_since(t2))}});
   return result;
 }
@@ -722,6 +819,7 @@ Result<pipeline::BakeResult> Run::execute() {
                                                     : v1::SHARD_STATE_RUNNING);
   }
 
+  stop_rules_ = s.time_budget_s() > 0 || s.target_error() > 0;
   std::vector<std::thread> threads;
   for (uint32_t k = 0; k < plan_.count; ++k) threads.emplace_back([this, k] { drive(k); });
 
@@ -747,13 +845,28 @@ Result<pipeline::BakeResult> Run::execute() {
       wake_.notify_all();
       break;
     }
+    if (Status st = fold_downloaded(); !st.is_ok()) {
+      // A checked download that does not read back: the disk under the
+      // data dir failed. The bake fails rather than merge less.
+      fail(st);
+      break;
+    }
     if (seconds_since(last_cleanup) >= 1) {
       cancel_abandoned();
       last_cleanup = Clock::now();
     }
     if (seconds_since(last_progress) >= progress_every || all_done) {
-      publish_progress();
+      const v1::BakeProgress combined = publish_progress();
+      if (!all_done) decide_stop(combined);
       last_progress = Clock::now();
+    } else if (stop_rules_ || (job_.finish && job_.finish->load())) {
+      // Between published reports too: the shards trace on while the rule waits.
+      std::vector<v1::BakeProgress> parts;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        for (const auto& st : status_) parts.push_back(st.progress());
+      }
+      decide_stop(combine_progress(parts));
     }
     if (s.snapshot_format() != v1::SNAPSHOT_FORMAT_NONE &&
         seconds_since(last_snapshot) >= snapshot_every) {

@@ -19,6 +19,17 @@
 // at any point and restarted on the same data dir re-attaches to the worker
 // bakes (the runner re-queues its RUNNING bakes) and completes.
 //
+// Stop rules across shards: samples are dealt (each shard traces its share).
+// Time and target error are the coordinator's: it sums the shards' progress
+// (combine_progress) and, when the slowest shard has traced time_budget_s,
+// or the merged error estimate reaches target_error, or CancelBake asked to
+// finish, it records the rule in shards.json and asks every shard bake to
+// finish (CancelBake with finish): each ends with what it traced, and the
+// merge is the exact union of those sample indices. The shards carry the
+// bake's own time_budget_s and target_error too, as backstops that end them
+// if the coordinator is gone: one shard alone at the target error is
+// already past the merged target.
+//
 // Faults, each recorded in BakeInfo.notes: a worker whose stream fails is
 // retried (GetBake, then WatchBake again) for the grace period (a restarted
 // luxeld resumes its bakes from checkpoints); past it, or after a stall (no
@@ -61,6 +72,7 @@ struct ShardedJob {
   device::Context* ctx = nullptr;               // for the final merge and outputs
   const std::atomic<bool>* cancel = nullptr;    // CancelBake or shutdown
   const std::atomic<bool>* by_user = nullptr;   // CancelBake: the worker bakes are cancelled too
+  const std::atomic<bool>* finish = nullptr;    // CancelBake with finish: merge what is traced
   const std::atomic<bool>* stopping = nullptr;  // daemon shutdown: workers left running
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <nlohmann/json.hpp>
 
 #include "service/settings_translate.h"
@@ -21,19 +22,10 @@ Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
         strprintf("%s: this luxeld has no workers to shard across (start it with --workers or "
                   "--workers-dns); 0 or 1 bakes on this machine",
                   field));
-  if (s.target_error() > 0)
+  if (s.samples_per_texel() == 0 && !(s.time_budget_s() > 0) && !(s.target_error() > 0))
     return invalid_argument(
-        "settings.target_error: not with shards (each worker would stop on the error of its own "
-        "share); use samples_per_texel or time_budget_s");
-  // The merge needs every texel at the whole bake's sample count
-  // (pipeline::finish_merged_bake): a shard stopped by time holds fewer.
-  if (s.time_budget_s() > 0)
-    return invalid_argument(
-        "settings.time_budget_s: not with shards (a shard stopped by time holds fewer samples "
-        "than the exact merge needs); use samples_per_texel");
-  if (s.samples_per_texel() == 0)
-    return invalid_argument(
-        "settings.samples_per_texel: a sharded bake needs a sample count to split (0: none)");
+        "settings.samples_per_texel: a sharded bake needs a stop rule (samples_per_texel, "
+        "time_budget_s or target_error)");
   if (!s.reference_bake_id().empty())
     return invalid_argument("settings.reference_bake_id: benchmark mode is not sharded");
   // Left unset it is off for a sharded bake (the engine's rule for shards).
@@ -104,6 +96,21 @@ v1::BakeProgress combine_progress(const std::vector<v1::BakeProgress>& shards) {
   return out;
 }
 
+pipeline::Termination merged_termination(const ShardPlan& plan) {
+  using pipeline::Termination;
+  auto named = [](const std::string& t) -> std::optional<Termination> {
+    if (t == "time") return Termination::kTime;
+    if (t == "error") return Termination::kError;
+    if (t == "stopped") return Termination::kStopped;
+    return std::nullopt;
+  };
+  if (auto t = named(plan.stop)) return *t;
+  for (const char* rule : {"time", "error", "stopped"})
+    for (const ShardRecord& r : plan.shards)
+      if (r.termination == rule) return *named(rule);
+  return Termination::kSamples;
+}
+
 std::string shard_idempotency_key(const std::string& bake_id, uint32_t index, uint32_t attempt) {
   return strprintf("luxel-coordinator/%s/shard-%u/attempt-%u", bake_id.c_str(), index, attempt);
 }
@@ -120,9 +127,11 @@ std::string plan_to_json(const ShardPlan& plan) {
                            {"attempts", r.attempts},
                            {"downloaded", r.downloaded},
                            {"sha256", r.sha256},
-                           {"bad_workers", r.bad_workers}});
+                           {"bad_workers", r.bad_workers},
+                           {"termination", r.termination}});
   j["abandoned"] = nlohmann::json::array();
   for (const auto& [worker, bake] : plan.abandoned) j["abandoned"].push_back({worker, bake});
+  j["stop"] = plan.stop;
   return j.dump(1) + "\n";
 }
 
@@ -140,11 +149,16 @@ Result<ShardPlan> plan_from_json(const std::string& text) {
       r.downloaded = s.at("downloaded").get<bool>();
       r.sha256 = s.at("sha256").get<std::string>();
       r.bad_workers = s.at("bad_workers").get<std::vector<std::string>>();
+      r.termination = s.value("termination", std::string());
       plan.shards.push_back(std::move(r));
     }
     if (j.contains("abandoned"))
       for (const auto& a : j.at("abandoned"))
         plan.abandoned.emplace_back(a.at(0).get<std::string>(), a.at(1).get<std::string>());
+    plan.stop = j.value("stop", std::string());
+    if (!plan.stop.empty() && plan.stop != "time" && plan.stop != "error" &&
+        plan.stop != "stopped")
+      return Status(StatusCode::kDataLoss, "shards.json: unknown stop rule " + plan.stop);
     if (plan.shards.size() != plan.count)
       return Status(StatusCode::kDataLoss, "shards.json: shard count does not match its list");
     for (uint32_t k = 0; k < plan.count; ++k)

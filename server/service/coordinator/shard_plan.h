@@ -9,6 +9,7 @@
 
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
+#include "pipeline/bake.h"
 #include "service/settings_translate.h"
 
 namespace luxel::service::coordinator {
@@ -17,14 +18,15 @@ namespace luxel::service::coordinator {
 bool is_sharded(const v1::BakeSettings& s);
 
 // SubmitBake's rules for sharded settings on this daemon (INVALID_ARGUMENT
-// naming the field): a coordinator (have_workers) is needed; target_error
-// is refused (each worker would stop on the error of its own share, not on
-// the merged one), so are time_budget_s and samples_per_texel = 0 (the
-// exact merge needs every texel at the whole sample count), benchmark mode (reference_bake_id lives
-// on the coordinator) and adaptive = true (shards sample uniformly, each tracing its part of every
-// texel's sample indices; adaptive unset is off for them). Then the engine's own rules for a shard
-// of these settings (the progressive least-squares solvers do not merge), as a worker would apply
-// them. `auto_count`: the shards shards_auto would make now (the workers resolved).
+// naming the field): a coordinator (have_workers) is needed; benchmark mode
+// is refused (reference_bake_id lives on the coordinator, and with it the
+// rmse / rel_mse target metrics), so is adaptive = true (shards sample
+// uniformly, each tracing its part of every texel's sample indices; adaptive
+// unset is off for them). Any stop rule works: samples are dealt, time and
+// target error are decided by the coordinator (coordinator.h). Then the
+// engine's own rules for a shard of these settings (the progressive
+// least-squares solvers do not merge), as a worker would apply them.
+// `auto_count`: the shards shards_auto would make now (the workers resolved).
 Status check_shard_settings(const v1::BakeSettings& s, bool have_workers,
                             const SettingsLimits& limits = {}, uint32_t auto_count = 2);
 
@@ -34,7 +36,8 @@ uint32_t usable_shard_count(const v1::BakeSettings& s, uint32_t wanted,
                             const SettingsLimits& limits);
 
 // What worker `index` of `count` bakes: the whole bake's settings (all of
-// samples_per_texel: the engine takes shard index's share of it) with
+// samples_per_texel: the engine takes shard index's share of it; the time
+// budget and target error as backstops, see coordinator.h) with
 // shard_index/shard_count set, shards cleared (a worker never coordinates),
 // and EXR snapshots (the coordinator merges them into its previews) unless
 // the bake has none.
@@ -61,6 +64,7 @@ struct ShardRecord {
   bool downloaded = false;               // <bake dir>/shards/<index>.bin is checked
   std::string sha256;                    // of that file
   std::vector<std::string> bad_workers;  // refused or lost this shard: tried last
+  std::string termination;               // the downloaded shard bake's ("samples", "stopped", ...)
 };
 struct ShardPlan {
   uint32_t count = 0;
@@ -68,7 +72,14 @@ struct ShardPlan {
   // Worker bakes of reassigned shards, {worker, bake id}, not yet cancelled
   // (their worker was down): a worker that comes back would resume them.
   std::vector<std::pair<std::string, std::string>> abandoned;
+  // The stop rule the coordinator decided ("time", "error", "stopped"; empty
+  // while the shards run on): every shard bake is asked to finish.
+  std::string stop;
 };
+// The merged bake's termination: the coordinator's stop rule when it
+// decided one, else the shards' (all "samples": samples; else the first of
+// time, error, stopped that a shard ended on).
+pipeline::Termination merged_termination(const ShardPlan& plan);
 std::string plan_to_json(const ShardPlan& plan);
 Result<ShardPlan> plan_from_json(const std::string& text);
 

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -205,7 +206,8 @@ class ShardMergeTest : public ::testing::Test {
     return states;
   }
   static Result<BakeResult> finish(const BakeCheckpoint& merged) {
-    return pipeline::finish_merged_bake(*scene_, settings(), *ctx_, merged, hooks());
+    return pipeline::finish_merged_bake(*scene_, settings(), *ctx_, merged,
+                                           pipeline::Termination::kSamples, hooks());
   }
 
   static device::Context* ctx_;
@@ -319,6 +321,12 @@ TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
     auto permuted = pipeline::merge_shard_states(reversed);
     ASSERT_TRUE(permuted);
     expect_same_bits(merged.value(), permuted.value());
+    // The coordinator's fold, one shard at a time in index order: same bits.
+    pipeline::ShardMerger fold;
+    for (const BakeCheckpoint& st : states) ASSERT_TRUE(fold.add(st).is_ok());
+    auto folded = fold.finish();
+    ASSERT_TRUE(folded) << folded.status().to_string();
+    expect_same_bits(merged.value(), folded.value());
 
     auto finished = finish(merged.value());
     ASSERT_TRUE(finished) << finished.status().to_string();
@@ -387,6 +395,111 @@ TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
 // A shard baked in device-memory tiles (pipeline/tile_plan.h) ends with
 // the state of every tile, the same bits as untiled; a merged state
 // finishes in tiles too, with the bits of the untiled finish.
+// Stops by time, error or request end each shard wherever it is: the
+// shards hold different numbers of samples, and texels within one shard may
+// differ by one. The merge is still exactly the union of the sample indices
+// they traced: counts add texel by texel, nothing more is traced when
+// finishing, and the estimate is unbiased (pooled against the whole bake).
+TEST_F(ShardMergeTest, ShardsStoppedEarlyMergeToTheUnionOfTheirSamples) {
+  constexpr uint32_t kCount = 3;
+  // Shares of 80-96 samples per texel: far more than the iterations below trace.
+  BakeSettings whole = settings();
+  whole.samples_per_texel = 256;
+  std::vector<BakeCheckpoint> states;
+  uint64_t paths = 0;
+  for (uint32_t k = 0; k < kCount; ++k) {
+    BakeSettings s = whole;
+    s.shard_index = k;
+    s.shard_count = kCount;
+    s.progress_interval_s = 1e-9;  // a report after every iteration
+    std::atomic<bool> finish{false};
+    uint32_t reports = 0;
+    pipeline::BakeHooks h = hooks();
+    h.finish_now = &finish;
+    // Shard k stops after k + 1 iterations of 8192 paths.
+    h.on_progress = [&](const pipeline::BakeProgress&) {
+      if (++reports == k + 1) finish = true;
+      return true;
+    };
+    auto r = pipeline::bake(*scene_, s, *ctx_, h);
+    ASSERT_TRUE(r) << r.status().to_string();
+    EXPECT_EQ(r.value().termination, pipeline::Termination::kStopped);
+    EXPECT_STREQ(pipeline::termination_name(r.value().termination), "stopped");
+    EXPECT_EQ(r.value().paths, uint64_t{k + 1} * 8192);
+    ASSERT_TRUE(r.value().final_state) << "a stopped shard keeps its accumulators";
+    EXPECT_LT(r.value().min_spp, s.shard_samples());
+    paths += r.value().paths;
+    states.push_back(*r.value().final_state);
+  }
+  auto merged = pipeline::merge_shard_states(states);
+  ASSERT_TRUE(merged) << merged.status().to_string();
+  EXPECT_EQ(merged.value().paths_done, paths);
+  for (size_t t = 0; t < merged.value().spp.size(); ++t) {
+    uint32_t sum = 0;
+    for (const BakeCheckpoint& st : states) sum += st.spp[t];
+    ASSERT_EQ(merged.value().spp[t], sum) << "texel slot " << t;
+  }
+  // Ending on samples needs every texel at the count: refused, naming it.
+  auto as_samples = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(),
+                                                 pipeline::Termination::kSamples, hooks());
+  ASSERT_FALSE(as_samples);
+  EXPECT_NE(as_samples.status().message().find("settings.samples_per_texel"), std::string::npos);
+  for (auto why : {pipeline::Termination::kTime, pipeline::Termination::kError,
+                   pipeline::Termination::kStopped}) {
+    auto f = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(), why, hooks());
+    ASSERT_TRUE(f) << f.status().to_string();
+    EXPECT_EQ(f.value().termination, why);
+    EXPECT_EQ(f.value().paths, paths);  // nothing more traced
+    // Unbiased: the pooled irradiance agrees with the whole 56-sample bake.
+    // Both estimate one expectation from overlapping sample indices; the
+    // merged one has 6 x 8192 paths over the covered texels (about as many
+    // per texel as the whole bake), and the pooled relative standard error
+    // of either is below 1 %.
+    double merged_sum = 0, single_sum = 0;
+    for (size_t i = 0; i < single_->irradiance.size(); i += 4) {
+      merged_sum += f.value().irradiance[i] + f.value().irradiance[i + 1] + f.value().irradiance[i + 2];
+      single_sum += single_->irradiance[i] + single_->irradiance[i + 1] + single_->irradiance[i + 2];
+    }
+    EXPECT_NEAR(merged_sum / single_sum, 1.0, 0.03);
+  }
+  // More samples in a texel than the bake allows: shards of another bake.
+  BakeSettings fewer = settings();
+  fewer.samples_per_texel = 16;
+  auto over = pipeline::finish_merged_bake(*scene_, fewer, *ctx_, merged.value(),
+                                           pipeline::Termination::kTime, hooks());
+  ASSERT_FALSE(over);
+  EXPECT_NE(over.status().message().find("more than the bake's 16"), std::string::npos);
+}
+
+// finish_now on a whole bake: set before the first iteration, it ends with
+// nothing traced (a queued bake asked to finish); set later, after the
+// current iteration, with a complete result of what was traced.
+TEST_F(ShardMergeTest, FinishNowEndsAWholeBakeWithWhatItTraced) {
+  std::atomic<bool> finish{true};
+  pipeline::BakeHooks h = hooks();
+  h.finish_now = &finish;
+  auto none = pipeline::bake(*scene_, settings(), *ctx_, h);
+  ASSERT_TRUE(none) << none.status().to_string();
+  EXPECT_EQ(none.value().termination, pipeline::Termination::kStopped);
+  EXPECT_EQ(none.value().paths, 0u);
+  EXPECT_EQ(none.value().min_spp, 0u);
+
+  finish = false;
+  BakeSettings s = settings();
+  s.progress_interval_s = 1e-9;
+  int reports = 0;
+  h.on_progress = [&](const pipeline::BakeProgress&) {
+    if (++reports == 2) finish = true;
+    return true;
+  };
+  auto two = pipeline::bake(*scene_, s, *ctx_, h);
+  ASSERT_TRUE(two) << two.status().to_string();
+  EXPECT_EQ(two.value().termination, pipeline::Termination::kStopped);
+  EXPECT_EQ(two.value().paths, 2u * 8192);
+  EXPECT_EQ(two.value().samples.size(), single_->samples.size());
+  EXPECT_GT(two.value().error, single_->error);  // fewer samples, larger error estimate
+}
+
 TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
   // A budget leaving room for about a quarter of the per-texel state
   // (tiled_bake_test's rule).
@@ -412,7 +525,8 @@ TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
   ASSERT_TRUE(plain) << plain.status().to_string();
   BakeSettings whole = settings();
   whole.device_memory_budget_mib = budget;
-  auto in_tiles = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(), hooks());
+  auto in_tiles = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(),
+                                                   pipeline::Termination::kSamples, hooks());
   ASSERT_TRUE(in_tiles) << in_tiles.status().to_string();
   EXPECT_GE(in_tiles.value().tiles, 2u);
   EXPECT_EQ(in_tiles.value().paths, plain.value().paths);
@@ -610,13 +724,31 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
     refused(s, "shard 0 of 3 (input 0): holds progressive");
   }
   refused({}, "no shard states");
+  {
+    // The fold takes shards in index order, and finishes only with all.
+    pipeline::ShardMerger fold;
+    Status early = fold.add(good[1]);
+    EXPECT_NE(early.message().find("shard 1 of 3: arrives out of order: shard 0 is next"),
+              std::string::npos)
+        << early.to_string();
+    ASSERT_TRUE(fold.add(good[0]).is_ok());
+    ASSERT_TRUE(fold.add(good[1]).is_ok());
+    auto short_one = fold.finish();
+    ASSERT_FALSE(short_one);
+    EXPECT_NE(short_one.status().message().find("shard 2 of 3 is missing"), std::string::npos);
+    auto other = good[0];
+    other.fingerprint = "another bake";
+    ASSERT_TRUE(fold.add(good[0]).is_ok());  // reusable after finish()
+    EXPECT_NE(fold.add(other).message().find("belongs to another bake"), std::string::npos);
+  }
   auto merged = pipeline::merge_shard_states(good);
   ASSERT_TRUE(merged);
   // The finished merge goes through the denoiser and the output writer like
   // any bake (the daemon's default denoise is atrous); no accumulators.bin.
   BakeSettings denoised = settings();
   denoised.denoise = pipeline::Denoise::kAtrous;
-  auto finished = pipeline::finish_merged_bake(*scene_, denoised, *ctx_, merged.value(), hooks());
+  auto finished = pipeline::finish_merged_bake(
+      *scene_, denoised, *ctx_, merged.value(), pipeline::Termination::kSamples, hooks());
   ASSERT_TRUE(finished) << finished.status().to_string();
   EXPECT_EQ(finished.value().irradiance_denoised.size(), finished.value().irradiance.size());
   const std::string out = ::testing::TempDir() + "/shard_merge_outputs";
@@ -629,7 +761,8 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   // A merge missing samples is refused when finishing.
   BakeSettings more = settings();
   more.samples_per_texel = kSamples + 16;
-  auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(), hooks());
+  auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(),
+                                          pipeline::Termination::kSamples, hooks());
   ASSERT_FALSE(r);
   EXPECT_NE(r.status().message().find("settings.samples_per_texel"), std::string::npos);
 }

@@ -27,17 +27,23 @@ TEST(ShardPlan, RefusesWhatCannotBeSharded) {
   auto_on_plain.set_shards_auto(true);
   EXPECT_NE(check_shard_settings(auto_on_plain, false).message().find("settings.shards_auto"),
             std::string::npos);
-  v1::BakeSettings error = sharded(2);
-  error.set_target_error(0.01);
-  EXPECT_NE(check_shard_settings(error, true).message().find("settings.target_error"),
-            std::string::npos);
-  v1::BakeSettings timed = sharded(2);
-  timed.set_time_budget_s(10);
-  EXPECT_NE(check_shard_settings(timed, true).message().find("settings.time_budget_s"),
-            std::string::npos);
+  // Time and target error are the coordinator's stop rules, with or without
+  // a sample count; a bake with no rule at all is refused.
   v1::BakeSettings no_samples = sharded(2);
   no_samples.set_samples_per_texel(0);
   EXPECT_NE(check_shard_settings(no_samples, true).message().find("settings.samples_per_texel"),
+            std::string::npos);
+  v1::BakeSettings error = no_samples;
+  error.set_target_error(0.01);
+  EXPECT_TRUE(check_shard_settings(error, true).is_ok());
+  v1::BakeSettings timed = no_samples;
+  timed.set_time_budget_s(10);
+  EXPECT_TRUE(check_shard_settings(timed, true).is_ok());
+  timed.set_samples_per_texel(64);
+  EXPECT_TRUE(check_shard_settings(timed, true).is_ok());
+  v1::BakeSettings benchmark = sharded(2);
+  benchmark.set_reference_bake_id("0123456789abcdef0123456789abcdef");
+  EXPECT_NE(check_shard_settings(benchmark, true).message().find("settings.reference_bake_id"),
             std::string::npos);
   v1::BakeSettings adaptive = sharded(2);
   adaptive.set_adaptive(true);
@@ -76,6 +82,34 @@ TEST(ShardPlan, WorkerSettingsKeepTheWholeSampleCount) {
   EXPECT_EQ(w.shard_count(), 3u);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
   EXPECT_EQ(shard_settings(s, 0, 3).snapshot_format(), v1::SNAPSHOT_FORMAT_NONE);
+  // The whole bake's time budget and target error stay: each shard's backstop.
+  s.set_time_budget_s(30);
+  s.set_target_error(0.02);
+  EXPECT_EQ(shard_settings(s, 1, 3).time_budget_s(), 30);
+  EXPECT_EQ(shard_settings(s, 1, 3).target_error(), 0.02);
+}
+
+// The merged bake's termination: the coordinator's rule when it decided
+// one, else what the shards ended on (samples only when all did).
+TEST(ShardPlan, MergedTermination) {
+  using pipeline::Termination;
+  ShardPlan p;
+  p.count = 2;
+  p.shards = {{.index = 0, .termination = "samples"}, {.index = 1, .termination = "samples"}};
+  EXPECT_EQ(merged_termination(p), Termination::kSamples);
+  p.shards[1].termination = "time";  // a shard's own time backstop
+  EXPECT_EQ(merged_termination(p), Termination::kTime);
+  p.shards[1].termination = "stopped";
+  EXPECT_EQ(merged_termination(p), Termination::kStopped);
+  p.stop = "error";
+  EXPECT_EQ(merged_termination(p), Termination::kError);
+  auto back = plan_from_json(plan_to_json(p));
+  ASSERT_TRUE(back.is_ok()) << back.status().to_string();
+  EXPECT_EQ(back->stop, "error");
+  EXPECT_EQ(back->shards[1].termination, "stopped");
+  std::string bad = plan_to_json(p);
+  bad.replace(bad.find("\"error\""), 7, "\"never\"");
+  EXPECT_EQ(plan_from_json(bad).status().code(), StatusCode::kDataLoss);
 }
 
 TEST(ShardPlan, CombinedProgress) {
