@@ -1,10 +1,10 @@
 // The coordinator's merge cost per shard, in C++ (the figure the scaling
 // model, tests/bench/shard_model.py --merge-rate, takes): W shard states of T
 // covered texels in the accumulators.bin layout (pipeline/checkpoint.h) are
-// written, read back as the coordinator reads its downloads
-// (read_checkpoint), merged (merge_shard_states: Chan et al.'s parallel
-// Welford per texel) and timed; peak RSS at the end, since the merge holds
-// every shard's state at once.
+// written, then read back and folded one at a time as the coordinator does
+// (read_checkpoint, pipeline::ShardMerger: Chan et al.'s parallel Welford
+// per texel), each step timed; peak RSS at the end (the fold holds one
+// shard's state and the double accumulators, whatever W).
 //
 //   bench_shard_merge [--texels T] [--shards W] [--sh2] [--dir D]
 //
@@ -112,20 +112,28 @@ int main(int argc, char** argv) {
     }
     bytes += std::filesystem::file_size(paths.back());
   }
-  const auto t_read = Clock::now();
-  std::vector<BakeCheckpoint> states;
+  // As the coordinator merges (coordinator.cpp, fold_downloaded): each
+  // shard read back and folded in index order, one state in memory at a time.
+  double read_s = 0, merge_s = 0;
+  luxel::pipeline::ShardMerger merger;
   for (const std::string& p : paths) {
+    const auto t_read = Clock::now();
     auto c = luxel::pipeline::read_checkpoint(p);
+    read_s += seconds_since(t_read);
     if (!c) {
       std::fprintf(stderr, "read: %s\n", c.status().to_string().c_str());
       return 1;
     }
-    states.push_back(std::move(c.value()));
+    const auto t_merge = Clock::now();
+    if (auto st = merger.add(c.value()); !st.is_ok()) {
+      std::fprintf(stderr, "merge: %s\n", st.to_string().c_str());
+      return 1;
+    }
+    merge_s += seconds_since(t_merge);
   }
-  const double read_s = seconds_since(t_read);
-  const auto t_merge = Clock::now();
-  auto merged = luxel::pipeline::merge_shard_states(std::move(states));
-  const double merge_s = seconds_since(t_merge);
+  const auto t_finish = Clock::now();
+  auto merged = merger.finish();
+  merge_s += seconds_since(t_finish);
   if (!merged) {
     std::fprintf(stderr, "merge: %s\n", merged.status().to_string().c_str());
     return 1;
