@@ -380,6 +380,69 @@ class TokenTest(unittest.TestCase):
             daemon.cleanup()
 
 
+class FinishTest(unittest.TestCase):
+    """CancelBake with finish keeps the bake: a running one ends after its
+    current iteration with what it traced (SUCCEEDED, termination "stopped",
+    results downloadable); a queued one finishes as soon as it starts, and
+    the request survives a kill -9 of the daemon."""
+
+    def test_finish_running_and_queued_bakes(self):
+        binary = os.environ.get("LUXELD")
+        if not binary or not os.access(binary, os.X_OK):
+            self.skipTest("LUXELD does not name the luxeld binary")
+        args = ["--max-concurrent-bakes", "1", "--checkpoint-interval", "0.3"]
+        daemon = Luxeld(binary, args).start()
+        self.addCleanup(daemon.cleanup)
+        replaced = []
+        self.addCleanup(lambda: [d.cleanup() for d in replaced])
+        out = tempfile.TemporaryDirectory(prefix="luxel_finish_")
+        self.addCleanup(out.cleanup)
+        long_bake = dict(resolution=32, samples_per_texel=0, time_budget_s=600,
+                         paths_per_iteration=4096)
+        with Client(daemon.address) as c:
+            scene = c.upload_scene(CORNELL)
+            running = c.submit_bake(scene.scene_id, **long_bake)
+            queued = c.submit_bake(scene.scene_id, seed=2, **long_bake)
+            deadline = time.monotonic() + 60
+            while c.get_bake(running.bake_id).progress.paths == 0:
+                self.assertLess(time.monotonic(), deadline)
+                time.sleep(0.05)
+            asked = c.cancel_bake(queued.bake_id, finish=True)
+            self.assertEqual(state_name(asked.state), "QUEUED")
+            self.assertTrue(asked.finish_requested)
+            time.sleep(0.5)  # a checkpoint of the running bake
+        daemon.process.kill()
+        daemon.process.wait()
+        replaced.append(daemon)
+        daemon = Luxeld(binary, args, data_dir=daemon.data_dir).start(address=daemon.address)
+        replaced.append(daemon)
+        with Client(daemon.address) as c:
+            deadline = time.monotonic() + 60
+            while c.get_bake(running.bake_id).progress.paths == 0 or \
+                    state_name(c.get_bake(running.bake_id).state) != "RUNNING":
+                self.assertLess(time.monotonic(), deadline)
+                time.sleep(0.05)
+            c.cancel_bake(running.bake_id, finish=True)
+            done = c.wait(running.bake_id)
+            self.assertEqual(state_name(done.state), "SUCCEEDED", done.error_message)
+            self.assertEqual(done.termination, "stopped")
+            self.assertGreater(done.progress.paths, 0)
+            self.assertLess(done.progress.elapsed_s, 600)
+            self.assertIn("irradiance.exr", done.artifacts)
+            c.download(running.bake_id, "manifest.json", pathlib.Path(out.name) / "m.json")
+            manifest = json.loads((pathlib.Path(out.name) / "m.json").read_text())
+            self.assertEqual(manifest["stats"]["termination"], "stopped")
+            # The queued bake kept its request through the restart: it
+            # finished as soon as it started, with nothing traced.
+            other = c.wait(queued.bake_id)
+            self.assertEqual(state_name(other.state), "SUCCEEDED", other.error_message)
+            self.assertEqual(other.termination, "stopped")
+            self.assertEqual(other.progress.paths, 0)
+            # Finishing a finished bake changes nothing.
+            again = c.cancel_bake(running.bake_id, finish=True)
+            self.assertEqual(again.termination, "stopped")
+
+
 class OneDaemonTest(unittest.TestCase):
     """A second luxeld on the same --data-dir, or on the same port, refuses to
     start with a message saying why; the first one keeps serving."""
