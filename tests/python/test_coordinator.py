@@ -17,6 +17,7 @@ import os
 import pathlib
 import random
 import re
+import signal
 import subprocess
 import tempfile
 import time
@@ -316,6 +317,77 @@ class Coordinator(unittest.TestCase):
             self.assertIn("lost", notes, f"seed {seed}, kills {kills}")
             print(f"seed {seed}: kills (shard, paths, back at once) {kills}; attempts "
                   f"{[s.attempts for s in final.shards]}")
+
+    def test_stalled_worker_shard_reassigned(self):
+        # A worker that hangs (SIGSTOP: its connections stay open, nothing
+        # answers) is a stall, not a crash: a coordinator with short stall and
+        # grace periods gives its shard to the other worker, and the result
+        # is still the single bake's. The hung worker, continued, has its
+        # abandoned shard bake cancelled.
+        args = ["--workers", ",".join(w.address for w in self.workers), "--worker-grace", "2",
+                "--worker-stall-timeout", "2", "--checkpoint-interval", "0.3"]
+        coordinator = Luxeld(self.binary, args).start()
+        self.addCleanup(coordinator.cleanup)
+        with Client(coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            shard = running.shards[1]
+            victim = next(w for w in self.workers if w.address == shard.worker)
+            victim.process.send_signal(signal.SIGSTOP)
+            try:
+                final = self.finish_and_compare(c, info.bake_id)
+            finally:
+                victim.process.send_signal(signal.SIGCONT)
+            notes = "\n".join(final.notes)
+            self.assertIn("reassigned", notes)
+            self.assertEqual(final.shards[1].attempts, 2, notes)
+            self.assertNotEqual(final.shards[1].worker, victim.address)
+        with Client(victim.address) as w:
+            deadline = time.monotonic() + 30
+            while state_name(w.get_bake(shard.worker_bake_id).state) not in ("CANCELLED",
+                                                                              "SUCCEEDED"):
+                self.assertLess(time.monotonic(), deadline, "abandoned shard bake still runs")
+                time.sleep(0.1)
+
+    def test_garbage_accumulators_rejected(self):
+        # A worker whose accumulators.bin is damaged on its own disk serves
+        # it with a matching SHA-256 (it hashes what it sends); the file's own
+        # checksum catches it, and the shard is reassigned.
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+        self.coordinator.process.kill()
+        self.coordinator.process.wait()
+        shard = running.shards[1]
+        worker = next(w for w in self.workers if w.address == shard.worker)
+        with Client(worker.address) as w:
+            done = w.wait(shard.worker_bake_id)
+            self.assertEqual(state_name(done.state), "SUCCEEDED", done.error_message)
+        path = worker.data_dir / "bakes" / shard.worker_bake_id / "results" / "accumulators.bin"
+        data = bytearray(path.read_bytes())
+        for i in range(len(data) // 2, len(data) // 2 + 64):
+            data[i] ^= 0x5A
+        path.write_bytes(bytes(data))
+        type(self).coordinator = self.restart(self.coordinator)
+        with Client(self.coordinator.address) as c:
+            final = self.finish_and_compare(c, info.bake_id)
+            notes = "\n".join(final.notes)
+            self.assertIn("rejected", notes)
+            self.assertIn("checksum", notes)
+            self.assertEqual(final.shards[1].attempts, 2, notes)
+
+    def test_coordinator_sigterm_and_restart(self):
+        # A graceful stop leaves the shard bakes running on the workers; the
+        # next start re-attaches to them (no shard submitted twice).
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            self.wait_running(c, info.bake_id)
+        self.assertEqual(self.coordinator.stop(timeout=30), 0, self.coordinator.log())
+        type(self).coordinator = self.restart(self.coordinator)
+        with Client(self.coordinator.address) as c:
+            final = self.finish_and_compare(c, info.bake_id)
+            self.assertTrue(any("coordinator restarted" in n for n in final.notes), final.notes)
+            self.assertTrue(all(s.attempts == 1 for s in final.shards), final.shards)
 
     def test_worker_killed_shard_reassigned(self):
         with Client(self.coordinator.address) as c:
