@@ -113,6 +113,7 @@ int run(const DaemonConfig& config) {
     co.grace_s = config.worker_grace_s;
     co.stall_s = config.worker_stall_s;
     co.limits = ro.limits;
+    co.metrics = &metrics;
     coord = std::make_unique<coordinator::Coordinator>(*bakes.value(), co);
     ro.coordinator = coord.get();
     const auto workers = coord->pool().resolve();

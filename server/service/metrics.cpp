@@ -90,7 +90,27 @@ class Metrics::Impl : public prometheus::Collectable {
         streams(prometheus::BuildGauge()
                     .Name("luxel_active_streams")
                     .Help("Open streaming RPCs by kind")
-                    .Register(*registry)) {
+                    .Register(*registry)),
+        shard_events(prometheus::BuildCounter()
+                         .Name("luxel_coordinator_shard_events_total")
+                         .Help("Coordinator mode: shard events (submitted, lost, reattached, "
+                               "reassigned, downloaded, finish_asked)")
+                         .Register(*registry)),
+        shard_bytes(prometheus::BuildCounter()
+                        .Name("luxel_coordinator_shard_bytes_total")
+                        .Help("Coordinator mode: accumulators.bin bytes downloaded from workers")
+                        .Register(*registry)
+                        .Add({})),
+        shard_download_seconds(prometheus::BuildHistogram()
+                                   .Name("luxel_coordinator_shard_download_seconds")
+                                   .Help("Coordinator mode: one shard's accumulators download")
+                                   .Register(*registry)
+                                   .Add({}, kRpcBuckets)),
+        merge_seconds(prometheus::BuildCounter()
+                          .Name("luxel_coordinator_merge_seconds_total")
+                          .Help("Coordinator mode: seconds merging shards, by step (read, fold, "
+                                "finish)")
+                          .Register(*registry)) {
     for (const char* kind : {"uploads", "watchers", "downloads"}) streams.Add({{"kind", kind}});
   }
 
@@ -141,6 +161,10 @@ class Metrics::Impl : public prometheus::Collectable {
   Family<Counter>& rpcs;
   Family<Histogram>& rpc_seconds;
   Family<Gauge>& streams;
+  Family<Counter>& shard_events;
+  Counter& shard_bytes;
+  Histogram& shard_download_seconds;
+  Family<Counter>& merge_seconds;
 
   mutable std::mutex mu;  // the fields below
   mutable uint64_t paths_seen = 0, upload_seen = 0;
@@ -240,6 +264,21 @@ void Metrics::bake_ended(const std::string& bake_id, const std::string& outcome,
     impl_->running.erase(bake_id);
   }
   impl_->bake_seconds.Add({{"outcome", outcome}}, kBakeBuckets).Observe(seconds);
+}
+
+void Metrics::shard_event(const std::string& event) {
+  impl_->shard_events.Add({{"event", event}}).Increment();
+}
+
+void Metrics::shard_downloaded(uint64_t bytes, double seconds) {
+  impl_->shard_bytes.Increment(static_cast<double>(bytes));
+  impl_->shard_download_seconds.Observe(seconds);
+}
+
+void Metrics::shards_merged(double read_s, double fold_s, double finish_s) {
+  impl_->merge_seconds.Add({{"step", "read"}}).Increment(read_s);
+  impl_->merge_seconds.Add({{"step", "fold"}}).Increment(fold_s);
+  impl_->merge_seconds.Add({{"step", "finish"}}).Increment(finish_s);
 }
 
 std::string Metrics::render() {

@@ -62,6 +62,13 @@ class Metrics {
   // ("samples", "time", "error", "stopped", "cancelled", "interrupted", "failed").
   void bake_ended(const std::string& bake_id, const std::string& outcome, double seconds);
 
+  // Coordinator mode (coordinator/coordinator.h): a shard event ("submitted",
+  // "lost", "reattached", "reassigned", "downloaded", "finish_asked"), a
+  // shard's accumulators downloaded, and a bake's merge cost by step.
+  void shard_event(const std::string& event);
+  void shard_downloaded(uint64_t bytes, double seconds);
+  void shards_merged(double read_s, double fold_s, double finish_s);
+
   // Text exposition of every metric (what a scrape returns).
   std::string render();
 

@@ -22,11 +22,12 @@ import subprocess
 import tempfile
 import time
 import unittest
+import urllib.request
 
 import numpy as np
 
 from luxel_client import Client, luxel_pb2, state_name
-from luxeld_process import Luxeld
+from luxeld_process import Luxeld, free_loopback_port
 
 SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
                                      pathlib.Path(__file__).resolve().parents[2] / "scenes"))
@@ -79,9 +80,18 @@ class Coordinator(unittest.TestCase):
 
     @classmethod
     def start_coordinator(cls):
+        cls.metrics_address = f"127.0.0.1:{free_loopback_port()}"
         args = ["--workers", ",".join(w.address for w in cls.workers), "--worker-grace",
-                str(GRACE_S), "--checkpoint-interval", "0.3"]
+                str(GRACE_S), "--checkpoint-interval", "0.3", "--metrics-listen",
+                cls.metrics_address]
         return Luxeld(cls.binary, args).start()
+
+    def scrape(self):
+        """The coordinator's Prometheus metrics: {name{labels}: value}."""
+        with urllib.request.urlopen(f"http://{self.metrics_address}/metrics", timeout=10) as r:
+            text = r.read().decode()
+        return {line.rsplit(" ", 1)[0]: float(line.rsplit(" ", 1)[1])
+                for line in text.splitlines() if line and not line.startswith("#")}
 
     @classmethod
     def tearDownClass(cls):
@@ -162,6 +172,16 @@ class Coordinator(unittest.TestCase):
             self.assertTrue(any(e.HasField("snapshot") for e in events))
             self.assertEqual(sorted(c.server_status().workers),
                              sorted(w.address for w in self.workers))
+            # The coordinator's own metrics: shards submitted and downloaded,
+            # their bytes, the merge's steps.
+            m = self.scrape()
+            self.assertGreaterEqual(
+                m['luxel_coordinator_shard_events_total{event="downloaded"}'], 2)
+            self.assertGreaterEqual(
+                m['luxel_coordinator_shard_events_total{event="submitted"}'], 2)
+            self.assertGreater(m["luxel_coordinator_shard_bytes_total"], 2 * 40 * 40 * 10)
+            self.assertGreaterEqual(m["luxel_coordinator_shard_download_seconds_count"], 2)
+            self.assertGreater(m['luxel_coordinator_merge_seconds_total{step="fold"}'], 0)
         # The comparison tells bakes apart: another seed (other sample
         # sequences, same expectation) is outside its tolerance.
         with Client(self.workers[1].address) as w:

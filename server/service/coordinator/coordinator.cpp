@@ -19,6 +19,7 @@
 #include "service/coordinator/shard_plan.h"
 #include "service/files.h"
 #include "service/log.h"
+#include "service/metrics.h"
 
 namespace luxel::service::coordinator {
 
@@ -51,6 +52,9 @@ class Run {
 
   // ---- state shared by the threads (mu_)
   void note(const std::string& line);
+  void count(const char* event) {
+    if (options_.metrics) options_.metrics->shard_event(event);
+  }
   Status persist_locked();
   void fail(const Status& why);
   bool stopped() const { return stop_.load(); }
@@ -263,6 +267,7 @@ bool Run::assign(uint32_t k) {
     if (Status p = persist_locked(); !p.is_ok())
       log_event("coordinator_persist_failed", {{"error", p.to_string()}});
   }
+  count("submitted");
   note(strprintf("shard %u/%u: submitted to worker %s as bake %s (attempt %u)", k, plan_.count,
                  worker.c_str(), info.bake_id().c_str(), attempt));
   return true;
@@ -333,6 +338,7 @@ void Run::reassign(uint32_t k, const std::string& worker, const std::string& why
     if (Status st = persist_locked(); !st.is_ok())
       log_event("coordinator_persist_failed", {{"error", st.to_string()}});
   }
+  count("reassigned");
   note(strprintf("shard %u/%u: worker %s %s; reassigned (restarts from zero, same result)", k,
                  plan_.count, worker.c_str(), why.c_str()));
 }
@@ -343,6 +349,7 @@ void Run::lost(uint32_t k, const std::string& worker, const std::string& worker_
     std::lock_guard<std::mutex> lock(mu_);
     status_[k].set_state(v1::SHARD_STATE_RETRYING);
   }
+  count("lost");
   note(strprintf("shard %u/%u: worker %s lost (%s); retrying for %.0f s", k, plan_.count,
                  worker.c_str(), why.c_str(), options_.grace_s));
   const auto since = Clock::now();
@@ -359,6 +366,7 @@ void Run::lost(uint32_t k, const std::string& worker, const std::string& worker_
         std::lock_guard<std::mutex> lock(mu_);
         status_[k].set_state(v1::SHARD_STATE_RUNNING);
       }
+      count("reattached");
       note(strprintf("shard %u/%u: re-attached to bake %s on worker %s (%s, %llu paths)", k,
                      plan_.count, worker_bake.c_str(), worker.c_str(),
                      v1::BakeState_Name(info.state()).c_str(),
@@ -426,6 +434,8 @@ Status Run::download(uint32_t k, const std::string& worker, const std::string& w
     return verdict;
   }
   LUXEL_RETURN_IF_ERROR(rename_durable(part, shard_path(k)));
+  count("downloaded");
+  if (options_.metrics) options_.metrics->shard_downloaded(bytes, seconds_since(t0));
   log_event("shard_downloaded", {{"bake", job_.bake_id},
                                  {"shard", std::to_string(k)},
                                  {"worker", worker},
@@ -591,6 +601,7 @@ void Run::ask_to_finish(uint32_t k, const std::string& worker, const std::string
                                       {"error", grpc_text(st)}});
     return;
   }
+  count("finish_asked");
   std::lock_guard<std::mutex> lock(mu_);
   finish_sent_.insert(worker_bake);
 }
@@ -735,6 +746,8 @@ Result<pipeline::BakeResult> Run::merge() {
                               {"read_s", strprintf("%.4f", fold_read_s_)},
                               {"merge_s", strprintf("%.4f", fold_merge_s_)},
                               {"finish_s", strprintf("%.4f", seconds_since(t2))}});
+  if (options_.metrics)
+    options_.metrics->shards_merged(fold_read_s_, fold_merge_s_, seconds_since(t2));
   return result;
 }
 

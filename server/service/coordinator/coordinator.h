@@ -51,6 +51,10 @@
 #include "service/scene_store.h"
 #include "service/settings_translate.h"
 
+namespace luxel::service {
+class Metrics;
+}
+
 namespace luxel::service::coordinator {
 
 struct CoordinatorOptions {
@@ -59,6 +63,7 @@ struct CoordinatorOptions {
   double stall_s = 300;       // --worker-stall-timeout: no progress this long = lost
   uint32_t max_attempts = 4;  // per shard; past it the bake FAILS
   SettingsLimits limits;
+  Metrics* metrics = nullptr;  // shard events, downloads, merge cost (may be null)
 };
 
 // One sharded bake as the runner hands it over.
