@@ -44,7 +44,7 @@ class Coordinator;
 
 struct RunnerOptions {
   int max_concurrent_bakes = 1;
-  std::string device_spec;            // device::choose_device spec ("" = default)
+  std::string device_spec;  // device::choose_device spec ("" = default)
   // What settings.intersector = auto runs on (luxeld --intersector); the
   // fingerprint keeps "auto", so shards of one bake may run on workers with
   // other backends and still merge.

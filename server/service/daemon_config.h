@@ -15,7 +15,7 @@ struct DaemonConfig {
   std::string listen = "127.0.0.1:50051";  // loopback unless told otherwise
   std::string data_dir;                    // required
   int max_concurrent_bakes = 1;
-  std::string device;             // OpenCL device spec ("" = LUXEL_DEVICE, then default)
+  std::string device;  // OpenCL device spec ("" = LUXEL_DEVICE, then default)
   // What settings.intersector = auto means on this daemon: "auto" (Embree on
   // CPU devices, the OpenCL kernels on GPUs), "embree" or "opencl".
   std::string intersector = "auto";

@@ -10,6 +10,8 @@
 //
 // The states are synthetic (random means, M2 and weights that pass the
 // merge's checks): the merge's cost does not depend on the values.
+#include "pipeline/shard_merge.h"
+
 #include <sys/resource.h>
 
 #include <chrono>
@@ -22,7 +24,6 @@
 
 #include "common/status.h"
 #include "pipeline/checkpoint.h"
-#include "pipeline/shard_merge.h"
 #include "shared/bake.h"
 
 namespace {
@@ -60,7 +61,8 @@ BakeCheckpoint synthetic_shard(size_t texels, uint32_t index, uint32_t count, bo
     c.basis.resize(texels * (1 + kLobes));
     for (size_t t = 0; t < texels; ++t) {
       c.basis[t * (1 + kLobes)] = {16.0f, 0.0f, 0.0f, 0.0f};
-      for (uint32_t l = 1; l <= kLobes; ++l) c.basis[t * (1 + kLobes) + l] = {u(rng), u(rng), u(rng), 0.0f};
+      for (uint32_t l = 1; l <= kLobes; ++l)
+        c.basis[t * (1 + kLobes) + l] = {u(rng), u(rng), u(rng), 0.0f};
     }
   }
   return c;
@@ -91,7 +93,8 @@ int main(int argc, char** argv) {
     } else if (a == "--dir") {
       dir = next();
     } else {
-      std::fprintf(stderr, "usage: bench_shard_merge [--texels T] [--shards W] [--sh2] [--dir D]\n");
+      std::fprintf(stderr,
+                   "usage: bench_shard_merge [--texels T] [--shards W] [--sh2] [--dir D]\n");
       return 2;
     }
   }

@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "shared/bake.h"
 #include "shared/shard.h"
@@ -164,8 +165,8 @@ Status ShardMerger::add(const BakeCheckpoint& s) {
       return bad(strprintf("belongs to another bake (fingerprint %s, shard 0 has %s)",
                            s.fingerprint.c_str(), out_.fingerprint.c_str()));
     if (s.shard_count != out_.shard_count)
-      return bad(strprintf("is one of %u shards, shard 0 one of %u", s.shard_count,
-                           out_.shard_count));
+      return bad(
+          strprintf("is one of %u shards, shard 0 one of %u", s.shard_count, out_.shard_count));
     if (s.width != out_.width || s.height != out_.height || s.mean.size() != texels_)
       return bad(strprintf("is a %ux%u lightmap with %zu covered texels, shard 0 %ux%u with %zu",
                            s.width, s.height, s.mean.size(), out_.width, out_.height, texels_));
@@ -173,52 +174,67 @@ Status ShardMerger::add(const BakeCheckpoint& s) {
       return bad("has other directional encodings than shard 0");
   }
   if (s.shard_index != added_)
-    return bad(strprintf("arrives out of order: shard %u is next (shards fold in index order)",
-                         added_));
+    return bad(
+        strprintf("arrives out of order: shard %u is next (shards fold in index order)", added_));
   out_.paths_done += s.paths_done;
   out_.nonfinite += s.nonfinite;
   out_.iteration = std::max(out_.iteration, s.iteration);
   out_.elapsed_s = std::max(out_.elapsed_s, s.elapsed_s);
-  for (size_t t = 0; t < texels_; ++t) {
-    double* a = &acc_[t * kTexelDoubles];  // mean[4], m2[4], w, w2
-    const double wb = s.weight[t].x;
-    spp_[t] += s.spp[t];
-    a[9] += s.weight[t].y;
-    if (!(wb > 0)) continue;  // nothing accumulated here
-    const double wa = a[8];
-    const double w = wa + wb;
-    a[8] = w;
-    const float* mb = &s.mean[t].x;
-    const float* m2b = &s.m2[t].x;
-    for (int c = 0; c < 4; ++c) {
-      const double d = double{mb[c]} - a[c];
-      a[c] += d * (wb / w);
-      a[4 + c] += double{m2b[c]} + d * d * (wa * wb / w);
-    }
-  }
-  // Encodings: per encoding, the header's weight sum adds, every other
-  // value (running means) is the weight-sum-weighted mean.
-  for (size_t t = 0; t < texels_ && stride_ > 0; ++t) {
-    size_t offset = t * stride_;
-    for (size_t e = 0; e < out_.basis_layout.size(); ++e) {
-      const size_t values = 1 + (out_.basis_layout[e] & 0xFFFFu);
-      const cl::float4* st = &s.basis[offset];
-      const double wb = st[0].x;
-      double& total = totals_[t * out_.basis_layout.size() + e];
-      if (wb > 0) {
-        total += wb;
-        const double f = wb / total;
-        double* acc = &basis_[offset * 4];
-        const float* h = &st[0].x;
-        for (int c = 1; c < 4; ++c) acc[c] += (double{h[c]} - acc[c]) * f;
-        for (size_t k = 1; k < values; ++k) {
-          const float* l = &st[k].x;
-          for (int c = 0; c < 4; ++c) acc[k * 4 + c] += (double{l[c]} - acc[k * 4 + c]) * f;
-        }
+  // Texels are independent: ranges fold on several threads, each texel's
+  // arithmetic unchanged (same bits whatever the thread count).
+  auto fold = [&](size_t begin, size_t end) {
+    for (size_t t = begin; t < end; ++t) {
+      double* a = &acc_[t * kTexelDoubles];  // mean[4], m2[4], w, w2
+      const double wb = s.weight[t].x;
+      spp_[t] += s.spp[t];
+      a[9] += s.weight[t].y;
+      if (!(wb > 0)) continue;  // nothing accumulated here
+      const double wa = a[8];
+      const double w = wa + wb;
+      a[8] = w;
+      const float* mb = &s.mean[t].x;
+      const float* m2b = &s.m2[t].x;
+      for (int c = 0; c < 4; ++c) {
+        const double d = double{mb[c]} - a[c];
+        a[c] += d * (wb / w);
+        a[4 + c] += double{m2b[c]} + d * d * (wa * wb / w);
       }
-      offset += values;
     }
-  }
+    // Encodings: per encoding, the header's weight sum adds, every other
+    // value (running means) is the weight-sum-weighted mean.
+    for (size_t t = begin; t < end && stride_ > 0; ++t) {
+      size_t offset = t * stride_;
+      for (size_t e = 0; e < out_.basis_layout.size(); ++e) {
+        const size_t values = 1 + (out_.basis_layout[e] & 0xFFFFu);
+        const cl::float4* st = &s.basis[offset];
+        const double wb = st[0].x;
+        double& total = totals_[t * out_.basis_layout.size() + e];
+        if (wb > 0) {
+          total += wb;
+          const double f = wb / total;
+          double* acc = &basis_[offset * 4];
+          const float* h = &st[0].x;
+          for (int c = 1; c < 4; ++c) acc[c] += (double{h[c]} - acc[c]) * f;
+          for (size_t k = 1; k < values; ++k) {
+            const float* l = &st[k].x;
+            for (int c = 0; c < 4; ++c) acc[k * 4 + c] += (double{l[c]} - acc[k * 4 + c]) * f;
+          }
+        }
+        offset += values;
+      }
+    }
+  };
+  constexpr size_t kMinTexelsPerThread = size_t{1} << 16;
+  const size_t threads =
+      threads_ > 0 ? std::min<size_t>(threads_, std::max<size_t>(texels_, 1))
+                   : std::clamp<size_t>(texels_ / kMinTexelsPerThread, 1,
+                                        std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  const size_t chunk = (texels_ + threads - 1) / threads;
+  for (size_t i = 1; i < threads; ++i)
+    pool.emplace_back(fold, std::min(texels_, i * chunk), std::min(texels_, (i + 1) * chunk));
+  fold(0, std::min(texels_, chunk));
+  for (std::thread& t : pool) t.join();
   ++added_;
   return Status::ok();
 }
@@ -238,8 +254,8 @@ Result<BakeCheckpoint> ShardMerger::finish() {
   out_.spp.resize(texels_);
   out_.basis.resize(texels_ * stride_);
   auto f4 = [](const double* v) {
-    return cl::float4{static_cast<float>(v[0]), static_cast<float>(v[1]),
-                      static_cast<float>(v[2]), static_cast<float>(v[3])};
+    return cl::float4{static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2]),
+                      static_cast<float>(v[3])};
   };
   for (size_t t = 0; t < texels_; ++t) {
     const double* a = &acc_[t * kTexelDoubles];

@@ -51,12 +51,16 @@ Result<BakeCheckpoint> merge_shard_states(std::vector<BakeCheckpoint> shards);
 // one. The merger can be reused after finish().
 class ShardMerger {
  public:
+  // threads: how many fold texel ranges side by side (0: one per hardware
+  // thread, ranges of at least 2^16 texels); the bits do not depend on it.
+  explicit ShardMerger(unsigned threads = 0) : threads_(threads) {}
   Status add(const BakeCheckpoint& shard);
   Result<BakeCheckpoint> finish();
   uint32_t added() const { return added_; }
 
  private:
   void reset();
+  unsigned threads_ = 0;
   BakeCheckpoint out_;  // header fields, then the result
   uint32_t added_ = 0;
   size_t texels_ = 0, stride_ = 0;

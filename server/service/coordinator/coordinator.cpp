@@ -576,7 +576,8 @@ void Run::decide_stop(const v1::BakeProgress& combined) {
   note(strprintf("stop rule \"%s\": %s; every shard asked to finish with what it traced",
                  rule.c_str(), why.c_str()));
   for (const ShardRecord& r : recs)
-    if (!r.downloaded && !r.worker_bake_id.empty()) ask_to_finish(r.index, r.worker, r.worker_bake_id);
+    if (!r.downloaded && !r.worker_bake_id.empty())
+      ask_to_finish(r.index, r.worker, r.worker_bake_id);
 }
 
 // CancelBake with finish on a shard bake, once per bake and process, when a
@@ -733,14 +734,14 @@ Result<pipeline::BakeResult> Run::merge() {
         job_.bake_id, [&](v1::BakeInfo& b) { b.set_lightmap_layout(line); }, false);
   };
   const pipeline::Termination why = merged_termination(plan_);
-  auto result = pipeline::finish_merged_bake(*job_.scene, *job_.settings, *job_.ctx,
-                                             merged.value(), why, hooks);
+  auto result = pipeline::finish_merged_bake(*job_.scene, *job_.settings, *job_.ctx, merged.value(),
+                                             why, hooks);
   if (result && why != pipeline::Termination::kSamples)
-    note(strprintf("merged %llu paths of the shards (ended on %s): mean %.1f samples per texel, "
-                   "minimum %u, error estimate %.4g",
-                   static_cast<unsigned long long>(result.value().paths),
-                   pipeline::termination_name(why), result.value().mean_spp,
-                   result.value().min_spp, result.value().error));
+    note(strprintf(
+        "merged %llu paths of the shards (ended on %s): mean %.1f samples per texel, "
+        "minimum %u, error estimate %.4g",
+        static_cast<unsigned long long>(result.value().paths), pipeline::termination_name(why),
+        result.value().mean_spp, result.value().min_spp, result.value().error));
   log_event("shards_merged", {{"bake", job_.bake_id},
                               {"shards", std::to_string(plan_.count)},
                               {"read_s", strprintf("%.4f", fold_read_s_)},

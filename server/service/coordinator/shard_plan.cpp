@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "service/settings_translate.h"
 
@@ -156,8 +156,7 @@ Result<ShardPlan> plan_from_json(const std::string& text) {
       for (const auto& a : j.at("abandoned"))
         plan.abandoned.emplace_back(a.at(0).get<std::string>(), a.at(1).get<std::string>());
     plan.stop = j.value("stop", std::string());
-    if (!plan.stop.empty() && plan.stop != "time" && plan.stop != "error" &&
-        plan.stop != "stopped")
+    if (!plan.stop.empty() && plan.stop != "time" && plan.stop != "error" && plan.stop != "stopped")
       return Status(StatusCode::kDataLoss, "shards.json: unknown stop rule " + plan.stop);
     if (plan.shards.size() != plan.count)
       return Status(StatusCode::kDataLoss, "shards.json: shard count does not match its list");

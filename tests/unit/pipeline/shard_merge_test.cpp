@@ -207,7 +207,7 @@ class ShardMergeTest : public ::testing::Test {
   }
   static Result<BakeResult> finish(const BakeCheckpoint& merged) {
     return pipeline::finish_merged_bake(*scene_, settings(), *ctx_, merged,
-                                           pipeline::Termination::kSamples, hooks());
+                                        pipeline::Termination::kSamples, hooks());
   }
 
   static device::Context* ctx_;
@@ -321,12 +321,15 @@ TEST_F(ShardMergeTest, MergedShardsGiveTheSingleBake) {
     auto permuted = pipeline::merge_shard_states(reversed);
     ASSERT_TRUE(permuted);
     expect_same_bits(merged.value(), permuted.value());
-    // The coordinator's fold, one shard at a time in index order: same bits.
-    pipeline::ShardMerger fold;
-    for (const BakeCheckpoint& st : states) ASSERT_TRUE(fold.add(st).is_ok());
-    auto folded = fold.finish();
-    ASSERT_TRUE(folded) << folded.status().to_string();
-    expect_same_bits(merged.value(), folded.value());
+    // The coordinator's fold, one shard at a time in index order: same bits,
+    // on one thread or on several (texel ranges side by side).
+    for (unsigned threads : {1u, 3u}) {
+      pipeline::ShardMerger fold(threads);
+      for (const BakeCheckpoint& st : states) ASSERT_TRUE(fold.add(st).is_ok());
+      auto folded = fold.finish();
+      ASSERT_TRUE(folded) << folded.status().to_string();
+      expect_same_bits(merged.value(), folded.value());
+    }
 
     auto finished = finish(merged.value());
     ASSERT_TRUE(finished) << finished.status().to_string();
@@ -457,8 +460,10 @@ TEST_F(ShardMergeTest, ShardsStoppedEarlyMergeToTheUnionOfTheirSamples) {
     // of either is below 1 %.
     double merged_sum = 0, single_sum = 0;
     for (size_t i = 0; i < single_->irradiance.size(); i += 4) {
-      merged_sum += f.value().irradiance[i] + f.value().irradiance[i + 1] + f.value().irradiance[i + 2];
-      single_sum += single_->irradiance[i] + single_->irradiance[i + 1] + single_->irradiance[i + 2];
+      merged_sum +=
+          f.value().irradiance[i] + f.value().irradiance[i + 1] + f.value().irradiance[i + 2];
+      single_sum +=
+          single_->irradiance[i] + single_->irradiance[i + 1] + single_->irradiance[i + 2];
     }
     EXPECT_NEAR(merged_sum / single_sum, 1.0, 0.03);
   }
@@ -526,7 +531,7 @@ TEST_F(ShardMergeTest, TiledShardsAndTiledFinish) {
   BakeSettings whole = settings();
   whole.device_memory_budget_mib = budget;
   auto in_tiles = pipeline::finish_merged_bake(*scene_, whole, *ctx_, merged.value(),
-                                                   pipeline::Termination::kSamples, hooks());
+                                               pipeline::Termination::kSamples, hooks());
   ASSERT_TRUE(in_tiles) << in_tiles.status().to_string();
   EXPECT_GE(in_tiles.value().tiles, 2u);
   EXPECT_EQ(in_tiles.value().paths, plain.value().paths);
@@ -747,8 +752,8 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   // any bake (the daemon's default denoise is atrous); no accumulators.bin.
   BakeSettings denoised = settings();
   denoised.denoise = pipeline::Denoise::kAtrous;
-  auto finished = pipeline::finish_merged_bake(
-      *scene_, denoised, *ctx_, merged.value(), pipeline::Termination::kSamples, hooks());
+  auto finished = pipeline::finish_merged_bake(*scene_, denoised, *ctx_, merged.value(),
+                                               pipeline::Termination::kSamples, hooks());
   ASSERT_TRUE(finished) << finished.status().to_string();
   EXPECT_EQ(finished.value().irradiance_denoised.size(), finished.value().irradiance.size());
   const std::string out = ::testing::TempDir() + "/shard_merge_outputs";
@@ -762,7 +767,7 @@ TEST_F(ShardMergeTest, CorruptOrMismatchedShardsAreRefusedByName) {
   BakeSettings more = settings();
   more.samples_per_texel = kSamples + 16;
   auto r = pipeline::finish_merged_bake(*scene_, more, *ctx_, merged.value(),
-                                          pipeline::Termination::kSamples, hooks());
+                                        pipeline::Termination::kSamples, hooks());
   ASSERT_FALSE(r);
   EXPECT_NE(r.status().message().find("settings.samples_per_texel"), std::string::npos);
 }
