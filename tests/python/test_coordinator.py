@@ -453,6 +453,33 @@ class Coordinator(unittest.TestCase):
             # Re-attached, not submitted again: one worker bake per shard.
             self.assertTrue(all(s.attempts == 1 for s in final.shards), final.shards)
 
+    def test_coordinator_killed_mid_merge(self):
+        # Killed with one shard downloaded and folded and the other still
+        # running (its worker held still with SIGSTOP until the kill): the
+        # restarted coordinator folds the downloaded shard again from its
+        # file, re-attaches to the running one, and the result is exact.
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+            self.assertNotEqual(running.shards[0].worker, running.shards[1].worker)
+            held = next(w for w in self.workers if w.address == running.shards[1].worker)
+            held.process.send_signal(signal.SIGSTOP)
+            try:
+                deadline = time.monotonic() + 120
+                while c.get_bake(info.bake_id).shards[0].state != \
+                        luxel_pb2.SHARD_STATE_DOWNLOADED:
+                    self.assertLess(time.monotonic(), deadline, "shard 0 never downloaded")
+                    time.sleep(0.05)
+                self.coordinator.process.kill()
+                self.coordinator.process.wait()
+            finally:
+                held.process.send_signal(signal.SIGCONT)
+        type(self).coordinator = self.restart(self.coordinator)
+        with Client(self.coordinator.address) as c:
+            final = self.finish_and_compare(c, info.bake_id)
+            self.assertTrue(any("1 of 2 shards downloaded" in n for n in final.notes), final.notes)
+            self.assertTrue(all(s.attempts == 1 for s in final.shards), final.shards)
+
     def test_mismatched_accumulators_rejected(self):
         # An impostor: a finished shard bake of other settings (another seed)
         # on the worker that runs shard 1, put in shard 1's place in the
