@@ -116,7 +116,12 @@ void print_bake_info(const luxel::v1::BakeInfo& b) {
               format_time(b.submitted_at()).c_str(), format_time(b.started_at()).c_str(),
               format_time(b.finished_at()).c_str());
   if (!b.features().empty()) std::printf("features   %s\n", b.features().c_str());
-  if (!b.termination().empty()) std::printf("stopped by %s\n", b.termination().c_str());
+  if (b.termination() == "stopped")
+    std::printf("stopped by a finish request (luxel cancel --finish)\n");
+  else if (!b.termination().empty())
+    std::printf("stopped by %s\n", b.termination().c_str());
+  else if (b.finish_requested())
+    std::printf("finish     requested: ends with the samples it has\n");
   if (!b.error_message().empty()) std::printf("error      %s\n", b.error_message().c_str());
   if (b.nonfinite_dropped() > 0)
     std::printf("warning    %llu non-finite samples dropped\n",
