@@ -22,11 +22,11 @@ serial in W: this term and the merge grow with W while tracing shrinks as
 The single-machine baseline is one luxeld without sharding: setup + P/rate
 + finish (no upload through the coordinator, no download, no merge).
 
-Defaults are measured figures, each named below; the merge rate is a numpy
-stand-in for the coordinator's C++ merge (measure it here with
---measure-merge N; the coordinator's own figure replaces it when it exists).
+Defaults are measured figures, each named below; the merge rate is the
+coordinator's own (read back and fold, bench_shard_merge); --measure-merge N
+measures the older numpy stand-in instead.
 
-usage: shard_model.py [--link-gbit 1,10] [--paths-per-s R] [--topology star|tree] ... [--check]
+usage: shard_model.py [--link-gbit 1,10] [--paths-per-s R] [--topology star|tree] [--no-overlap] ... [--check]
 """
 import argparse
 import math
@@ -124,7 +124,7 @@ def print_tables(p):
     print(f"bake: {p.texels:,} covered texels x {p.samples} spp = "
           f"{p.texels * p.samples / 1e9:.2f} G paths; {state_bytes(p.encodings)} B/texel "
           f"({'+'.join(p.encodings)}), shard state {p.texels * state_bytes(p.encodings) / 1e6:.0f} MB; "
-          f"{p.paths_per_s / 1e6:.2f} M paths/s per worker; merge {p.merge_rate / 1e6:.0f} M texels/s; "
+          f"{p.paths_per_s / 1e6:.2f} M paths/s per worker; merge {p.merge_rate / 1e6:.2f} M texels/s; "
           f"setup {p.setup_s} s, finish {p.finish_s} s; scene {p.scene_mb} MB; "
           f"download and merge {'overlapped' if p.overlap else 'serial'}, {p.topology}")
     for g in p.link_gbit:
@@ -236,12 +236,15 @@ def main():
     a.add_argument("--scene-mb", type=float, default=35.1, help="scene upload (sponza.glb: 35.1 MB)")
     a.add_argument("--encodings", default="irradiance", help=f"comma list of {', '.join(LOBES)}")
     a.add_argument("--merge-rate", type=float, default=None,
-                   help="merged texels/s at the coordinator (default: the numpy figure "
-                        "in docs/performance.md, or --measure-merge)")
+                   help="merged texels/s at the coordinator, reading each shard back "
+                        "included (default: bench_shard_merge's figure in docs/performance.md; "
+                        "--measure-merge for the numpy stand-in)")
     a.add_argument("--setup-s", type=float, default=5.7,
                    help="per-worker setup (bench_bake --memory, 4096² Cornell box: 5.7 s)")
     a.add_argument("--finish-s", type=float, default=None, help="dilation + writing at 4096²")
-    a.add_argument("--overlap", action="store_true", help="merge while the next shard downloads")
+    a.add_argument("--no-overlap", dest="overlap", action="store_false",
+                   help="merge after every shard has downloaded (the coordinator folds each "
+                        "shard as it arrives: overlap is the default)")
     a.add_argument("--topology", choices=("star", "tree"), default="star",
                    help="every shard to the coordinator (star), or pairwise merges among the "
                         "workers first (tree)")
@@ -266,7 +269,9 @@ def main():
 
 
 # Measured defaults (docs/performance.md, "Sharded bakes: a scaling model").
-MERGE_RATE = 15e6
+# The coordinator's read + fold of shard states, C++ (bench_shard_merge,
+# 4 x 10.8 M texels, 2-core AMD EPYC): 4.76 M texels/s.
+MERGE_RATE = 4.76e6
 FINISH_S = 10.0
 
 if __name__ == "__main__":
