@@ -214,6 +214,16 @@ class Coordinator(unittest.TestCase):
                         self.assertLess(time.monotonic(), deadline, f"shard {shard.index} still runs")
                         time.sleep(0.05)
 
+    def kill_coordinator_while_shards_run(self):
+        """A two-shard bake submitted, both shards running on the workers,
+        then kill -9 of the coordinator: (the bake's info, its running info)."""
+        with Client(self.coordinator.address) as c:
+            info = self.submit(c, shards=2)
+            running = self.wait_running(c, info.bake_id)
+        self.coordinator.process.kill()
+        self.coordinator.process.wait()
+        return info, running
+
     def worker_bakes(self, info):
         """The shard bakes behind a coordinator bake, as their workers see them."""
         out = []
@@ -373,11 +383,7 @@ class Coordinator(unittest.TestCase):
         # A worker whose accumulators.bin is damaged on its own disk serves
         # it with a matching SHA-256 (it hashes what it sends); the file's own
         # checksum catches it, and the shard is reassigned.
-        with Client(self.coordinator.address) as c:
-            info = self.submit(c, shards=2)
-            running = self.wait_running(c, info.bake_id)
-        self.coordinator.process.kill()
-        self.coordinator.process.wait()
+        info, running = self.kill_coordinator_while_shards_run()
         shard = running.shards[1]
         worker = next(w for w in self.workers if w.address == shard.worker)
         with Client(worker.address) as w:
@@ -441,11 +447,7 @@ class Coordinator(unittest.TestCase):
             self.assertEqual(final.shards[shard.index].attempts, 1, notes)
 
     def test_coordinator_killed_and_restarted(self):
-        with Client(self.coordinator.address) as c:
-            info = self.submit(c, shards=2)
-            self.wait_running(c, info.bake_id)
-        self.coordinator.process.kill()
-        self.coordinator.process.wait()
+        info, _ = self.kill_coordinator_while_shards_run()
         type(self).coordinator = self.restart(self.coordinator)
         with Client(self.coordinator.address) as c:
             final = self.finish_and_compare(c, info.bake_id)
@@ -484,11 +486,7 @@ class Coordinator(unittest.TestCase):
         # An impostor: a finished shard bake of other settings (another seed)
         # on the worker that runs shard 1, put in shard 1's place in the
         # coordinator's state while the coordinator is down.
-        with Client(self.coordinator.address) as c:
-            info = self.submit(c, shards=2)
-            running = self.wait_running(c, info.bake_id)
-        self.coordinator.process.kill()
-        self.coordinator.process.wait()
+        info, running = self.kill_coordinator_while_shards_run()
         worker = running.shards[1].worker
         with Client(worker) as w:
             impostor = self.submit(w, seed=7, shard_index=1, shard_count=2)
