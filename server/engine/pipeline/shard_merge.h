@@ -59,6 +59,9 @@ class ShardMerger {
   uint32_t added() const { return added_; }
 
  private:
+  friend Result<BakeCheckpoint> merge_shard_states(std::vector<BakeCheckpoint> shards);
+  // check = false: the caller ran check_shard on this state already.
+  Status add(const BakeCheckpoint& shard, bool check);
   void reset();
   unsigned threads_ = 0;
   BakeCheckpoint out_;  // header fields, then the result

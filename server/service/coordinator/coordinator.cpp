@@ -80,6 +80,9 @@ class Run {
   // ---- the combining loop
   v1::BakeProgress publish_progress();
   void publish_snapshot();
+  // CancelBake (finish: keep what it traced) of a worker's bake, within deadline_s.
+  grpc::Status cancel_on(const std::string& worker, const std::string& worker_bake, bool finish,
+                         double deadline_s);
   void cancel_workers();
   void cancel_abandoned();
   Status fold_downloaded();
@@ -588,13 +591,7 @@ void Run::ask_to_finish(uint32_t k, const std::string& worker, const std::string
     std::lock_guard<std::mutex> lock(mu_);
     if (plan_.stop.empty() || finish_sent_.count(worker_bake)) return;
   }
-  grpc::ClientContext ctx;
-  pool_.prepare(ctx, 5);
-  v1::CancelBakeRequest req;
-  req.set_bake_id(worker_bake);
-  req.set_finish(true);
-  v1::BakeInfo info;
-  grpc::Status st = pool_.stub(worker)->CancelBake(&ctx, req, &info);
+  grpc::Status st = cancel_on(worker, worker_bake, true, 5);
   if (!st.ok()) {
     log_event("shard_finish_failed", {{"bake", job_.bake_id},
                                       {"shard", std::to_string(k)},
@@ -654,6 +651,17 @@ void Run::publish_snapshot() {
   preview_s_ += seconds_since(t0);
 }
 
+grpc::Status Run::cancel_on(const std::string& worker, const std::string& worker_bake, bool finish,
+                            double deadline_s) {
+  grpc::ClientContext ctx;
+  pool_.prepare(ctx, deadline_s);
+  v1::CancelBakeRequest req;
+  req.set_bake_id(worker_bake);
+  req.set_finish(finish);
+  v1::BakeInfo info;
+  return pool_.stub(worker)->CancelBake(&ctx, req, &info);
+}
+
 void Run::cancel_workers() {
   std::vector<ShardRecord> recs;
   {
@@ -662,12 +670,7 @@ void Run::cancel_workers() {
   }
   for (const ShardRecord& r : recs) {
     if (r.downloaded || r.worker_bake_id.empty()) continue;
-    grpc::ClientContext ctx;
-    pool_.prepare(ctx, 2);
-    v1::CancelBakeRequest req;
-    req.set_bake_id(r.worker_bake_id);
-    v1::BakeInfo info;
-    (void)pool_.stub(r.worker)->CancelBake(&ctx, req, &info);
+    (void)cancel_on(r.worker, r.worker_bake_id, false, 2);
   }
 }
 
@@ -683,12 +686,7 @@ void Run::cancel_abandoned() {
   if (todo.empty()) return;
   std::vector<std::pair<std::string, std::string>> done;
   for (const auto& [worker, bake] : todo) {
-    grpc::ClientContext ctx;
-    pool_.prepare(ctx, 1);
-    v1::CancelBakeRequest req;
-    req.set_bake_id(bake);
-    v1::BakeInfo info;
-    grpc::Status st = pool_.stub(worker)->CancelBake(&ctx, req, &info);
+    grpc::Status st = cancel_on(worker, bake, false, 1);
     if (st.ok() || st.error_code() == grpc::StatusCode::NOT_FOUND) {
       done.emplace_back(worker, bake);
       log_event("abandoned_shard_cancelled",
