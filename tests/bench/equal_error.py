@@ -65,8 +65,10 @@ SHARED = ["cornell_box.glb", "breakfast_room.glb", "sponza.glb", "gas_station.gl
 
 
 def configs(leave_one_out):
-    out = [("before", set()), ("analytic", {"analytic"}), ("adaptive", {"adaptive"}),
-           ("denoise", {"denoise"}), ("all", set(FEATURES))]
+    # "default": no option at all, what a bake gets today (its features are
+    # whatever the defaults are: None).
+    out = [("before", set()), ("default", None), ("analytic", {"analytic"}), ("adaptive", {"adaptive"}),
+           ("denoise", {"denoise"}), ("stitch", {"stitch"}), ("all", set(FEATURES))]
     if leave_one_out:
         out += [("all_but_" + f, set(FEATURES) - {f}) for f in FEATURES if f != "stitch"]
     return out
@@ -89,6 +91,8 @@ def parse_args(argv):
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--paths-per-iteration", type=int, default=65536)
     p.add_argument("--leave-one-out", action="store_true", help="also all_but_X configurations")
+    p.add_argument("--configs", default=None,
+                   help="comma-separated configurations to run (default: all; 'before' is always run)")
     p.add_argument("--device", default=None)
     p.add_argument("--quick", action="store_true", help="smoke run: Cornell box 32^2, budgets 0.2,0.4")
     a = p.parse_args(argv)
@@ -107,7 +111,10 @@ def schema(luxel):
 
 
 def options_for(features_on, sch):
-    """CLI options that set every feature on or off; None when a needed setting is missing."""
+    """CLI options that set every feature on or off; None when a needed setting is missing.
+    features_on None: no options (the defaults)."""
+    if features_on is None:
+        return []
     opts = []
     for f, (name, on, off) in FEATURES.items():
         want = on if f in features_on else off
@@ -210,6 +217,12 @@ def main(argv):
     version = m.group(1) if m else machine["luxel_version"]
     ref_opts = options_for(set(), sch)
     cfgs = configs(args.leave_one_out)
+    if args.configs:
+        wanted = {"before"} | {c.strip() for c in args.configs.split(",") if c.strip()}
+        unknown = wanted - {c for c, _ in cfgs}
+        if unknown:
+            sys.exit("unknown configuration(s): %s" % ", ".join(sorted(unknown)))
+        cfgs = [(c, on) for c, on in cfgs if c in wanted]
     results, failures = {"machine": machine, "budgets": args.budget_list, "scenes": {}}, []
     t_start = time.monotonic()
     for name, path, res in scene_list(args):
@@ -243,7 +256,8 @@ def main(argv):
                     failures.append("%s/%s at %g s: %s" % (name, cname, b, msg))
                     continue
                 man = json.loads((bdir / "manifest.json").read_text(encoding="utf-8"))
-                fmap = bdir / ("irradiance_denoised.exr" if "denoise" in on else "irradiance.exr")
+                denoised = "denoise" in on if on is not None else sch["denoise"]["default"] != "off"
+                fmap = bdir / ("irradiance_denoised.exr" if denoised else "irradiance.exr")
                 if not fmap.is_file():
                     failures.append("%s/%s: %s missing" % (name, cname, fmap.name))
                     continue
@@ -252,7 +266,8 @@ def main(argv):
                           "paths": man["stats"]["paths"]})
                 e["cost_s"] = e["tracing_s"] + e["post_s"]
                 ladder.append(e)
-            sres["configs"][cname] = {"features": sorted(on), "options": opts, "ladder": ladder}
+            sres["configs"][cname] = {"features": sorted(on) if on is not None else "defaults",
+                                      "options": opts, "ladder": ladder}
             last = ladder[-1] if ladder else {}
             print("  %-16s %s" % (cname, "  ".join("%gs: %.4g" % (x["budget_s"], x["rmse"]) for x in ladder)),
                   flush=True)

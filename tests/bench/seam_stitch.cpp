@@ -3,8 +3,10 @@
 // (dilated, unstitched) and stitches it, printing the discontinuity before
 // and after, the most negative value, and the solve's CPU seconds.
 //   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]
-//                     [--min-edge TEXELS] [--clamp 0|1]
-// The defaults are the bake's. SEAM_DEBUG=1 also prints every 20th-part
+//                     [--min-edge TEXELS] [--min-chart TEXELS] [--clamp 0|1]
+//                     [--write OUT.exr]
+// The defaults are the bake's. --write saves the stitched map (to compare
+// option choices against a reference without re-baking). SEAM_DEBUG=1 also prints every 20th-part
 // seam with its values and the seams around the lowest texel.
 #include "output/seam_stitch.h"
 
@@ -31,14 +33,17 @@ int main(int argc, char** argv) {
   }
   output::SeamStitchOptions o;
   bool clamp = true;  // as the bake does for irradiance
+  std::string write_path;
   for (int i = 3; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
+    if (a == "--write") write_path = argv[i + 1];
     const double v = std::atof(argv[i + 1]);
     if (a == "--lambda") o.seam_weight = v;
     if (a == "--padding") o.padding_weight = v;
     if (a == "--tolerance") o.tolerance = v;
     if (a == "--points") o.samples_per_texel = v;
     if (a == "--min-edge") o.min_edge_texels = v;
+    if (a == "--min-chart") o.min_chart_texels = v;
     if (a == "--clamp") clamp = v != 0;
   }
   auto scene = scene::import_gltf_file(argv[1]);
@@ -54,7 +59,7 @@ int main(int argc, char** argv) {
   const double find_s = double(std::clock() - c0) / CLOCKS_PER_SEC;
   std::vector<output::StitchEdge> edges;
   for (const auto& e : seams.edges)
-    if (e.page == 0) edges.push_back({e.a0, e.a1, e.b0, e.b1});
+    if (e.page == 0) edges.push_back({e.a0, e.a1, e.b0, e.b1, e.chart_texels});
   output::Image& im = img.value();
   std::vector<float> coverage(im.texel_count());
   for (size_t t = 0; t < coverage.size(); ++t) coverage[t] = im.pixels[t * 4 + 3];
@@ -111,9 +116,15 @@ int main(int argc, char** argv) {
       "edges %zu (hard %zu, non-manifold %zu, cross-page %zu) points %zu unknowns %zu\n"
       "before rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
       "after  rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
-      "cg iterations %d, find %.3f s, stitch %.3f s CPU (3 channels), lowest %.4g, negative %zu\n",
+      "cg iterations %d, find %.3f s, stitch %.3f s CPU (3 channels), lowest %.4g, negative %zu\n"
+      "edges left alone: %zu short, %zu of narrow charts\n",
       edges.size(), seams.hard_edges, seams.non_manifold, seams.cross_page, st.points(),
       st.unknowns(), before.rms_abs, before.max_abs, before.rms_rel, before.max_rel, after.rms_abs,
-      after.max_abs, after.rms_rel, after.max_rel, it, find_s, stitch_s, lowest, negative);
+      after.max_abs, after.rms_rel, after.max_rel, it, find_s, stitch_s, lowest, negative,
+      st.short_edges(), st.narrow_chart_edges());
+  if (!write_path.empty()) {
+    const Status w = output::write_exr(write_path, im, {"R", "G", "B", "A"});
+    if (!w.ok()) return std::fprintf(stderr, "%s\n", w.to_string().c_str()), 1;
+  }
   return 0;
 }

@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <tuple>
+#include <utility>
 
 namespace luxel::atlas {
 namespace {
@@ -24,9 +26,11 @@ bool same_edge(const EdgeRecord& x, const EdgeRecord& y) {
   return x.lo == y.lo && x.hi == y.hi;
 }
 
-// A seam of one mesh in uv1 space (before the instance's placement).
+// A seam of one mesh in uv1 space (before the instance's placement), with
+// the uv1 bounds of the chart on each side.
 struct MeshSeam {
   Vec2 a0, a1, b0, b1;
+  Vec2 chart_a_lo, chart_a_hi, chart_b_lo, chart_b_hi;
 };
 
 struct MeshSeams {
@@ -46,6 +50,24 @@ bool smooth(const EdgeRecord& x, const EdgeRecord& y) {
   constexpr float kCosSmooth = 0.999f;  // about 2.6 degrees
   return dot(x.n_lo, y.n_lo) >= kCosSmooth && dot(x.n_hi, y.n_hi) >= kCosSmooth;
 }
+
+// Union-find over triangles: charts are triangles joined by edges whose two
+// uv1 images coincide (the same rule the denoiser's chart labels follow).
+struct Charts {
+  std::vector<uint32_t> parent;
+  explicit Charts(size_t n) : parent(n) {
+    for (size_t i = 0; i < n; ++i) parent[i] = static_cast<uint32_t>(i);
+  }
+  uint32_t find(uint32_t t) {
+    while (parent[t] != t) t = parent[t] = parent[parent[t]];
+    return t;
+  }
+  void join(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
 
 MeshSeams mesh_seams(const scene::Mesh& mesh) {
   MeshSeams out;
@@ -89,16 +111,46 @@ MeshSeams mesh_seams(const scene::Mesh& mesh) {
   std::sort(edges.begin(), edges.end(), [](const EdgeRecord& x, const EdgeRecord& y) {
     return std::tie(x.lo, x.hi, x.triangle) < std::tie(y.lo, y.hi, y.triangle);
   });
+  Charts charts(mesh.triangle_count());
+  // Split vertices carry equal or nearly equal copies of one uv1.
+  auto same_uv = [](Vec2 p, Vec2 q) {
+    return std::abs(p.x - q.x) <= 1e-6f && std::abs(p.y - q.y) <= 1e-6f;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> seam_triangles;
   for (size_t i = 0; i < edges.size();) {
     size_t j = i + 1;
     while (j < edges.size() && same_edge(edges[i], edges[j])) ++j;
-    if (j - i == 2 && smooth(edges[i], edges[i + 1]))
-      out.seams.push_back({edges[i].uv_lo, edges[i].uv_hi, edges[i + 1].uv_lo, edges[i + 1].uv_hi});
-    else if (j - i == 2)
+    const EdgeRecord &x = edges[i], &y = edges[std::min(i + 1, edges.size() - 1)];
+    if (j - i == 2 && same_uv(x.uv_lo, y.uv_lo) && same_uv(x.uv_hi, y.uv_hi))
+      charts.join(x.triangle, y.triangle);  // not a seam: one chart continues
+    else if (j - i == 2 && smooth(x, y)) {
+      out.seams.push_back({x.uv_lo, x.uv_hi, y.uv_lo, y.uv_hi, {}, {}, {}, {}});
+      seam_triangles.emplace_back(x.triangle, y.triangle);
+    } else if (j - i == 2)
       ++out.hard;
     else if (j - i > 2)
       ++out.non_manifold;
     i = j;
+  }
+  // uv1 bounds of every chart, for each seam's two sides.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<Vec2> lo_of(mesh.triangle_count(), Vec2{kInf, kInf}),
+      hi_of(mesh.triangle_count(), Vec2{-kInf, -kInf});
+  for (uint32_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t c = charts.find(t);
+    for (int k = 0; k < 3; ++k) {
+      const Vec2 uv = mesh.uv1[mesh.indices[3 * t + k]];
+      lo_of[c] = {std::min(lo_of[c].x, uv.x), std::min(lo_of[c].y, uv.y)};
+      hi_of[c] = {std::max(hi_of[c].x, uv.x), std::max(hi_of[c].y, uv.y)};
+    }
+  }
+  for (size_t s = 0; s < out.seams.size(); ++s) {
+    const uint32_t ca = charts.find(seam_triangles[s].first),
+                   cb = charts.find(seam_triangles[s].second);
+    out.seams[s].chart_a_lo = lo_of[ca];
+    out.seams[s].chart_a_hi = hi_of[ca];
+    out.seams[s].chart_b_lo = lo_of[cb];
+    out.seams[s].chart_b_hi = hi_of[cb];
   }
   return out;
 }
@@ -110,6 +162,19 @@ Vec2 to_texels(const Atlas& atlas, uint32_t instance, Vec2 uv1) {
 
 float distance(Vec2 p, Vec2 q) {
   return std::hypot(p.x - q.x, p.y - q.y);
+}
+
+// The narrower side, in texels, of the atlas image of the uv1 box [lo, hi]
+// (the placement may rotate a chart, so all four corners are mapped).
+float box_width_texels(const Atlas& atlas, uint32_t instance, Vec2 lo, Vec2 hi) {
+  Vec2 a_lo{std::numeric_limits<float>::infinity(), std::numeric_limits<float>::infinity()};
+  Vec2 a_hi{-a_lo.x, -a_lo.y};
+  for (const Vec2 c : {lo, hi, Vec2{lo.x, hi.y}, Vec2{hi.x, lo.y}}) {
+    const Vec2 t = to_texels(atlas, instance, c);
+    a_lo = {std::min(a_lo.x, t.x), std::min(a_lo.y, t.y)};
+    a_hi = {std::max(a_hi.x, t.x), std::max(a_hi.y, t.y)};
+  }
+  return std::min(a_hi.x - a_lo.x, a_hi.y - a_lo.y);
 }
 
 }  // namespace
@@ -140,6 +205,8 @@ SeamSet find_seams(const scene::Scene& scene, const Atlas& atlas) {
       e.a1 = to_texels(atlas, inst, s.a1);
       e.b0 = to_texels(atlas, inst, s.b0);
       e.b1 = to_texels(atlas, inst, s.b1);
+      e.chart_texels = std::min(box_width_texels(atlas, inst, s.chart_a_lo, s.chart_a_hi),
+                                box_width_texels(atlas, inst, s.chart_b_lo, s.chart_b_hi));
       if (distance(e.a0, e.b0) <= kSameImage && distance(e.a1, e.b1) <= kSameImage) continue;
       if (distance(e.a0, e.a1) <= kSameImage || distance(e.b0, e.b1) <= kSameImage) {
         ++set.degenerate;

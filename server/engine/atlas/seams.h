@@ -33,6 +33,10 @@ struct SeamEdge {
   uint32_t instance = 0;
   int page = 0;
   Vec2 a0, a1, b0, b1;
+  // Width in texels of the narrower of the two charts the seam joins (the
+  // shorter side of each chart's bounding box in the atlas): the stitcher
+  // leaves seams of charts too narrow to hold a bilinear footprint alone.
+  float chart_texels = 0;
 };
 
 struct SeamSet {

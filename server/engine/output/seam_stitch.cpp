@@ -17,6 +17,10 @@ SeamStitcher::SeamStitcher(int width, int height, const std::vector<StitchEdge>&
       ++short_edges_;
       continue;
     }
+    if (e.chart_texels < options_.min_chart_texels) {
+      ++narrow_chart_edges_;
+      continue;
+    }
     const double len = std::max(len_a, len_b);
     const double want = std::ceil(options_.samples_per_texel * len);
     const int n = std::isfinite(want) ? static_cast<int>(std::clamp(want, 2.0, 1e6)) : 2;

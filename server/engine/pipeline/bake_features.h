@@ -16,6 +16,9 @@ namespace luxel::pipeline {
 // Analytic direct light (DIRECT_ANALYTIC) loops over the whole light table
 // for every path; past this many lights the bake keeps plain NEE.
 inline constexpr size_t kMaxAnalyticLightTable = 4096;
+// direct = auto takes the analytic form only for tables up to this size (a
+// few punctual lights beside the sky and sun): the per-path loop stays short.
+inline constexpr size_t kMaxAutoAnalyticLightTable = 64;
 
 device::FeatureSet derive_bake_features(const BakeSettings& settings, const LightTable& lights,
                                         const SceneData& data, const EncodingPlan& plan);

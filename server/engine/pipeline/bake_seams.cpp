@@ -24,7 +24,7 @@ BakeSeamStitch::BakeSeamStitch(const BakeResult& result)
 std::vector<output::StitchEdge> BakeSeamStitch::page_edges(int page) const {
   std::vector<output::StitchEdge> edges;
   for (const atlas::SeamEdge& e : result_.seams->edges)
-    if (e.page == page) edges.push_back({e.a0, e.a1, e.b0, e.b1});
+    if (e.page == page) edges.push_back({e.a0, e.a1, e.b0, e.b1, e.chart_texels});
   return edges;
 }
 
@@ -35,7 +35,8 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
   const std::vector<output::StitchEdge> edges = page_edges(page);
   if (edges.empty()) return;
   const output::SeamStitcher stitcher(irradiance.width, irradiance.height, edges, coverage.pixels);
-  edges_ += edges.size();
+  narrow_chart_edges_ += stitcher.narrow_chart_edges();
+  edges_ += edges.size() - stitcher.narrow_chart_edges();
   unknowns_ += stitcher.unknowns();
   before_.add(stitcher.measure(irradiance.pixels, 4, 0, 3));
   int it = stitcher.stitch(irradiance.pixels, 4, 0, 3, true);  // irradiance >= 0
@@ -89,6 +90,8 @@ std::string BakeSeamStitch::manifest_json() const {
                       {"non_manifold_edges_skipped", s.non_manifold},
                       {"hard_edges_skipped", s.hard_edges},
                       {"degenerate_edges_skipped", s.degenerate},
+                      {"narrow_chart_edges_skipped", narrow_chart_edges_},
+                      {"min_chart_texels", o.min_chart_texels},
                       {"sample_points", before_.points},
                       {"texels_solved", unknowns_},
                       {"seam_weight", o.seam_weight},

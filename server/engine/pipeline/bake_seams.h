@@ -49,7 +49,7 @@ class BakeSeamStitch {
   std::vector<output::StitchEdge> page_edges(int page) const;
 
   const BakeResult& result_;
-  size_t edges_ = 0, unknowns_ = 0;
+  size_t edges_ = 0, narrow_chart_edges_ = 0, unknowns_ = 0;
   int most_iterations_ = 0;
   double seconds_ = 0;
   Totals before_, after_, denoised_before_, denoised_after_;

@@ -26,7 +26,15 @@ const char* filter_name(Filter f) {
 }
 
 const char* direct_light_name(DirectLight d) {
-  return d == DirectLight::kAnalytic ? "analytic" : "sampled";
+  switch (d) {
+    case DirectLight::kAnalytic:
+      return "analytic";
+    case DirectLight::kSampled:
+      return "sampled";
+    case DirectLight::kAuto:
+      break;
+  }
+  return "auto";
 }
 
 const char* error_metric_name(ErrorMetric m) {
@@ -78,7 +86,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["filter"] = filter_name(filter);
   // Only when not the default: bake fingerprints (checkpoint resume) and
   // manifests of default bakes stay what they were before the setting.
-  if (direct != DirectLight::kSampled) m["direct"] = direct_light_name(direct);
+  if (direct != DirectLight::kAuto) m["direct"] = direct_light_name(direct);
   if (!probes.empty()) {
     m["probes"] = probes;
     m["probe_sh_order"] = std::to_string(probe_sh_order);

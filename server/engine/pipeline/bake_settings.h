@@ -27,8 +27,11 @@ enum class Denoise { kOff, kAtrous };
 const char* denoise_name(Denoise d);
 // Direct light at the texel point (irradiance lightmaps): the exact
 // unshadowed irradiance of analytic lights with sampled visibility
-// (kernels/bake/raygen.h), or plain next-event estimation.
-enum class DirectLight { kAnalytic, kSampled };
+// (kernels/bake/raygen.h), or plain next-event estimation. kAuto takes the
+// analytic form where it was measured to win: when every analytic light of
+// the scene is punctual (pipeline/bake_features.cpp; docs/accuracy.md
+// "Analytic direct light").
+enum class DirectLight { kAnalytic, kSampled, kAuto };
 
 // Where the lightmap UVs come from (pipeline/lightmap_layout.h).
 enum class UvMode { kAuto, kGenerate, kExisting };
@@ -96,7 +99,7 @@ struct BakeSettings {
   double device_memory_budget_mib = 0;
   uint32_t seed = 1;
   Filter filter = Filter::kBox;
-  DirectLight direct = DirectLight::kSampled;  // docs/accuracy.md "Analytic direct light"
+  DirectLight direct = DirectLight::kAuto;  // docs/accuracy.md "Analytic direct light"
   // Ray queries: Embree on the host for CPU devices, the OpenCL traversal
   // for GPUs (auto), or either on request (accel/intersector.h).
   accel::IntersectorKind intersector = accel::IntersectorKind::kAuto;

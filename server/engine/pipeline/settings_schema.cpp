@@ -280,16 +280,19 @@ std::vector<Setting> make_schema() {
        .units = "",
        .help = "direct light at the texel point: analytic (exact unshadowed irradiance of "
                "untextured emissive triangles and punctual lights, sampled shadows; irradiance "
-               "only) or sampled (plain next-event estimation)",
+               "only), sampled (plain next-event estimation), or auto (analytic when every "
+               "analytic light of the scene is punctual, else sampled)",
        .flag = "--direct",
        .metavar = "D",
-       .default_value = SettingValue::of_text("sampled"),
-       .choices = {"analytic", "sampled"},
+       .default_value = SettingValue::of_text("auto"),
+       .choices = {"auto", "analytic", "sampled"},
        .get =
            [](const BakeSettings& s) { return SettingValue::of_text(direct_light_name(s.direct)); },
        .set =
            [](BakeSettings& s, const SettingValue& v) {
-             s.direct = v.text == "sampled" ? DirectLight::kSampled : DirectLight::kAnalytic;
+             s.direct = v.text == "sampled"    ? DirectLight::kSampled
+                        : v.text == "analytic" ? DirectLight::kAnalytic
+                                               : DirectLight::kAuto;
            }});
   t.push_back({.name = "intersector",
                .type = Type::kChoice,

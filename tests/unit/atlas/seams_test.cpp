@@ -47,6 +47,49 @@ TEST(Seams, QuadCutIntoTwoChartsHasOneSeamWithMatchingEndpoints) {
   EXPECT_TRUE(p0_first || p2_first) << e.a0.x << "," << e.a0.y << " " << e.b0.x << "," << e.b0.y;
 }
 
+// Each seam carries the width of the narrower chart it joins: the shorter
+// side of the chart's box in the atlas. Here both triangles are charts of
+// 0.3 x 0.3 (6 x 6 texels); with the right one squeezed to 0.3 x 0.05 (a
+// sliver one texel high) the seam's width is that texel.
+TEST(Seams, SeamCarriesTheNarrowerChartsWidth) {
+  for (const float top : {0.4f, 0.15f}) {
+    SceneBuilder b;
+    b.add_mesh({{0.1f, 0.1f}, {0.4f, 0.1f}, {0.4f, 0.4f}, {0.6f, 0.1f}, {0.9f, top}, {0.6f, top}},
+               {0, 1, 2, 3, 4, 5}, kQuad);
+    b.instance(0);
+    AtlasSettings s;
+    s.resolution = 20;
+    const SeamSet seams = find_seams(b.scene, testing::expect_atlas(b.scene, s));
+    ASSERT_EQ(seams.edges.size(), 1u);
+    EXPECT_NEAR(seams.edges[0].chart_texels, 20 * (top - 0.1f), 1e-3f) << top;
+  }
+}
+
+// Triangles joined by an edge whose uv1 images coincide are one chart. T0
+// and T1 share B-C (the same vertices): each alone spans 3 texels in x, the
+// two together 6. T2 meets T1 along C-D with vertices of its own (other
+// UVs): the one seam, to a chart 6 texels wide. Widths taken per triangle
+// would give 3.
+TEST(Seams, ChartsFollowUvConnectivity) {
+  SceneBuilder b;
+  b.add_mesh(
+      {{0.1f, 0.1f},
+       {0.25f, 0.1f},
+       {0.25f, 0.4f},
+       {0.4f, 0.1f},  // A B C D
+       {0.6f, 0.4f},
+       {0.6f, 0.1f},
+       {0.9f, 0.25f}},  // C' D' E
+      {0, 1, 2, 1, 3, 2, 4, 5, 6},
+      {{0, 0, 0}, {0.5f, 0, 0}, {0.5f, 1, 0}, {1, 0, 0}, {0.5f, 1, 0}, {1, 0, 0}, {1.5f, 0.5f, 0}});
+  b.instance(0);
+  AtlasSettings s;
+  s.resolution = 20;
+  const SeamSet seams = find_seams(b.scene, testing::expect_atlas(b.scene, s));
+  ASSERT_EQ(seams.edges.size(), 1u);
+  EXPECT_NEAR(seams.edges[0].chart_texels, 6.0f, 1e-3f);
+}
+
 // The same cut, but the second triangle's vertices carry another normal
 // (a hard edge): the lighting may jump there, so it is no seam.
 TEST(Seams, HardEdgeIsCountedNotStitched) {

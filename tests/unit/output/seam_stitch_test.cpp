@@ -97,6 +97,33 @@ TEST(SeamStitch, BilinearValuesAgreeAlongTheSeamAfterStitching) {
   EXPECT_DOUBLE_EQ(bilerp(img, 2.5, 4.5, 0), bilerp(before, 2.5, 4.5, 0));
 }
 
+// The same seam, but one of its charts is narrower than min_chart_texels:
+// it is left alone (no unknowns, every texel keeps its bits) and counted; at
+// the chart width of two_charts (4 texels) it is stitched as above.
+TEST(SeamStitch, SeamsOfNarrowChartsAreLeftAlone) {
+  std::vector<float> coverage;
+  Img img = two_charts(coverage);
+  const Img before = img;
+  std::vector<StitchEdge> narrow = kEdge;
+  narrow[0].chart_texels = 1.5f;
+  const SeamStitcher skip(img.w, img.h, narrow, coverage);
+  EXPECT_EQ(skip.narrow_chart_edges(), 1u);
+  EXPECT_EQ(skip.points(), 0u);
+  EXPECT_EQ(skip.unknowns(), 0u);
+  skip.stitch(img.px, 2, 0, 2);
+  EXPECT_EQ(img.px, before.px);
+  std::vector<StitchEdge> wide = kEdge;
+  wide[0].chart_texels = 4.0f;
+  const SeamStitcher stitch(img.w, img.h, wide, coverage);
+  EXPECT_EQ(stitch.narrow_chart_edges(), 0u);
+  stitch.stitch(img.px, 2, 0, 2);
+  EXPECT_LT(worst_relative_gap(img, kEdge, 0), 0.01);
+  // The limit is an option: 0 stitches every chart.
+  SeamStitchOptions all;
+  all.min_chart_texels = 0;
+  EXPECT_EQ(SeamStitcher(img.w, img.h, narrow, coverage, all).narrow_chart_edges(), 0u);
+}
+
 // A black region (x <= 5) against a lit one (x >= 6), with a seam whose two
 // sides both read texel column 5 (x = 4.6 reads columns 4 and 5, x = 5.9
 // columns 5 and 6): raising side A's mean to side B's pulls column 5 down,

@@ -333,6 +333,111 @@ TEST_F(AnalyticDirectTest, LowSampleCountBiasAgainstClosedForm) {
   EXPECT_GT(std::fabs(mean - 0.02), 4 * se + 1e-4) << "a 2 % bias must be detectable";
 }
 
+// direct = auto, the default: analytic where every analytic light is
+// punctual, plain NEE where an emissive triangle is analytic. Two sun-like
+// directional lights (no disc: delta lights, uniform irradiance I cos over
+// the plane) over a black plane with a black occluder: with the analytic
+// form a texel whose sample positions all see both lights gets exactly
+// I1 cos1 + I2 cos2, and one whose positions see neither gets 0 (to
+// rounding), with no noise from choosing between the lights (the chosen
+// light's f / p is the exact total). Plain NEE (sampled) picks one light
+// by power per path, so the same lit texels are off by the rounding of
+// the picks: the check must fail for it.
+TEST_F(AnalyticDirectTest, AutoIsAnalyticForPunctualLightsOnly) {
+  scene::Scene s = emitter_scene(true, 0.0f);
+  s.materials[1] = testing::diffuse_material(0.0f);  // the emitter goes dark: no emissive triangle
+  const std::array<Vec3, 2> dir = {normalize(Vec3{0.3f, -1.0f, 0.1f}),
+                                   normalize(Vec3{0.1f, -1.0f, 0.2f})};
+  // Not 5:3: with 16 stratified light choices, p = 5/8 would make plain NEE
+  // pick each light exactly in proportion, and exact.
+  const std::array<float, 2> intensity = {2.0f, 1.3f};
+  for (int k = 0; k < 2; ++k) {
+    scene::Light light;
+    light.type = scene::LightType::kDirectional;
+    light.intensity = intensity[k];
+    light.direction = dir[k];
+    s.lights.push_back(light);
+  }
+  // Irradiance at (px, 0, pz) from light k, and whether the occluder (or
+  // the dark quad at kLightY) is in the way.
+  auto blocked = [](double px, double pz, const Vec3& w, double y, double x0, double x1, double z0,
+                    double z1) {
+    const double t = y / w.y;
+    const double x = px + w.x * t, z = pz + w.z * t;
+    return x >= x0 && x <= x1 && z >= z0 && z <= z1;
+  };
+  auto light_e = [&](double px, double pz, int k) {
+    const Vec3 w = dir[k] * -1.0f;
+    if (blocked(px, pz, w, kOccY, kOccX0, kOccX1, kOccZ0, kOccZ1) ||
+        blocked(px, pz, w, kLightY, kLightX0, kLightX1, kLightZ0, kLightZ1))
+      return std::make_pair(0.0, true);
+    return std::make_pair(intensity[k] * double(w.y), false);
+  };
+  const auto st_auto = settings(16, pipeline::DirectLight::kAuto);
+  auto atlas = atlas::build_atlas(s, st_auto.atlas);
+  ASSERT_TRUE(atlas);
+  auto info = atlas::build_sample_info(s, atlas.value());
+  ASSERT_TRUE(info);
+  // Per texel: the exact mean over its valid positions when every position
+  // sees both lights (lit) or neither (dark); NaN otherwise.
+  std::vector<double> expected(size_t(info->width) * info->height, NAN);
+  size_t lit = 0, dark = 0;
+  for (uint32_t texel = 0; texel < expected.size(); ++texel) {
+    const uint32_t tx = texel % uint32_t(info->width), ty = texel / uint32_t(info->width);
+    if ((tx + 1.0) / info->width > 0.5) continue;
+    const uint32_t off = info->offsets[texel];
+    const uint64_t valid = uint64_t{info->words[off]} | (uint64_t{info->words[off + 1]} << 32);
+    double sum = 0;
+    int n = 0, seen = 0;
+    for (uint32_t i = 0; i < 64; ++i) {
+      if (!(valid >> i & 1)) continue;
+      const cl::float2 h = cl::lux_hammersley64(i);
+      const double u = (tx + h.x) / info->width, v = (ty + h.y) / info->height;
+      for (int k = 0; k < 2; ++k) {
+        const auto [e, shadowed] = light_e(-1 + 2 * v, -1 + 4 * u, k);
+        sum += e;
+        seen += shadowed ? 0 : 1;
+      }
+      ++n;
+    }
+    if (n == 0) continue;
+    if (seen == 2 * n) expected[texel] = sum / n, ++lit;
+    if (seen == 0) expected[texel] = 0, ++dark;
+  }
+  ASSERT_GT(lit, 100u);
+  ASSERT_GT(dark, 4u);
+  // Max relative deviation of the lit texels, and the largest dark value.
+  auto deviations = [&](const pipeline::BakeResult& r) {
+    double worst_lit = 0, worst_dark = 0;
+    for (size_t t = 0; t < expected.size(); ++t) {
+      if (std::isnan(expected[t]) || r.samples[t] < 1) continue;
+      // Dark texels are judged against the lit level (rounding of E - f / p).
+      const double x = r.irradiance[t * 4 + 1];
+      if (expected[t] > 0)
+        worst_lit = std::max(worst_lit, std::fabs(x / expected[t] - 1));
+      else
+        worst_dark = std::max(worst_dark, std::fabs(x) / (intensity[0] + intensity[1]));
+    }
+    std::printf("  lit texels: worst relative deviation %.2e; dark texels: largest |E| / I %.2e\n",
+                worst_lit, worst_dark);
+    return std::make_pair(worst_lit, worst_dark);
+  };
+  const auto a = bake(s, st_auto);
+  ASSERT_NE(a.features.find("direct_analytic"), std::string::npos) << a.features;
+  const auto [lit_a, dark_a] = deviations(a);
+  EXPECT_LT(lit_a, 1e-5);
+  EXPECT_LT(dark_a, 1e-6);
+  const auto b = bake(s, settings(16, pipeline::DirectLight::kSampled));
+  EXPECT_EQ(b.features.find("direct_analytic"), std::string::npos) << b.features;
+  // The light choices are stratified over a texel's 16 paths, so plain NEE
+  // misses by only about 0.1 %, still fifty times the bound above.
+  EXPECT_GT(deviations(b).first, 1e-3 / 2) << "plain NEE's light choice must show as noise";
+  // An emissive triangle keeps auto on plain NEE (the Cornell boxes: the
+  // loop over the light table costs more than the exact polygon saves).
+  const auto c = bake(emitter_scene(false, 0.0f), settings(4, pipeline::DirectLight::kAuto));
+  EXPECT_EQ(c.features.find("direct_analytic"), std::string::npos) << c.features;
+}
+
 TEST_F(AnalyticDirectTest, DirectionalEncodingsFallBackToSampling) {
   auto st = settings(4, pipeline::DirectLight::kAnalytic);
   st.encodings.names = {"sh2"};
