@@ -21,6 +21,7 @@
 #include "pipeline/primitives/offset_buffer.h"
 #include "pipeline/primitives/radix_sort.h"
 #include "pipeline/primitives/stream_compaction.h"
+#include "pipeline/progressive_variance.h"
 #include "pipeline/resource_estimate.h"
 #include "pipeline/tile_plan.h"
 
@@ -76,10 +77,33 @@ class Baker {
   // A checkpoint of the whole atlas from the current tile's state.
   BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile) const;
   static void append_state(BakeCheckpoint& to, const BakeCheckpoint& from);
-  // settings_.denoise applied to a whole-atlas RGBA image with its per-texel
-  // relative errors (the guides are built and uploaded on the first call).
+  // settings_.denoise applied to a whole-atlas RGBA image with the variance
+  // of each texel's mean (the guides are built and uploaded on the first
+  // call). `two_point_texels`: how many variances are progressive_'s
+  // two-point estimates (the manifest says so).
   Result<std::vector<float>> denoise(const std::vector<float>& rgba,
-                                     const std::vector<float>& rel_error);
+                                     const std::vector<float>& variance, size_t two_point_texels);
+  // The denoiser's variances come from ProgressiveVariance (box filter; the
+  // Gaussian filter's weighted samples keep the Welford variance).
+  bool tracks_progressive_variance() const {
+    return settings_.denoise != Denoise::kOff && settings_.filter == Filter::kBox;
+  }
+  // Variances for the denoiser of the whole atlas (`rgba`, `rel_error`):
+  // Welford's from the relative errors, replaced by the two-point estimates
+  // of the finished tiles (denoise_variance_) and, with `state`, of the
+  // current tile from `begin`.
+  std::vector<float> atlas_variance(const std::vector<float>& rgba,
+                                    const std::vector<float>& rel_error,
+                                    const BakeCheckpoint* state, size_t begin,
+                                    size_t* two_point) const {
+    *two_point = 0;
+    std::vector<float> welford = texel_variance(rgba, rel_error);
+    if (!tracks_progressive_variance()) return welford;
+    std::vector<float> v = denoise_variance_;
+    *two_point = two_point_texels_ + (state ? progressive_.fill(s_, *state, begin, v) : 0);
+    return ProgressiveVariance::overlay(std::move(welford), v);
+  }
+  DenoiseParams denoise_params(size_t two_point_texels) const;
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -121,7 +145,10 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
-  std::unique_ptr<Denoiser> denoiser_;  // on the first denoise()
+  std::unique_ptr<Denoiser> denoiser_;   // on the first denoise()
+  ProgressiveVariance progressive_;      // milestones of the current tile
+  std::vector<float> denoise_variance_;  // finished tiles' two-point variances (-1: none)
+  size_t two_point_texels_ = 0;          // how many texels have one
   TilePlan plan_;
   size_t budget_ = 0;
   uint64_t paths_done_ = 0;  // of the current tile (of the bake, untiled)
@@ -150,13 +177,24 @@ class Baker {
 };
 
 Result<std::vector<float>> Baker::denoise(const std::vector<float>& rgba,
-                                          const std::vector<float>& rel_error) {
+                                          const std::vector<float>& variance,
+                                          size_t two_point_texels) {
   if (!denoiser_) {
     auto d = Denoiser::create(ctx_, build_denoise_guides(scene_, s_.atlas, s_.info));
     if (!d) return d.status();
     denoiser_ = std::move(d.value());
   }
-  return denoiser_->run(rgba, texel_variance(rgba, rel_error), DenoiseParams{});
+  return denoiser_->run(rgba, variance, denoise_params(two_point_texels));
+}
+
+DenoiseParams Baker::denoise_params(size_t two_point_texels) const {
+  DenoiseParams p;
+  if (tracks_progressive_variance())
+    p.variance_source = strprintf(
+        "two-point progressive estimate (y_n - y_s)^2 s / (n - s) for %zu of %zu covered texels "
+        "(pipeline/progressive_variance.h), Welford for the rest",
+        two_point_texels, s_.info.covered_texels.size());
+  return p;
 }
 
 Status Baker::setup() {
@@ -592,6 +630,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       tile_settings.time_budget_s = settings_.time_budget_s * static_cast<double>(tile.end) /
                                     static_cast<double>(s_.info.covered_texels.size());
     const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin);
+    progressive_.reset();
     if (ti > first_tile) {
       LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));
       paths_done_ = 0;
@@ -629,6 +668,17 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
         why = *stop;
         break;
       }
+      // A milestone of the denoiser's variance estimate when the tile's
+      // mean count has doubled (pipeline/progressive_variance.h).
+      if (completed && tracks_progressive_variance()) {
+        const double mean_spp =
+            static_cast<double>(paths_done_) / static_cast<double>(tile.end - tile.begin);
+        if (progressive_.due(mean_spp)) {
+          auto state = read_state();
+          if (!state) return state.status();
+          progressive_.record(state.value(), mean_spp);
+        }
+      }
       if (policy.report_due(seconds_since(last_report))) {
         auto keep_going = report(false);
         if (!keep_going) return keep_going.status();
@@ -653,9 +703,12 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
         if (hooks.denoise_snapshots && settings_.denoise != Denoise::kOff) {
           std::vector<float> rel_error = result.rel_error;
           fill_rel_error(s_, state.value(), tile.begin, rel_error);
+          size_t two_point = 0;
+          const std::vector<float> variance =
+              atlas_variance(snap.irradiance, rel_error, &state.value(), tile.begin, &two_point);
           std::unique_lock<std::mutex> turn;
           if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
-          auto filtered = denoise(snap.irradiance, rel_error);
+          auto filtered = denoise(snap.irradiance, variance, two_point);
           if (!filtered) return filtered.status();
           snap.irradiance = std::move(filtered.value());
           snap.denoised = true;
@@ -701,6 +754,8 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto state = read_state();
     if (!state) return state.status();
     write_state(s_, state.value(), tile.begin, result);
+    if (tracks_progressive_variance())
+      two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
     if (keep_finished_) append_state(finished_, state.value());
     const double n = static_cast<double>(tile.end - tile.begin);
     done_.slots = tile.end;
@@ -749,10 +804,13 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       const auto t_denoise = Clock::now();
       std::unique_lock<std::mutex> turn;
       if (hooks.device_turn) turn = std::unique_lock<std::mutex>(*hooks.device_turn);
-      auto filtered = denoise(result.irradiance, result.rel_error);
+      size_t two_point = 0;
+      const std::vector<float> variance =
+          atlas_variance(result.irradiance, result.rel_error, nullptr, 0, &two_point);
+      auto filtered = denoise(result.irradiance, variance, two_point);
       if (!filtered) return filtered.status();
       result.irradiance_denoised = std::move(filtered.value());
-      result.denoise_json = DenoiseParams{}.describe_json();
+      result.denoise_json = denoise_params(two_point).describe_json();
       result.denoise_s = seconds_since(t_denoise);
       peak = std::max(peak, s_.tracer->device_bytes() + denoiser_->device_bytes());
     }

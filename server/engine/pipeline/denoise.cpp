@@ -1,5 +1,7 @@
 #include "pipeline/denoise.h"
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "device/program_cache.h"
@@ -19,7 +21,9 @@ std::string DenoiseParams::describe_json() const {
                       {"sigma_luminance", sigma_luminance},
                       {"sigma_normal", sigma_normal},
                       {"sigma_plane_texels", sigma_plane},
-                      {"guides", "world position, shading normal, chart id per texel"}};
+                      {"guides", "world position, shading normal, chart id per texel"},
+                      {"variance", variance_source},
+                      {"clamp_standard_errors", clamp_standard_errors}};
   return j.dump();
 }
 
@@ -57,7 +61,8 @@ Result<std::unique_ptr<Denoiser>> Denoiser::create(device::Context& ctx,
   };
   LUXEL_RETURN_IF_ERROR(up(guides.position, "denoise guide position", d->position_));
   LUXEL_RETURN_IF_ERROR(up(guides.normal, "denoise guide normal", d->normal_));
-  LUXEL_RETURN_IF_ERROR(up(guides.chart, "denoise guide chart", d->chart_));
+  LUXEL_RETURN_IF_ERROR(up(guides.chart, "denoise guide chart", d->chart_ids_));
+  d->chart_ = guides.chart;
   for (int i = 0; i < 2; ++i) {
     auto c = ctx.alloc(texels * sizeof(cl::float4), "denoise colour");
     if (!c) return c.status();
@@ -70,7 +75,7 @@ Result<std::unique_ptr<Denoiser>> Denoiser::create(device::Context& ctx,
 }
 
 size_t Denoiser::device_bytes() const {
-  return position_.bytes() + normal_.bytes() + chart_.bytes() + one_chart_.bytes() +
+  return position_.bytes() + normal_.bytes() + chart_ids_.bytes() + one_chart_.bytes() +
          2 * (color_[0].bytes() + variance_[0].bytes());
 }
 
@@ -85,7 +90,7 @@ Result<std::vector<float>> Denoiser::run(const std::vector<float>& rgba,
     if (!b) return b.status();
     one_chart_ = std::move(b.value());
   }
-  const device::Buffer& charts = params.ignore_charts ? one_chart_ : chart_;
+  const device::Buffer& charts = params.ignore_charts ? one_chart_ : chart_ids_;
   LUXEL_RETURN_IF_ERROR(ctx_.write(color_[0], rgba.data(), texels * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx_.write(variance_[0], variance.data(), texels * sizeof(float)));
   int src = 0;
@@ -105,7 +110,38 @@ Result<std::vector<float>> Denoiser::run(const std::vector<float>& rgba,
   std::vector<float> out(texels * 4);
   LUXEL_RETURN_IF_ERROR(ctx_.read(color_[src], out.data(), texels * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  if (params.clamp_standard_errors > 0) clamp_to_raw(rgba, variance, params, out);
   return out;
+}
+
+void Denoiser::clamp_to_raw(const std::vector<float>& rgba, const std::vector<float>& variance,
+                            const DenoiseParams& params, std::vector<float>& out) const {
+  auto lum = [](const float* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t t = size_t(y) * size_t(width_) + size_t(x);
+      if (!(rgba[t * 4 + 3] > 0.0f)) continue;
+      // The variance smoothed over the covered 3x3 neighbours of the chart:
+      // a two-point variance has one degree of freedom per texel.
+      double sum = 0;
+      int n = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          if (qx < 0 || qy < 0 || qx >= width_ || qy >= height_) continue;
+          const size_t q = size_t(qy) * size_t(width_) + size_t(qx);
+          if (!(rgba[q * 4 + 3] > 0.0f) || chart_[q] != chart_[t]) continue;
+          sum += std::max(0.0f, variance[q]);
+          ++n;
+        }
+      const double bound = params.clamp_standard_errors * std::sqrt(sum / std::max(n, 1));
+      const double raw = lum(&rgba[t * 4]), filtered = lum(&out[t * 4]);
+      const double moved = std::abs(filtered - raw);
+      if (!(moved > bound)) continue;
+      const float keep = static_cast<float>(bound / moved);  // of the filter's change
+      for (int c = 0; c < 3; ++c)
+        out[t * 4 + c] = rgba[t * 4 + c] + keep * (out[t * 4 + c] - rgba[t * 4 + c]);
+    }
 }
 
 }  // namespace luxel::pipeline

@@ -29,6 +29,16 @@ struct DenoiseParams {
   // Test hook (the injected error of the edge test): treat all texels as one
   // chart. Never set by a bake.
   bool ignore_charts = false;
+  // After filtering, each texel's luminance stays within this many standard
+  // errors of its raw value (the variance smoothed over its 3x3 chart
+  // neighbours; the colour is scaled towards the raw one). The filter's bias
+  // then shrinks with the noise, so the denoised map converges to the raw one;
+  // 0 turns the clamp off. Needs a variance that is not overstated: with the
+  // Welford variance of stratified samples it bounded nothing
+  // (docs/accuracy.md "Denoiser").
+  float clamp_standard_errors = 1.0f;
+  // What the variances given to run() are, for the manifest (set by the bake).
+  std::string variance_source = "Welford variance of each texel's samples";
 
   // {"method":"atrous","iterations":5,...} for the manifest.
   std::string describe_json() const;
@@ -58,11 +68,15 @@ class Denoiser {
 
  private:
   explicit Denoiser(device::Context& ctx) : ctx_(ctx) {}
+  // DenoiseParams::clamp_standard_errors on the filtered `out`.
+  void clamp_to_raw(const std::vector<float>& rgba, const std::vector<float>& variance,
+                    const DenoiseParams& params, std::vector<float>& out) const;
   device::Context& ctx_;
   int width_ = 0, height_ = 0;
   device::Kernel atrous_;
-  device::Buffer position_, normal_, chart_, one_chart_;
+  device::Buffer position_, normal_, chart_ids_, one_chart_;
   device::Buffer color_[2], variance_[2];
+  std::vector<uint32_t> chart_;  // host copy of the chart guide, for the clamp
 };
 
 }  // namespace luxel::pipeline
