@@ -289,8 +289,8 @@ int main(int argc, char** argv) {
     if (custom) {
       auto d = pipeline::Denoiser::create(*ctx.value(), guides);
       if (!d) die(d.status().to_string());
-      auto o =
-          d.value()->run(r.irradiance, pipeline::texel_variance(r.irradiance, r.rel_error), params);
+      // The variances the bake's own denoiser used (two-point estimates).
+      auto o = d.value()->run(r.irradiance, r.denoise_variance, params);
       if (!o) die(o.status().to_string());
       denoised = std::move(o.value());
     }

@@ -264,8 +264,19 @@ def main(argv):
                 e = errors(fmap, ref)
                 e.update({"budget_s": b, "tracing_s": man["stats"]["seconds"], "post_s": post_seconds(man),
                           "paths": man["stats"]["paths"]})
-                e["cost_s"] = e["tracing_s"] + e["post_s"]
                 ladder.append(e)
+            # Cost of each point: its paths at the configuration's mean
+            # throughput over the whole ladder, plus its post-processing. A
+            # single run's own tracing time carries the machine's run-to-run
+            # throughput noise (+-10-20 % in 4 s on the shared 2-core VM:
+            # configurations with the same estimator came out 0.64x-1.41x);
+            # the ladder's mean carries much less, and the RMSE at a given
+            # path count is deterministic.
+            traced = sum(x["tracing_s"] for x in ladder)
+            rate = sum(x["paths"] for x in ladder) / traced if traced > 0 else math.nan
+            for x in ladder:
+                x["paths_per_s"] = rate
+                x["cost_s"] = x["paths"] / rate + x["post_s"] if rate > 0 else x["tracing_s"] + x["post_s"]
             sres["configs"][cname] = {"features": sorted(on) if on is not None else "defaults",
                                       "options": opts, "ladder": ladder}
             last = ladder[-1] if ladder else {}
@@ -309,22 +320,23 @@ def markdown(args, res):
                ", ".join("%g" % b for b in args.budget_list), args.bounces, args.seed, args.reference_spp,
                args.seed + 1000, res["wall_s"]), "",
            "speed-up = cost of `before` at the largest budget / cost at which the configuration reaches the same "
-           "RMSE (cost = tracing + the post-processing it adds). RMSE ratio: at the largest budget, "
+           "RMSE (cost = paths at the configuration's mean paths/s over its ladder + the post-processing it "
+           "adds). RMSE ratio: at the largest budget, "
            "configuration / before (< 1 better), on all covered texels and on texels within 2 texels of a "
            "chart border.", "",
-           "| scene | config | speed-up | read | RMSE ratio | edge RMSE ratio | post s |",
-           "|---|---|---:|---|---:|---:|---:|"]
+           "| scene | config | speed-up | read | RMSE ratio | edge RMSE ratio | post s | Mpaths/s |",
+           "|---|---|---:|---|---:|---:|---:|---:|"]
     for name, s in res["scenes"].items():
         for cname, c in s["configs"].items():
             if c.get("absent"):
-                out.append("| %s | %s | absent | | | | |" % (name, cname))
+                out.append("| %s | %s | absent | | | | | |" % (name, cname))
                 continue
             if "speedup" not in c:
                 continue
-            out.append("| %s %d² | %s | %s | %s | %s | %s | %.3f |" % (
+            out.append("| %s %d² | %s | %s | %s | %s | %s | %.3f | %.2f |" % (
                 name, s["resolution"], cname, evt.fmt(c["speedup"], ".2f"), c["how"],
                 evt.fmt(c["rmse_ratio_at_largest"], ".3f"), evt.fmt(c["edge_ratio_at_largest"], ".3f"),
-                c["ladder"][-1]["post_s"]))
+                c["ladder"][-1]["post_s"], c["ladder"][-1]["paths_per_s"] / 1e6))
     if res["failures"]:
         out += ["", "## Failures", ""] + ["- " + f for f in res["failures"]]
     return "\n".join(out) + "\n"

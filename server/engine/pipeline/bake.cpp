@@ -810,6 +810,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
       auto filtered = denoise(result.irradiance, variance, two_point);
       if (!filtered) return filtered.status();
       result.irradiance_denoised = std::move(filtered.value());
+      result.denoise_variance = variance;
       result.denoise_json = denoise_params(two_point).describe_json();
       result.denoise_s = seconds_since(t_denoise);
       peak = std::max(peak, s_.tracer->device_bytes() + denoiser_->device_bytes());

@@ -80,6 +80,9 @@ struct BakeResult {
   // fit the device-memory budget beside the BVH. denoise_json describes the
   // filter, or why it was skipped (manifest "denoise").
   std::vector<float> irradiance_denoised;
+  // The variance of each texel's mean that the denoiser was given (width *
+  // height; pipeline/progressive_variance.h); empty without denoising.
+  std::vector<float> denoise_variance;
   std::string denoise_json;
   double denoise_s = 0;  // guides + filter, wall seconds (the launches are in kernel_ms)
   atlas::Atlas atlas;
