@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 
+#include "pipeline/progressive_variance.h"
 #include "shared/probe.h"
 
 namespace luxel::pipeline {
@@ -50,12 +51,9 @@ void fill_rel_error(const BakeSetup& setup, const BakeCheckpoint& state, size_t 
   rel_error.resize(size_t{setup.params.texel_count}, 0.0f);
   for (size_t slot = 0; slot < state.spp.size(); ++slot) {
     const uint32_t texel = covered[begin + slot];
-    const double w = state.weight[slot].x, w2 = state.weight[slot].y;
-    if (state.spp[slot] >= 2 && w > 0 && state.mean[slot].w > 0) {
-      const double var = std::max(0.0, double{state.m2[slot].w} / w);
-      const double n_eff = w * w / std::max(w2, 1e-30);
-      rel_error[texel] = static_cast<float>(std::sqrt(var / n_eff) / state.mean[slot].w);
-    }
+    if (state.spp[slot] >= 2 && state.weight[slot].x > 0 && state.mean[slot].w > 0)
+      rel_error[texel] =
+          static_cast<float>(std::sqrt(welford_variance(state, slot)) / state.mean[slot].w);
   }
 }
 
