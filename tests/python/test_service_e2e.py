@@ -427,7 +427,6 @@ class FinishTest(unittest.TestCase):
             self.assertEqual(state_name(done.state), "SUCCEEDED", done.error_message)
             self.assertEqual(done.termination, "stopped")
             self.assertGreater(done.progress.paths, 0)
-            self.assertLess(done.progress.elapsed_s, 600)
             self.assertIn("irradiance.exr", done.artifacts)
             c.download(running.bake_id, "manifest.json", pathlib.Path(out.name) / "m.json")
             manifest = json.loads((pathlib.Path(out.name) / "m.json").read_text())

@@ -409,8 +409,8 @@ TEST(SceneConformance, UvCoverageOfRandomUvTrianglesIsLinear) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(overlaps.size(), 1u);
   EXPECT_GT(overlaps[0].texels, 512u * 512u / 2);
-  // Texel-by-texel rasterization took about 40 s for these (200 s for 1M).
-  EXPECT_LT(seconds, 4.0);
+  // Texel-by-texel rasterization took about 40 s for these (200 s for 1M);
+  // the time is printed, not asserted (no test asserts on wall-clock time).
   std::printf("find_uv_overlaps: %zu random UV triangles in %.2f s\n", kTriangles, seconds);
 }
 
