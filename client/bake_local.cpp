@@ -12,20 +12,21 @@
 #include <string>
 #include <vector>
 
+#include "api/scene_files.h"
+#include "api/settings_translate.h"
+#include "bake/bake.h"
+#include "bake/resource_estimate.h"
 #include "bake_options.h"
 #include "commands.h"
 #include "device/context.h"
 #include "output/reference_exr.h"
-#include "pipeline/bake.h"
-#include "pipeline/bake_outputs.h"
-#include "pipeline/resource_estimate.h"
+#include "post/bake_outputs.h"
 #include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
 #include "progress_bar.h"
-#include "remote/scene_files.h"
 #include "scene/gltf_import.h"
-#include "service/settings_translate.h"
+#include "settings/fingerprint.h"
 
 namespace luxel::cli {
 namespace {
@@ -209,7 +210,7 @@ int run_bake(const std::vector<std::string>& args) {
     std::fprintf(stderr, "luxel bake: %s\n", ctx.status().to_string().c_str());
     return 1;
   }
-  // The daemon's check at SubmitBake (pipeline/resource_estimate.h): a bake
+  // The daemon's check at SubmitBake (bake/resource_estimate.h): a bake
   // that cannot fit is refused before the layout and the BVH are built.
   if (a.settings.lightmap)
     if (auto e = pipeline::estimate_bake_resources(scene.value(), a.settings,
@@ -225,10 +226,10 @@ int run_bake(const std::vector<std::string>& args) {
   if (a.settings.sharded()) {
     // A shard's accumulators.bin carries the bake's fingerprint, as the
     // daemon derives it (scene id + settings without the shard), so shards
-    // baked here and on daemons merge (pipeline/shard_merge.h).
+    // baked here and on daemons merge (shards/shard_merge.h).
     remote::SceneFiles files;
     if (remote::collect_scene_files(a.scene, files).ok())
-      hooks.fingerprint = service::bake_fingerprint(remote::scene_id(files), a.settings);
+      hooks.fingerprint = pipeline::bake_fingerprint(remote::scene_id(files), a.settings);
   }
   hooks.on_layout = [](const std::string& line) {
     std::printf("uv         %s\n", line.c_str());

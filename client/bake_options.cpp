@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "commands.h"
-#include "pipeline/settings_schema.h"
+#include "settings/settings_schema.h"
 
 namespace luxel::cli {
 namespace {

@@ -1,14 +1,14 @@
 // The command line of `luxel bake`, shared by the in-process path (--local)
 // and the remote path (submit to luxeld): one parser, so both accept the same
 // settings options with the same meaning and errors. The settings' options
-// and their help come from the settings schema (pipeline/settings_schema.h).
+// and their help come from the settings schema (settings/settings_schema.h).
 #pragma once
 
 #include <string>
 #include <vector>
 
-#include "pipeline/bake_settings.h"
 #include "remote/connection.h"
+#include "settings/bake_settings.h"
 
 namespace luxel::cli {
 

@@ -12,9 +12,9 @@
 #include "accel/ray_gen.h"
 #include "accel/throughput.h"
 #include "accel/triangle_soup.h"
+#include "bake/lightmap_layout.h"
 #include "commands.h"
 #include "device/context.h"
-#include "pipeline/lightmap_layout.h"
 #include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
 

@@ -9,13 +9,13 @@
 #include <fstream>
 #include <sstream>
 
+#include "api/settings_translate.h"
 #include "bake_options.h"
 #include "common/status.h"
 #include "remote/fetch.h"
 #include "remote/output.h"
 #include "remote/upload.h"
 #include "remote/watch.h"
-#include "service/settings_translate.h"
 
 namespace luxel::cli {
 namespace {

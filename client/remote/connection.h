@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "api/grpc_status_name.h"
 #include "luxel/v1/luxel.grpc.pb.h"
-#include "service/grpc_status_name.h"
 
 namespace luxel::cli::remote {
 
@@ -71,6 +71,6 @@ class Connection {
   std::unique_ptr<luxel::v1::Luxel::Stub> stub_;
 };
 
-using luxel::status_code_name;  // service/grpc_status_name.h
+using luxel::status_code_name;  // api/grpc_status_name.h
 
 }  // namespace luxel::cli::remote

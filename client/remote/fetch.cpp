@@ -9,10 +9,10 @@
 #include <cstring>
 #include <filesystem>
 
+#include "api/file_hash.h"
 #include "commands.h"
 #include "common/status.h"
 #include "remote/output.h"
-#include "remote/sha256.h"
 #include "remote/watch.h"
 
 namespace luxel::cli::remote {

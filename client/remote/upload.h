@@ -5,8 +5,8 @@
 
 #include <string>
 
+#include "api/scene_files.h"
 #include "remote/connection.h"
-#include "remote/scene_files.h"
 
 namespace luxel::cli::remote {
 

@@ -7,7 +7,7 @@
  * is read from a device buffer (DESIGN.md: live counts stay on the device),
  * so work-groups whose tile starts at or past the count exit at once.
  *
- * Build options (set by server/engine/pipeline/primitives/tile_shape.cpp):
+ * Build options (set by server/engine/bake/primitives/tile_shape.cpp):
  *   LUX_PRIM_WG     work-group size, a power of two
  *   LUX_PRIM_ITEMS  elements per work-item in one tile */
 #ifndef LUXEL_PRIMITIVES_TILE_H

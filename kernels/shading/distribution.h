@@ -1,7 +1,7 @@
 /* Piecewise-constant distributions stored as normalised CDFs (device side).
  *
  * A distribution over n cells is n + 1 floats: cdf[0] = 0, non-decreasing,
- * cdf[n] = 1 (built on the host by pipeline/shading/distribution.h). The
+ * cdf[n] = 1 (built on the host by shading/cdf.h). The
  * probability of cell i is cdf[i+1] - cdf[i]; sampling and pdf evaluation
  * both read that same float difference, so a sample's pmf and the pmf the
  * MIS code evaluates later are always identical. Used for the equirect sky

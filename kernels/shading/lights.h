@@ -83,7 +83,7 @@ inline float3 lux_sky_texel(const LuxSky sky, const __global float* texels, floa
 
 #if LUX_SKY_IMAGE
 /* The octahedral cell of a unit local-frame normal on a side x side grid
- * (Cigolle et al., JCGT 3(2), 2014, §3.1; pipeline/shading/sky_distribution.h
+ * (Cigolle et al., JCGT 3(2), 2014, §3.1; shading/sky_distribution.h
  * builds one sky distribution per cell and mirrors this lookup). */
 inline uint lux_sky_normal_bin(float3 n, int side) {
   const float l1 = fabs(n.x) + fabs(n.y) + fabs(n.z);
@@ -99,7 +99,7 @@ inline uint lux_sky_normal_bin(float3 n, int side) {
 }
 
 /* Two-level sampling of the image sky for a receiver with world normal n
- * (pipeline/shading/sky_distribution.h; layout in shared/light.h): a block
+ * (shading/sky_distribution.h; layout in shared/light.h): a block
  * from the table of n's normal cell, then a texel of the block, each level
  * reusing the fraction of its random number left inside the chosen cell
  * (pbrt's SampleContinuous). Returns image (s, t) and the density with

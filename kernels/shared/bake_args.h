@@ -12,7 +12,7 @@
  * it names, each marked `in` (const) or `out`. bake.cl declares its kernels
  * and the stage functions of kernels/bake/ from these lists
  * (LUX_STAGE_PARAMS); the host binds arguments from the same lists by name
- * (server/engine/pipeline/bake_kernels.cpp), so a host buffer that is
+ * (server/engine/bake/bake_kernels.cpp), so a host buffer that is
  * missing, renamed or of the wrong value type is a compile error, and the
  * order of arguments cannot drift between the two sides.
  *

@@ -1,6 +1,6 @@
 /* Parameters of the edge-avoiding a-trous lightmap denoiser (kernels/denoise.cl),
  * shared by host and device. Per texel the kernels read the guides that
- * server/engine/pipeline/denoise_guides.h builds:
+ * server/engine/post/denoise_guides.h builds:
  *   position  float4: world position (xyz) and w = world length of one
  *             texel's side there (0: texel not covered, never read or written)
  *   normal    float4: unit shading normal (xyz), w unused

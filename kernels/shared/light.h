@@ -132,7 +132,7 @@ typedef struct LuxAliasEntry {
  *               colour * intensity already multiplied into the texels
  *   rotation    x = sin, y = cos of the rotation about +Y
  * Image texels: width * height * 3 floats (rgb, radiance), row 0 = up.
- * Importance sampling (pipeline/shading/sky_distribution.h), two levels:
+ * Importance sampling (shading/sky_distribution.h), two levels:
  *   sky block cdfs  per normal cell b (normal_bins^2 of them), at
  *               b * (blocks_y + 1 + blocks_y * (blocks_x + 1)): a marginal cdf
  *               over block rows, then one conditional cdf per block row.

@@ -5,9 +5,9 @@
 #include <functional>
 #include <optional>
 
+#include "bake/bake.h"
 #include "output/reference_exr.h"
-#include "pipeline/bake.h"
-#include "pipeline/bake_outputs.h"
+#include "post/bake_outputs.h"
 #include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
@@ -16,6 +16,7 @@
 #include "service/files.h"
 #include "service/log.h"
 #include "service/metrics.h"
+#include "settings/fingerprint.h"
 
 namespace luxel::service {
 
@@ -189,7 +190,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   }
 
   // Resume from the last checkpoint when there is a usable one.
-  const std::string fingerprint = bake_fingerprint(info->scene_id(), settings.value());
+  const std::string fingerprint = pipeline::bake_fingerprint(info->scene_id(), settings.value());
   // After the fingerprint, which keeps "auto": the daemon's choice for it.
   if (settings->intersector == accel::IntersectorKind::kAuto)
     settings->intersector = options_.auto_intersector;

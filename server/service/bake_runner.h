@@ -8,7 +8,7 @@
 //
 // Durability (the daemon may die at any point):
 //   - every state change is written to the record before it is reported;
-//   - checkpoints every --checkpoint-interval seconds (pipeline/checkpoint.h,
+//   - checkpoints every --checkpoint-interval seconds (shards/checkpoint.h,
 //     atomic and checksummed);
 //   - results are written into results.partial/ and renamed to results/
 //     before the record says SUCCEEDED;
@@ -29,11 +29,11 @@
 #include <vector>
 
 #include "accel/intersector.h"
+#include "api/settings_translate.h"
 #include "device/context.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
 #include "service/scene_store.h"
-#include "service/settings_translate.h"
 
 namespace luxel::service {
 

@@ -3,7 +3,7 @@
 //   <data>/bakes/<bake_id>/record.json      the record (nlohmann JSON; the
 //                                            BakeInfo in protobuf JSON form
 //                                            plus the queue sequence number)
-//   <data>/bakes/<bake_id>/checkpoint.bin   the latest checkpoint (pipeline/checkpoint.h)
+//   <data>/bakes/<bake_id>/checkpoint.bin   the latest checkpoint (shards/checkpoint.h)
 //   <data>/bakes/<bake_id>/results/         write_bake_outputs() files of a finished bake
 //
 // The record is rewritten atomically (tmp, fsync, rename, fsync dir) on every

@@ -13,14 +13,14 @@
 #include <mutex>
 #include <string>
 
+#include "api/settings_translate.h"
+#include "bake/resource_estimate.h"
 #include "luxel/v1/luxel.grpc.pb.h"
-#include "pipeline/resource_estimate.h"
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
 #include "service/scene_store.h"
 #include "service/scene_upload.h"
-#include "service/settings_translate.h"
 #include "service/stream_limits.h"
 #include "service/stream_pump.h"
 #include "service/upload_reactor.h"
@@ -39,7 +39,7 @@ struct ServiceOptions {
   std::string token;               // empty: no authentication
   std::string device_description;  // reported by GetServerStatus
   // The bake device's memory limits, for the estimate at SubmitBake
-  // (pipeline/resource_estimate.h); zeros when there is no device.
+  // (bake/resource_estimate.h); zeros when there is no device.
   pipeline::DeviceLimits device;
   uint32_t max_concurrent_bakes = 1;
   StreamCaps streams;
@@ -91,7 +91,7 @@ class LuxelService final : public LuxelServiceBase {
                                v1::ServerStatus* response) override;
 
  private:
-  // The resource estimate of a bake (pipeline/resource_estimate.h) as a
+  // The resource estimate of a bake (bake/resource_estimate.h) as a
   // gRPC status: RESOURCE_EXHAUSTED or INVALID_ARGUMENT naming the setting.
   grpc::Status estimate_at_submit(const std::string& scene_id,
                                   const pipeline::BakeSettings& settings);

@@ -8,8 +8,8 @@
 #include <mutex>
 #include <random>
 
+#include "api/grpc_status_name.h"
 #include "common/status.h"
-#include "service/grpc_status_name.h"
 #include "service/log.h"
 
 namespace luxel::service {

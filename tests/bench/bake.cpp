@@ -15,7 +15,7 @@
 //  3. ablations at 4 bounces: stream compaction off, ray-direction sorting on
 //     (time for the same number of paths, as a ratio to the default).
 // Scenes get a constant sky and a sun so outdoor scenes have light.
-#include "pipeline/bake.h"
+#include "bake/bake.h"
 
 #include <sys/resource.h>
 

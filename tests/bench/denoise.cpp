@@ -1,5 +1,5 @@
 // bench_denoise: accuracy and cost of the a-trous lightmap denoiser
-// (pipeline/denoise.h), the figures of docs/accuracy.md "Denoiser".
+// (post/denoise.h), the figures of docs/accuracy.md "Denoiser".
 //
 //   bench_denoise [--resolution N] [--bounces B] [--ref-spp N] [--spp 4,16,64]
 //                 [--sky] [--ref-cache FILE.exr]
@@ -22,7 +22,7 @@
 // constant sky); CPU (user + sys, all threads) and wall seconds of building
 // the host guides, and of one filter run (upload, 5 launches, read back; the
 // best of 3 after a warm-up run), per N.
-#include "pipeline/denoise.h"
+#include "post/denoise.h"
 
 #include <sys/resource.h>
 
@@ -36,10 +36,10 @@
 #include <vector>
 
 #include "atlas/sample_info.h"
+#include "bake/bake.h"
 #include "device/context.h"
 #include "output/exr.h"
-#include "pipeline/bake.h"
-#include "pipeline/denoise_guides.h"
+#include "post/denoise_guides.h"
 #include "scene/gltf_import.h"
 
 using namespace luxel;

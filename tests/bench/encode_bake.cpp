@@ -17,9 +17,9 @@
 #include <vector>
 
 #include "atlas/sample_info.h"
+#include "bake/bake.h"
 #include "device/context.h"
 #include "encode/basis.h"
-#include "pipeline/bake.h"
 #include "scene/gltf_import.h"
 
 using namespace luxel;

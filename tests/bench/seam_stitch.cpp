@@ -17,11 +17,11 @@
 #include <string>
 
 #include "atlas/seams.h"
+#include "bake/lightmap_layout.h"
 #include "output/exr.h"
-#include "pipeline/bake_settings.h"
-#include "pipeline/lightmap_layout.h"
-#include "pipeline/settings_schema.h"
 #include "scene/gltf_import.h"
+#include "settings/bake_settings.h"
+#include "settings/settings_schema.h"
 
 using namespace luxel;
 

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "bake/bake.h"
 #include "device/context.h"
-#include "pipeline/bake.h"
 #include "scene/gltf_import.h"
 
 using namespace luxel;

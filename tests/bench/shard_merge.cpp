@@ -1,6 +1,6 @@
 // The coordinator's merge cost per shard, in C++ (the figure the scaling
 // model, tests/bench/shard_model.py --merge-rate, takes): W shard states of T
-// covered texels in the accumulators.bin layout (pipeline/checkpoint.h) are
+// covered texels in the accumulators.bin layout (shards/checkpoint.h) are
 // written, then read back and folded one at a time as the coordinator does
 // (read_checkpoint, pipeline::ShardMerger: Chan et al.'s parallel Welford
 // per texel), each step timed; peak RSS at the end (the fold holds one
@@ -10,7 +10,7 @@
 //
 // The states are synthetic (random means, M2 and weights that pass the
 // merge's checks): the merge's cost does not depend on the values.
-#include "pipeline/shard_merge.h"
+#include "shards/shard_merge.h"
 
 #include <sys/resource.h>
 
@@ -23,8 +23,8 @@
 #include <vector>
 
 #include "common/status.h"
-#include "pipeline/checkpoint.h"
-#include "shared/bake.h"
+#include "kernels/shared/bake.h"
+#include "shards/checkpoint.h"
 
 namespace {
 

@@ -13,9 +13,9 @@ accumulators. Time of the sharded bake:
          + finish                         dilation, EXR/PNG writing, manifest
 
 state_bytes per covered texel is the BakeCheckpoint layout
-(server/engine/pipeline/checkpoint.h): mean float4 + m2 float4 + weight
+(server/engine/shards/checkpoint.h): mean float4 + m2 float4 + weight
 float2 + spp uint32 = 44 B, plus (1 + lobes) float4 per directional encoding
-(pipeline/encodings.cpp: EncodingPlan::stride). Upload and download both go
+(bake/encodings.cpp: EncodingPlan::stride). Upload and download both go
 through the coordinator's one network link ("link", Gbit/s), so they are
 serial in W: this term and the merge grow with W while tracing shrinks as
 1/W, and t(W) has a minimum at W* = sqrt(trace_1 / (per-shard overhead)).
@@ -34,7 +34,7 @@ import sys
 import time
 
 BASE_BYTES = 16 + 16 + 8 + 4  # mean float4, m2 float4, weight float2, spp uint32
-# Lobes per encoding (pipeline/encodings.cpp: stride += 1 + count).
+# Lobes per encoding (bake/encodings.cpp: stride += 1 + count).
 LOBES = {"irradiance": None, "sh1": 4, "sh2": 9, "sg9": 9, "sg12": 12, "ad": 12}
 WORKERS = (1, 2, 4, 8, 16, 32, 64, 100)
 

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
+#include "bake/primitives/radix_sort.h"
+#include "bake/primitives/stream_compaction.h"
 #include "common/machine_info.h"
 #include "device/context.h"
-#include "pipeline/primitives/radix_sort.h"
-#include "pipeline/primitives/stream_compaction.h"
 
 using namespace luxel;
 

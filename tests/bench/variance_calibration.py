@@ -9,7 +9,7 @@ irradiance.exr of the same size, e.g. from tests/bench/equal_error.py's
 cache):
   - Welford: (rel_error * Y)^2 from the bake's rel_error.exr (independent samples);
   - two-point: (Y_N - Y_S)^2 S / (N - S), the denoiser's guide
-    (server/engine/pipeline/progressive_variance.h), raw and after a 3x3 box.
+    (server/engine/bake/progressive_variance.h), raw and after a 3x3 box.
 Prints the sums over texels and estimate/true in quantile bins of each
 estimate (1 = calibrated). docs/accuracy.md "Denoiser" quotes a run.
 

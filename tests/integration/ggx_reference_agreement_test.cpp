@@ -33,9 +33,9 @@
 #include "atlas/atlas.h"
 #include "atlas/sample_info.h"
 #include "atlas/texel_raster.h"
+#include "bake/bake.h"
 #include "device/context.h"
 #include "lightmap_agreement.h"
-#include "pipeline/bake.h"
 #include "reference/cpu_lightmap_tracer.h"
 #include "scene/gltf_import.h"
 

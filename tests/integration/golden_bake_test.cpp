@@ -29,10 +29,10 @@
 #include <string>
 #include <vector>
 
+#include "bake/bake.h"
 #include "common/hash.h"
 #include "device/context.h"
 #include "output/exr.h"
-#include "pipeline/bake.h"
 #include "scene/gltf_import.h"
 
 namespace luxel {

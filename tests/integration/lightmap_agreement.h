@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "atlas/atlas.h"
-#include "pipeline/bake.h"
+#include "bake/bake.h"
 #include "reference/agreement_stats.h"
 #include "reference/cpu_lightmap_tracer.h"
 

@@ -18,9 +18,9 @@
 #include <string>
 
 #include "atlas/atlas.h"
+#include "bake/bake.h"
 #include "device/context.h"
 #include "lightmap_agreement.h"
-#include "pipeline/bake.h"
 #include "reference/cpu_lightmap_tracer.h"
 #include "scene/gltf_import.h"
 

@@ -12,7 +12,7 @@
 
 #include "daemon_harness.h"
 #include "output/exr.h"
-#include "pipeline/checkpoint.h"
+#include "shards/checkpoint.h"
 
 namespace luxel::test {
 namespace {
@@ -338,7 +338,7 @@ TEST_F(ServiceE2E, DirectionalEncodingsAreArtifacts) {
 
 // A shard of a distributed bake: adaptive left unset is off, and the
 // SUCCEEDED shard offers its accumulators (accumulators.bin, the checkpoint
-// format) for the coordinator's merge (pipeline/shard_merge.h).
+// format) for the coordinator's merge (shards/shard_merge.h).
 TEST_F(ServiceE2E, ShardBakeOffersItsAccumulators) {
   v1::SceneInfo scene;
   const std::string scene_id = upload_cornell(&scene);

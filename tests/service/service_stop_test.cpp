@@ -2,7 +2,7 @@
 // within a progress interval even with huge batches (pipeline/
 // iteration_stops.h); a second SIGTERM exits at once and the next start
 // resumes the bake from its last checkpoint; SubmitBake refuses bakes that
-// cannot fit (pipeline/resource_estimate.h) instead of FAILING them later.
+// cannot fit (bake/resource_estimate.h) instead of FAILING them later.
 #include <gtest/gtest.h>
 
 #include <csignal>

@@ -10,7 +10,7 @@
 #include "accel/triangle_soup.h"
 #include "common/status.h"
 #include "device/context.h"
-#include "shared/geometry.h"
+#include "kernels/shared/geometry.h"
 
 namespace luxel::accel {
 

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "accel/embree_device.h"
-#include "shared/alpha_mask.h"
+#include "kernels/shared/alpha_mask.h"
 
 namespace luxel::accel {
 namespace {

@@ -16,7 +16,7 @@
 
 #include "accel/bvh_builder.h"
 #include "common/status.h"
-#include "shared/geometry.h"
+#include "kernels/shared/geometry.h"
 
 namespace luxel::accel {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "shared/ray_offset.h"
+#include "kernels/shared/ray_offset.h"
 
 namespace luxel::accel {
 namespace {

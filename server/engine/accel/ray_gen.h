@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "accel/triangle_soup.h"
-#include "shared/geometry.h"
+#include "kernels/shared/geometry.h"
 
 namespace luxel::accel {
 

@@ -2,7 +2,7 @@
 // OpenCL C compiler gives it (DESIGN.md: defined once, checked on the host).
 #include <cstddef>
 
-#include "shared/geometry.h"
+#include "kernels/shared/geometry.h"
 
 namespace luxel::cl {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <map>
 
-#include "shared/texture.h"
+#include "kernels/shared/texture.h"
 
 namespace luxel::accel {
 namespace {

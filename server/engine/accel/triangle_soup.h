@@ -9,8 +9,8 @@
 
 #include "common/math.h"
 #include "common/status.h"
+#include "kernels/shared/geometry.h"
 #include "scene/scene.h"
-#include "shared/geometry.h"
 
 namespace luxel::accel {
 

@@ -67,7 +67,7 @@ struct Atlas {
   double texels_per_unit = 0;                 // achieved mean density (texels per world unit)
   // Lightmap pages (generated layouts past max_resolution): `pages` squares
   // of width x (height / pages) stacked from the top; the bake treats them as
-  // one image and the outputs cut it into pages (pipeline/bake_outputs.h).
+  // one image and the outputs cut it into pages (post/bake_outputs.h).
   int pages = 1;
   int page_height() const { return height / pages; }
 

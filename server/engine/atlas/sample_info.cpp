@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <bit>
 
-#include "shared/sample_info.h"
+#include "kernels/shared/sample_info.h"
 
 namespace luxel::atlas {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "atlas/chart_geometry.h"
-#include "shared/sample_info.h"
+#include "kernels/shared/sample_info.h"
 
 namespace luxel::atlas {
 namespace {

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
-#include "shared/bases.h"
+#include "kernels/shared/bases.h"
 
 namespace luxel::encode {
 namespace {

@@ -87,16 +87,16 @@ struct Manifest {
   std::vector<std::string> encodings_json;
   // Generated lightmap UVs: one JSON object (why they were generated, chart
   // count, stretch, packing efficiency, density spread, timings; see
-  // pipeline/bake_outputs.cpp), kept as JSON text. Empty when the file's
+  // post/bake_outputs.cpp), kept as JSON text. Empty when the file's
   // TEXCOORD_1 was used.
   std::string uv_layout_json;
   // The denoiser that made the "irradiance_denoised" files: one JSON object
   // (method, iterations, edge-stopping parameters, guides; see
-  // pipeline/denoise.h), kept as JSON text. Empty without denoising.
+  // post/denoise.h), kept as JSON text. Empty without denoising.
   std::string denoise_json;
   // Seam stitching (output/seam_stitch.h): one JSON object (seam edges,
   // sample points, the bilinear discontinuity along seams before and after,
-  // seconds; see pipeline/bake_seams.cpp), kept as JSON text. Empty when
+  // seconds; see post/bake_seams.cpp), kept as JSON text. Empty when
   // seam_stitch is off.
   std::string seam_stitch_json;
 

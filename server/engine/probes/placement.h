@@ -27,8 +27,8 @@
 
 #include "common/math.h"
 #include "common/status.h"
-#include "pipeline/probe_spec.h"
 #include "scene/scene.h"
+#include "settings/probe_spec.h"
 
 namespace luxel::probes {
 

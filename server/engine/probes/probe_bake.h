@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "bake/bake.h"
 #include "device/context.h"
-#include "pipeline/bake.h"
 #include "probes/placement.h"
 #include "probes/sh_window.h"
 

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "shared/probe.h"
+#include "kernels/shared/probe.h"
 
 namespace luxel::probes {
 namespace {

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "shared/bases.h"
+#include "kernels/shared/bases.h"
 
 namespace luxel::probes {
 

@@ -37,7 +37,7 @@ struct Mesh {
   std::vector<uint32_t> indices;           // 3 per triangle
   std::vector<int32_t> triangle_material;  // per triangle; index into Scene::materials
   // Where the vertices and triangles came from in the file, for writing
-  // generated lightmap UVs back (pipeline/lightmapped_gltf.h): per triangle
+  // generated lightmap UVs back (post/lightmapped_gltf.h): per triangle
   // primitive of the glTF mesh, its vertex range here (the primitive's
   // vertices in accessor order) and its triangle range here; per triangle,
   // its position in the primitive's triangle list (degenerate ones dropped,
@@ -51,7 +51,7 @@ struct Mesh {
   std::vector<uint32_t> source_triangle;
   bool generated_normals = false;
   // Every primitive had TEXCOORD_1 (otherwise the bake generates lightmap
-  // UVs, or refuses with --uv existing; pipeline/lightmap_layout.h).
+  // UVs, or refuses with --uv existing; bake/lightmap_layout.h).
   bool has_lightmap_uvs = true;
   // Texel centres of a 512^2 grid where TEXCOORD_1 overlaps itself (set by
   // the importer, scene_stats.h find_uv_overlaps); --uv auto regenerates such

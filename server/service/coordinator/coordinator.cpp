@@ -11,15 +11,16 @@
 #include <thread>
 #include <vector>
 
+#include "api/scene_files.h"
 #include "common/sha256.h"
 #include "output/reference_exr.h"
-#include "pipeline/checkpoint.h"
-#include "pipeline/shard_merge.h"
-#include "remote/scene_files.h"
 #include "service/coordinator/shard_plan.h"
 #include "service/files.h"
 #include "service/log.h"
 #include "service/metrics.h"
+#include "settings/fingerprint.h"
+#include "shards/checkpoint.h"
+#include "shards/shard_merge.h"
 
 namespace luxel::service::coordinator {
 
@@ -815,9 +816,9 @@ Result<pipeline::BakeResult> Run::execute() {
   }
   // Every shard's accumulators carry this; shard_index/shard_count are left
   // out of it by the engine, so shard 0's settings stand for all.
-  fingerprint_ =
-      bake_fingerprint(job_.info.scene_id(),
-                       stored_engine_settings(shard_settings(s, 0, plan_.count), options_.limits));
+  fingerprint_ = pipeline::bake_fingerprint(
+      job_.info.scene_id(),
+      stored_engine_settings(shard_settings(s, 0, plan_.count), options_.limits));
   status_.resize(plan_.count);
   snapshots_.resize(plan_.count);
   for (uint32_t k = 0; k < plan_.count; ++k) {

@@ -1,5 +1,5 @@
 // Coordinator mode: one bake split by sample index across worker luxelds and
-// merged exactly (parallel Welford, pipeline/shard_merge.h). Kubernetes (or
+// merged exactly (parallel Welford, shards/shard_merge.h). Kubernetes (or
 // whoever starts the daemons) runs the machines; this runs one sharded bake:
 //
 //   for each shard k of N, on its own thread:
@@ -43,13 +43,13 @@
 #include <memory>
 #include <string>
 
+#include "api/settings_translate.h"
+#include "bake/bake.h"
 #include "common/status.h"
 #include "device/context.h"
-#include "pipeline/bake.h"
 #include "service/bake_store.h"
 #include "service/coordinator/worker_pool.h"
 #include "service/scene_store.h"
-#include "service/settings_translate.h"
 
 namespace luxel::service {
 class Metrics;

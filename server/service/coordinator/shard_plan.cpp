@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "service/settings_translate.h"
+#include "api/settings_translate.h"
 
 namespace luxel::service::coordinator {
 

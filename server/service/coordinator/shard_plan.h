@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
+#include "api/settings_translate.h"
+#include "bake/bake.h"
 #include "common/status.h"
 #include "luxel/v1/luxel.pb.h"
-#include "pipeline/bake.h"
-#include "service/settings_translate.h"
 
 namespace luxel::service::coordinator {
 

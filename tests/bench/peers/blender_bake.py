@@ -109,7 +109,7 @@ def feed(nt, src, dst):
 
 
 def is_rough_dielectric(bsdf):
-    """Luxel's test (server/engine/pipeline/scene_data.cpp): metallic 0,
+    """Luxel's test (server/engine/bake/scene_data.cpp): metallic 0,
     roughness 1, no metallic-roughness texture; the importer links Metallic and
     Roughness to that texture when there is one"""
     m, r = bsdf.inputs["Metallic"], bsdf.inputs["Roughness"]

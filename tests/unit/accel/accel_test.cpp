@@ -16,7 +16,7 @@
 #include "accel/ray_gen.h"
 #include "accel/triangle_soup.h"
 #include "device/context.h"
-#include "shared/ray_offset.h"
+#include "kernels/shared/ray_offset.h"
 
 namespace luxel::accel {
 namespace {

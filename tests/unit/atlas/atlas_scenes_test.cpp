@@ -8,8 +8,8 @@
 
 #include "atlas/chart_geometry.h"
 #include "atlas_test_util.h"
+#include "kernels/shared/sample_info.h"
 #include "scene/gltf_import.h"
-#include "shared/sample_info.h"
 
 namespace luxel::atlas::testing {
 namespace {

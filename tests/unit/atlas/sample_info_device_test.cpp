@@ -9,8 +9,8 @@
 #include "atlas_test_util.h"
 #include "device/context.h"
 #include "device/program_cache.h"
+#include "kernels/shared/sample_info.h"
 #include "scene/gltf_import.h"
-#include "shared/sample_info.h"
 
 namespace luxel::atlas::testing {
 namespace {

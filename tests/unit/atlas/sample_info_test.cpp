@@ -1,6 +1,6 @@
 // Sample-info buffer (thesis §4.2) and its decode (§4.3), checked against an
 // independent brute-force point-in-triangle test on scenes built in code.
-#include "shared/sample_info.h"
+#include "kernels/shared/sample_info.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // Basis definitions: Gram matrices (thesis Eq. 7.3, 8.1) and the Ambient Dice
 // cosine-lobe partition of unity (§8.3, §8.3.1).
-#include "shared/bases.h"
+#include "kernels/shared/bases.h"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 
 #include "encode/basis.h"
 #include "encode/gram.h"
-#include "shared/bases.h"
+#include "kernels/shared/bases.h"
 
 namespace luxel::encode {
 namespace {

@@ -25,14 +25,14 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 
+#include "bake/bake.h"
 #include "device/context.h"
+#include "kernels/shared/bases.h"
 #include "luxel_lightmap.h"
-#include "pipeline/bake.h"
 #include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
-#include "shared/bases.h"
-#include "test_scenes.h"
+#include "support/test_scenes.h"
 
 namespace luxel {
 namespace {
@@ -537,7 +537,7 @@ TEST_F(ProbeTest, ProgressiveSolverAndErrorStopRule) {
 TEST_F(ProbeTest, ProbeStateBakedInTilesUnderASmallBudget) {
   // 4096 probes x 4.3 KB of state do not fit an 8 MiB budget beside the
   // path buffers: the probes are baked in tiles, one after another, as
-  // lightmap texels are (pipeline/tile_plan.h), and stay right.
+  // lightmap texels are (bake/tile_plan.h), and stay right.
   const float a = 0.3f;
   const scene::Scene s = testing::furnace_box(a, 1.0f);
   auto st = settings(32, 8);

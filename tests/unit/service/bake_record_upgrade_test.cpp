@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "api/settings_translate.h"
 #include "service/bake_store.h"
-#include "service/settings_translate.h"
 
 namespace luxel::service {
 namespace {

@@ -7,7 +7,7 @@
 #include <iterator>
 #include <string>
 
-#include "remote/scene_files.h"
+#include "api/scene_files.h"
 #include "scene/gltf_builder.h"
 #include "service/scene_store.h"
 #include "service/scene_upload.h"

@@ -7,8 +7,9 @@
 #include <functional>
 #include <set>
 
-#include "pipeline/settings_schema.h"
-#include "service/settings_translate.h"
+#include "api/settings_translate.h"
+#include "settings/fingerprint.h"
+#include "settings/settings_schema.h"
 
 namespace luxel::service {
 namespace {
@@ -222,12 +223,12 @@ TEST(SettingsProto, ShardsAreUniformAndShareTheFingerprint) {
   other.set_shard_index(1);
   auto s1 = to_engine_settings(other, SettingsLimits{});
   ASSERT_TRUE(s1) << s1.status().message();
-  EXPECT_EQ(bake_fingerprint("scene", *s), bake_fingerprint("scene", *s1));
+  EXPECT_EQ(pipeline::bake_fingerprint("scene", *s), pipeline::bake_fingerprint("scene", *s1));
   // The merged bake (shard_count 1, adaptive off) has the shards' fingerprint.
   pipeline::BakeSettings whole = *s;
   whole.shard_count = 1;
   whole.shard_index = 0;
-  EXPECT_EQ(bake_fingerprint("scene", whole), bake_fingerprint("scene", *s));
+  EXPECT_EQ(pipeline::bake_fingerprint("scene", whole), pipeline::bake_fingerprint("scene", *s));
   // What the API sends back for a shard round-trips.
   auto sent = to_proto_settings(*s);
   ASSERT_TRUE(sent) << sent.status().message();
@@ -314,7 +315,8 @@ TEST(SettingsProto, PlacementsRoundTripAndErrors) {
   // Placements shape the lightmap, so they are part of the settings the
   // checkpoint fingerprint covers.
   EXPECT_EQ(back->describe(), s.describe());
-  EXPECT_NE(bake_fingerprint("scene", s), bake_fingerprint("scene", pipeline::default_settings()));
+  EXPECT_NE(pipeline::bake_fingerprint("scene", s),
+            pipeline::bake_fingerprint("scene", pipeline::default_settings()));
 
   v1::BakeSettings bad = base();
   auto* np = bad.add_placements();

@@ -16,7 +16,7 @@
 
 #include "common/status.h"
 #include "device/context.h"
-#include "shared/compat.h"
+#include "kernels/shared/compat.h"
 
 namespace luxel::sampling_test {
 

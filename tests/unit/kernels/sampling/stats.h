@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "shared/compat.h"
+#include "kernels/shared/compat.h"
 #include "support/chi2.h"
 
 namespace luxel::sampling_test {

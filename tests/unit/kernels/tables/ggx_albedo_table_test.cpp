@@ -1,9 +1,9 @@
 // The committed kernels/shading/ggx_albedo_table.h against a fresh
 // in-process regeneration with the generator's own settings (it takes about
 // a second): the committed file must be exactly what luxel_ggx_albedo
-// (server/engine/pipeline/shading/make_ggx_albedo_table.cpp) writes. Also
+// (server/tools/make_ggx_albedo_table.cpp) writes. Also
 // checks the table against known properties of single-scattering GGX.
-#include "shading/ggx_albedo_table.h"
+#include "kernels/shading/ggx_albedo_table.h"
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,54 @@
+// Writes generated lightmap UVs back into the scene file, so an engine can
+// use the lightmap: `<scene>_lightmapped.glb` is the input glTF with
+//   - TEXCOORD_1 of every laid-out primitive replaced (or added) by the
+//     generated UVs, the vertices that chart seams split appended at the end
+//     of each primitive's vertex list (every other attribute and morph target
+//     copied for them) and the index list rewritten to use them;
+//   - on every baked node, extras.lightmapScaleOffset = [sx, sy, ox, oy]:
+//     atlas_uv = uv1 * (sx, sy) + (ox, oy) in glTF UV convention (Unity's
+//     Renderer.lightmapScaleOffset). A node that instantiates several
+//     instances (EXT_mesh_gpu_instancing) gets extras.lightmapScaleOffsets,
+//     one entry per instance in the extension's order. With several lightmap
+//     pages the scale/offset are relative to the instance's page and
+//     extras.lightmapIndex (lightmapIndices) names the page.
+// Everything else survives as it was in the JSON: nodes, materials, textures,
+// extensions, extras, unknown members. The file is always a GLB: buffers
+// (external, data URIs, the GLB chunk) are merged into its one binary chunk,
+// and external image files are embedded.
+//
+// The JSON is edited directly (nlohmann::json) rather than through tinygltf's
+// model, which would drop members it does not know.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bake/bake.h"
+#include "common/status.h"
+#include "scene/scene.h"
+
+namespace luxel::pipeline {
+
+struct WritebackReport {
+  size_t primitives = 0;              // primitives given generated TEXCOORD_1
+  size_t added_vertices = 0;          // seam copies appended over all primitives
+  size_t nodes = 0;                   // nodes given extras.lightmapScaleOffset(s)
+  std::vector<std::string> warnings;  // what could not be written, by name
+};
+
+// `source_path` is the file the scene was imported from (.gltf or .glb;
+// external files resolve beside it), `scene` the imported scene (not the
+// layout's split copy), `result` the bake, which must carry uv_layout.
+// Errors: INVALID_ARGUMENT when the bake has no generated UVs or the file
+// does not match the scene; NOT_FOUND / DATA_LOSS for unreadable inputs;
+// the output is written atomically.
+Result<WritebackReport> write_lightmapped_glb(const std::string& source_path,
+                                              const scene::Scene& scene, const BakeResult& result,
+                                              const std::string& out_path);
+
+// The same from memory; `base_dir` resolves external URIs ("" refuses them).
+Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::string& base_dir,
+                                          const scene::Scene& scene, const BakeResult& result,
+                                          WritebackReport* report);
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,20 @@
+#include "settings/fingerprint.h"
+
+#include "common/hash.h"
+
+namespace luxel::pipeline {
+
+std::string bake_fingerprint(const std::string& scene_id, const pipeline::BakeSettings& settings) {
+  Hasher h;
+  h.add(scene_id);
+  for (const auto& [key, value] : settings.describe()) {
+    if (key == "progress_interval_s") continue;  // shapes reports, not the lightmap
+    // Shards of one bake share the fingerprint (their states merge,
+    // shards/shard_merge.h); the checkpoint records the shard itself.
+    if (key == "shard") continue;
+    h.add(key).add("=").add(value).add("\n");
+  }
+  return h.hex();
+}
+
+}  // namespace luxel::pipeline

@@ -1,0 +1,220 @@
+// Adaptive sampling's allocation kernels (kernels/bake/adaptive.h) on the
+// real device, from a crafted per-texel state, against the allocation rule
+// computed here: every texel gets floor or ceil of its share of the batch,
+// the shares follow the texels' relative error (with the dark floor, the
+// cap and the defensive term), the keys come out sorted and sum to the
+// batch, and the result is the same on every run.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "bake/bake_kernels.h"
+#include "device/context.h"
+
+namespace luxel {
+namespace {
+
+using pipeline::BakeKernel;
+
+// Not a multiple of LUX_ALLOC_GROUP, and more than LUX_ALLOC_GROUP blocks
+// (alloc_scan's items then scan several blocks each).
+constexpr uint32_t kTexels = 70001;
+constexpr uint32_t kBatch = 1u << 20;
+constexpr uint32_t kSpp = 16;
+constexpr double kUnit = 128, kCap = 32, kMix = 0.2, kDarkFloor = 0.1;
+
+struct TexelState {
+  double y = 1;    // mean luminance
+  double rel = 0;  // relative standard error of the mean (against y)
+  uint32_t spp = kSpp;
+};
+
+// Texel t: relative errors 0.5 % .. 10 %; every 50th dark (y = 1e-3 with 50 %
+// relative error, i.e. tiny absolute error); texel 7 with 1 sample (counts
+// as 100 %); texel 11 with zero variance.
+std::vector<TexelState> crafted_state() {
+  std::vector<TexelState> s(kTexels);
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    s[t].rel = 0.005 * (1 + t % 20);
+    if (t % 50 == 3) {
+      s[t].y = 1e-3;
+      s[t].rel = 0.5;
+    }
+  }
+  s[7].spp = 1;
+  s[11].rel = 0;
+  return s;
+}
+
+class AdaptiveAllocationTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    auto ctx = device::Context::create();
+    ASSERT_TRUE(ctx) << ctx.status().to_string();
+    ctx_ = ctx.value().release();
+  }
+  static void TearDownTestSuite() { delete ctx_; }
+
+  // Runs alloc_weights, alloc_scan, alloc_keys; returns the keys of the
+  // batch and the device's weights.
+  static void allocate(const std::vector<TexelState>& state, const cl::LuxBakeParams& params,
+                       std::vector<uint32_t>& keys, std::vector<uint32_t>& weights) {
+    device::Context& ctx = *ctx_;
+    device::FeatureSet f;
+    f.set("ADAPTIVE");
+    auto kernels = pipeline::BakeKernels::create(ctx, f);
+    ASSERT_TRUE(kernels) << kernels.status().to_string();
+    pipeline::BakeArgs a;
+    a.params = params;
+    std::vector<cl::float4> mean(kTexels), m2(kTexels);
+    std::vector<cl::float2> weight(kTexels);
+    std::vector<uint32_t> spp(kTexels);
+    for (uint32_t t = 0; t < kTexels; ++t) {
+      // Welford state with unit weights: var = m2 / n, se = sqrt(var / n).
+      const double n = state[t].spp, se = state[t].rel * state[t].y;
+      mean[t].w = static_cast<float>(state[t].y);
+      m2[t].w = static_cast<float>(se * se * n * n);
+      weight[t] = {static_cast<float>(n), static_cast<float>(n)};
+      spp[t] = state[t].spp;
+    }
+    auto up = [&](auto& buffer, const auto& v, const char* name) {
+      auto b = ctx.upload(v, name, CL_MEM_READ_WRITE);
+      ASSERT_TRUE(b) << b.status().to_string();
+      buffer = std::move(b.value());
+    };
+    auto placeholder = [&](device::Buffer& b, size_t bytes, const char* name) {
+      auto r = ctx.alloc(std::max<size_t>(bytes, 16), name);
+      ASSERT_TRUE(r) << r.status().to_string();
+      b = std::move(r.value());
+    };
+    up(a.accum.mean, mean, "mean");
+    up(a.accum.m2, m2, "m2");
+    up(a.accum.weight, weight, "weight");
+    up(a.accum.spp, spp, "spp");
+    for (device::Buffer* b : {&a.accum.nonfinite, &a.accum.stats, &a.accum.reference})
+      placeholder(*b, 16, "unused");
+    placeholder(a.paths.keys, kBatch * 4, "keys");
+    for (device::Buffer* b :
+         {&a.paths.offsets, &a.paths.paths, &a.paths.rays, &a.paths.hits, &a.paths.shadow_rays,
+          &a.paths.shadow_contrib, &a.paths.occluded, &a.paths.alive, &a.paths.tagged})
+      placeholder(*b, 16, "unused");
+    const size_t blocks = (kTexels + LUX_ALLOC_GROUP - 1) / LUX_ALLOC_GROUP;
+    placeholder(a.alloc.alloc_weights, kTexels * 4, "weights");
+    placeholder(a.alloc.alloc_blocks, (blocks + 1) * 8, "blocks");
+    const size_t grid = blocks * LUX_ALLOC_GROUP;
+    for (auto [k, global, local] : {std::tuple{BakeKernel::alloc_weights, grid, size_t{256}},
+                                    std::tuple{BakeKernel::alloc_scan, size_t{256}, size_t{256}},
+                                    std::tuple{BakeKernel::alloc_keys, grid, size_t{256}}}) {
+      ASSERT_TRUE(kernels.value().bind(k, a).is_ok());
+      ASSERT_TRUE(ctx.launch(kernels.value()[k], global, local).is_ok());
+    }
+    keys.assign(kBatch, 0);
+    weights.assign(kTexels, 0);
+    ASSERT_TRUE(ctx.read(a.paths.keys, keys).is_ok());
+    ASSERT_TRUE(ctx.read(a.alloc.alloc_weights, weights).is_ok());
+    ASSERT_TRUE(ctx.finish().is_ok());
+  }
+
+  static device::Context* ctx_;
+};
+device::Context* AdaptiveAllocationTest::ctx_ = nullptr;
+
+// The allocation rule of kernels/bake/adaptive.h in double precision:
+// weight = min(e * scale, cap) + mix, e = se / max(y, floor) at most 1.
+double expected_weight(const TexelState& s, double floor, double scale) {
+  const double e = s.spp < 2 ? 1.0 : std::min(1.0, s.rel * s.y / std::max(s.y, floor));
+  return std::min(e * scale, kUnit * kCap) + kUnit * kMix;
+}
+
+TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
+  const std::vector<TexelState> state = crafted_state();
+  double mean_y = 0, mean_err = 0;
+  for (const auto& s : state) {
+    mean_y += s.y / kTexels;
+    mean_err += (s.spp < 2 ? 1.0 : std::min(1.0, s.rel)) / kTexels;
+  }
+  cl::LuxBakeParams p{};
+  p.covered_count = kTexels;
+  p.paths = kBatch;
+  p.adaptive_pass = 1;
+  p.alloc_floor = static_cast<float>(kDarkFloor * mean_y);
+  p.alloc_scale = static_cast<float>(kUnit / mean_err);
+  p.alloc_cap = static_cast<float>(kUnit * kCap);
+  p.alloc_mix = static_cast<float>(kUnit * kMix);
+  std::vector<uint32_t> keys, weights;
+  allocate(state, p, keys, weights);
+  if (HasFatalFailure()) return;
+
+  // The weights follow the rule (within the rounding to integers).
+  uint64_t total = 0;
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    const double w = expected_weight(state[t], p.alloc_floor, p.alloc_scale);
+    EXPECT_LE(std::fabs(weights[t] - w), 0.5 + 1e-3 * w) << "texel " << t;
+    total += weights[t];
+  }
+  // Sorted keys, all in range: the batch splits exactly.
+  ASSERT_TRUE(std::is_sorted(keys.begin(), keys.end()));
+  ASSERT_LT(keys.back(), kTexels);
+  std::vector<uint32_t> count(kTexels, 0);
+  for (uint32_t k : keys) ++count[k];
+  // Every texel: floor or ceil of its share of the batch.
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    const double share = double(kBatch) * weights[t] / double(total);
+    EXPECT_GE(count[t], std::floor(share)) << "texel " << t;
+    EXPECT_LE(count[t], std::ceil(share)) << "texel " << t;
+    EXPECT_GT(count[t], 0u) << "the defensive term samples every texel, texel " << t;
+  }
+  // More samples where the error is higher: the 10 % texels get about
+  // (10 % x scale + mix) / (0.5 % x scale + mix) times the 0.5 % ones'
+  // (summed over each class, so floor/ceil rounding averages out).
+  double hi = 0, lo = 0;
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    if (t % 50 == 3 || t == 7 || t == 11) continue;
+    if (t % 20 == 19) hi += count[t];
+    if (t % 20 == 0) lo += count[t];
+  }
+  const double ratio = expected_weight(state[19], p.alloc_floor, p.alloc_scale) /
+                       expected_weight(state[20], p.alloc_floor, p.alloc_scale);
+  EXPECT_GT(ratio, 4.0);
+  EXPECT_NEAR(hi / lo, ratio, 0.02 * ratio);
+  // The dark texel (50 % relative, y below the floor) counts its error
+  // against the floor: about the share of a 0.5 % texel, not of a 50 % one.
+  EXPECT_LE(count[3], count[19] / 4);
+  // The one-sample texel counts as 100 % error.
+  EXPECT_GT(count[7], count[19] * 5);
+
+  // Deterministic: the same state gives the same keys.
+  std::vector<uint32_t> again, weights2;
+  allocate(state, p, again, weights2);
+  EXPECT_EQ(keys, again);
+}
+
+// Injected error: a rule that ignored the error (uniform shares) must fail
+// the floor/ceil check above, so that check has teeth.
+TEST_F(AdaptiveAllocationTest, UniformSharesWouldFailTheCheck) {
+  const std::vector<TexelState> state = crafted_state();
+  cl::LuxBakeParams p{};
+  p.covered_count = kTexels;
+  p.paths = kBatch;
+  p.adaptive_pass = 1;
+  p.alloc_floor = 0.1f;
+  p.alloc_scale = 1000.0f;
+  p.alloc_cap = static_cast<float>(kUnit * kCap);
+  p.alloc_mix = 25.0f;
+  std::vector<uint32_t> keys, weights;
+  allocate(state, p, keys, weights);
+  if (HasFatalFailure()) return;
+  std::vector<uint32_t> count(kTexels, 0);
+  for (uint32_t k : keys) ++count[k];
+  size_t outside = 0;
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    const double uniform = double(kBatch) / kTexels;
+    if (count[t] < std::floor(uniform) || count[t] > std::ceil(uniform)) ++outside;
+  }
+  EXPECT_GT(outside, kTexels / 2);
+}
+
+}  // namespace
+}  // namespace luxel
