@@ -6,27 +6,22 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "api/scene_files.h"
-#include "api/settings_translate.h"
-#include "bake/bake.h"
 #include "bake/resource_estimate.h"
 #include "bake_options.h"
 #include "commands.h"
 #include "device/context.h"
+#include "job/bake_job.h"
 #include "output/reference_exr.h"
-#include "post/bake_outputs.h"
-#include "probes/gltf_nodes.h"
-#include "probes/probe_bake.h"
-#include "probes/probe_file.h"
+#include "probes/sh_window.h"
 #include "progress_bar.h"
 #include "scene/gltf_import.h"
 #include "settings/fingerprint.h"
+#include "settings/probe_spec.h"
 
 namespace luxel::cli {
 namespace {
@@ -44,23 +39,8 @@ void draw_progress(const pipeline::BakeProgress& p, bool tty) {
   draw_progress_bar(v, tty);
 }
 
-}  // namespace
-
-// The lightmap of the bake: outputs and the report.
-static int run_lightmap(const BakeArgs& a, const scene::Scene& scene, device::Context& ctx,
-                        const pipeline::BakeHooks& hooks, bool tty) {
-  auto result = pipeline::bake(scene, a.settings, ctx, hooks);
-  if (tty && !a.quiet) std::printf("\n");
-  if (!result) {
-    std::fprintf(stderr, "luxel bake: %s\n", result.status().to_string().c_str());
-    return 1;
-  }
-  const auto& r = result.value();
-  auto paths = pipeline::write_bake_outputs(a.out, scene, a.settings, r, "", a.scene);
-  if (!paths) {
-    std::fprintf(stderr, "luxel bake: %s\n", paths.status().to_string().c_str());
-    return 1;
-  }
+// The lightmap's figures, as soon as its bake ends (before the probes).
+void print_lightmap(const BakeArgs& a, const pipeline::BakeResult& r) {
   std::printf("lightmap   %dx%d (%s atlas), %zu covered texels, sample-info buffer %.1f MiB\n",
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
@@ -89,70 +69,16 @@ static int run_lightmap(const BakeArgs& a, const scene::Scene& scene, device::Co
     std::printf("           basis state %zu bytes per texel on the device\n",
                 r.basis_bytes_per_texel);
   std::printf("\nkernel timings (OpenCL profiling events)\n%s", r.kernel_table.c_str());
-  std::printf("\nwrote      %s\n           %s\n           %s\n",
-              paths.value().irradiance_exr.c_str(), paths.value().preview_png.c_str(),
-              paths.value().manifest_json.c_str());
-  if (!paths.value().irradiance_denoised_exr.empty())
-    std::printf("           %s (denoised, %.2f s)\n", paths.value().irradiance_denoised_exr.c_str(),
-                r.denoise_s);
-  for (const auto& f : paths.value().encodings) std::printf("           %s\n", f.c_str());
-  if (!paths.value().lightmapped_glb.empty())
-    std::printf("           %s\n", paths.value().lightmapped_glb.c_str());
-  return 0;
 }
 
-// The light probes of the bake (server/engine/probes/): placement, the
-// probe-domain bake, probes.bin and probes.json in --out.
-static int run_probes(const BakeArgs& a, const scene::Scene& scene, device::Context& ctx,
-                      const pipeline::BakeHooks& hooks, bool tty) {
-  auto spec = probes::parse_probe_spec(a.settings.probes);
-  if (!spec) {
-    std::fprintf(stderr, "luxel bake: %s\n", spec.status().message().c_str());
-    return 2;
-  }
-  probes::ProbeBakeSettings ps;
-  ps.placement = spec.value();
-  if (ps.placement.mode == probes::PlacementMode::kFile) {
-    std::ifstream f(ps.placement.file, std::ios::binary);
-    std::stringstream text;
-    text << f.rdbuf();
-    if (!f) {
-      std::fprintf(stderr, "luxel bake: --probes: cannot read %s\n", ps.placement.file.c_str());
-      return 1;
-    }
-    ps.placement.file_contents = text.str();
-  }
-  if (ps.placement.mode == probes::PlacementMode::kNodes) {
-    std::ifstream f(a.scene, std::ios::binary);
-    std::stringstream bytes;
-    bytes << f.rdbuf();
-    auto nodes = probes::probe_nodes_json(bytes.str());
-    if (!nodes) {
-      std::fprintf(stderr, "luxel bake: %s\n", nodes.status().message().c_str());
-      return 2;
-    }
-    ps.placement.file_contents = nodes.value();
-  }
-  ps.basis = a.settings.probe_sh_order == 1 ? "sh1" : "sh2";
-  ps.window = probes::parse_sh_window(a.settings.probe_window).value();
-  auto layout = probes::place_probes(scene, ps.placement);
-  if (!layout) {
-    std::fprintf(stderr, "luxel bake: %s\n", layout.status().to_string().c_str());
-    return 1;
-  }
-  const probes::ProbeLayout& l = layout.value();
+void print_probe_layout(const probes::ProbeLayout& l, const std::string& spec) {
   std::printf(
       "probes     %zu (%s), %zu inside geometry: %zu moved out, %zu flagged%s\n",
-      l.positions.size(), probes::describe_probe_spec(ps.placement).c_str(), l.inside_detected,
-      l.moved, l.flagged_inside,
+      l.positions.size(), spec.c_str(), l.inside_detected, l.moved, l.flagged_inside,
       l.dropped_far ? strprintf(", %zu far from geometry dropped", l.dropped_far).c_str() : "");
-  auto result = probes::bake_probe_layout(scene, a.settings, ps, layout.value(), ctx, hooks);
-  if (tty && !a.quiet) std::printf("\n");
-  if (!result) {
-    std::fprintf(stderr, "luxel bake: probes: %s\n", result.status().to_string().c_str());
-    return 1;
-  }
-  const probes::ProbeBake& b = result.value();
+}
+
+void print_probes(const probes::ProbeBake& b) {
   const pipeline::BakeResult& r = b.bake;
   std::printf(
       "probes     %.2f s, %llu paths (%.3f M probe-samples/s), samples per probe mean %.1f min "
@@ -162,14 +88,25 @@ static int run_probes(const BakeArgs& a, const scene::Scene& scene, device::Cont
       pipeline::termination_name(r.termination));
   std::printf("           negative irradiance: raw %.4f, %s %.4f of (probe, normal) pairs\n",
               b.negative_raw, probes::sh_window_name(b.window), b.negative_windowed);
-  if (auto st = probes::write_probe_files(b, a.out); !st.is_ok()) {
-    std::fprintf(stderr, "luxel bake: %s\n", st.to_string().c_str());
-    return 1;
-  }
-  std::printf("wrote      %s/probes.bin\n           %s/probes.json\n", a.out.c_str(),
-              a.out.c_str());
-  return 0;
 }
+
+void print_written(const BakeArgs& a, const job::JobResult& job) {
+  const pipeline::OutputPaths& w = job.written;
+  if (job.lightmap) {
+    std::printf("\nwrote      %s\n           %s\n           %s\n", w.irradiance_exr.c_str(),
+                w.preview_png.c_str(), w.manifest_json.c_str());
+    if (!w.irradiance_denoised_exr.empty())
+      std::printf("           %s (denoised, %.2f s)\n", w.irradiance_denoised_exr.c_str(),
+                  job.lightmap->denoise_s);
+    for (const auto& f : w.encodings) std::printf("           %s\n", f.c_str());
+    if (!w.lightmapped_glb.empty()) std::printf("           %s\n", w.lightmapped_glb.c_str());
+  }
+  if (job.probes)
+    std::printf("wrote      %s/probes.bin\n           %s/probes.json\n", a.out.c_str(),
+                a.out.c_str());
+}
+
+}  // namespace
 
 int run_bake(const std::vector<std::string>& args) {
   BakeArgs a;
@@ -187,6 +124,7 @@ int run_bake(const std::vector<std::string>& args) {
                  a.remote_only.front().c_str());
     return 2;
   }
+  if (!read_probe_positions(a)) return 2;
   if (const std::string& file = a.settings.reference_name; !file.empty()) {
     // Benchmark mode: RGBA (or RGB) float EXR of the lightmap's size.
     auto image = output::read_reference_exr(file);
@@ -222,26 +160,44 @@ int run_bake(const std::vector<std::string>& args) {
   std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
               ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));
-  pipeline::BakeHooks hooks;
+  const bool bar = tty && !a.quiet;
+  job::JobInput input{.scene = &scene.value(), .settings = a.settings, .scene_file = a.scene};
+  job::JobEvents events;
   if (a.settings.sharded()) {
     // A shard's accumulators.bin carries the bake's fingerprint, as the
     // daemon derives it (scene id + settings without the shard), so shards
     // baked here and on daemons merge (shards/shard_merge.h).
     remote::SceneFiles files;
     if (remote::collect_scene_files(a.scene, files).ok())
-      hooks.fingerprint = pipeline::bake_fingerprint(remote::scene_id(files), a.settings);
+      events.hooks.fingerprint = pipeline::bake_fingerprint(remote::scene_id(files), a.settings);
   }
-  hooks.on_layout = [](const std::string& line) {
+  events.hooks.on_layout = [](const std::string& line) {
     std::printf("uv         %s\n", line.c_str());
     std::fflush(stdout);
   };
-  hooks.on_progress = [&](const pipeline::BakeProgress& p) {
+  events.hooks.on_progress = [&](const pipeline::BakeProgress& p) {
     if (!a.quiet) draw_progress(p, tty);
     return true;
   };
-  if (a.settings.lightmap)
-    if (int rc = run_lightmap(a, scene.value(), *ctx.value(), hooks, tty)) return rc;
-  if (!a.settings.probes.empty()) return run_probes(a, scene.value(), *ctx.value(), hooks, tty);
+  events.on_lightmap = [&](const pipeline::BakeResult& r) {
+    if (bar) std::printf("\n");
+    print_lightmap(a, r);
+  };
+  events.on_probe_layout = [&](const probes::ProbeLayout& l) {
+    print_probe_layout(
+        l, probes::describe_probe_spec(probes::parse_probe_spec(a.settings.probes).value()));
+  };
+  events.on_probes = [&](const probes::ProbeBake& b) {
+    if (bar) std::printf("\n");
+    print_probes(b);
+  };
+  auto job = job::run_bake_job(input, *ctx.value(), events, a.out);
+  if (!job) {
+    if (bar) std::printf("\n");
+    std::fprintf(stderr, "luxel bake: %s\n", job.status().to_string().c_str());
+    return job.status().code() == StatusCode::kInvalidArgument ? 2 : 1;
+  }
+  print_written(a, job.value());
   return 0;
 }
 

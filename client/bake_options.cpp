@@ -2,6 +2,8 @@
 
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 
 #include "commands.h"
 #include "settings/settings_schema.h"
@@ -218,6 +220,20 @@ int run_settings(const std::vector<std::string>& args) {
     if (st.in_api() && st.api_note) std::printf("    API: %s\n", st.api_note);
   }
   return 0;
+}
+
+bool read_probe_positions(BakeArgs& a) {
+  if (a.settings.probes.rfind("file:", 0) != 0 || !a.settings.probe_positions.empty()) return true;
+  const std::string file = a.settings.probes.substr(5);
+  std::ifstream f(file, std::ios::binary);
+  std::stringstream text;
+  text << f.rdbuf();
+  if (!f) {
+    std::fprintf(stderr, "luxel bake: --probes: cannot read %s\n", file.c_str());
+    return false;
+  }
+  a.settings.probe_positions = text.str();
+  return true;
 }
 
 }  // namespace luxel::cli

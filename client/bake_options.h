@@ -42,6 +42,11 @@ enum class ParseOutcome { kOk, kHelpShown, kUsageError };
 // Parses `luxel bake` arguments (errors printed to stderr).
 ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& out);
 
+// `--probes file:PATH`: reads PATH into settings.probe_positions, which the
+// bake (local or on luxeld) places the probes from; the daemon gets the
+// positions, not the path. False (and a message) when it cannot be read.
+bool read_probe_positions(BakeArgs& a);
+
 // `luxel bake` without --local: upload if needed, submit, watch, download.
 int run_bake_remote(BakeArgs& args);
 

@@ -70,18 +70,7 @@ grpc::Status resolve_scene(Connection& conn, const BakeArgs& a, luxel::v1::Scene
 
 int run_bake_remote(BakeArgs& a) {
   if (int rc = check_remote_args(a); rc != kExitOk) return rc;
-  // Probes from a file: the daemon gets the positions, not the path.
-  if (a.settings.probes.rfind("file:", 0) == 0 && a.settings.probe_positions.empty()) {
-    const std::string file = a.settings.probes.substr(5);
-    std::ifstream f(file, std::ios::binary);
-    std::stringstream text;
-    text << f.rdbuf();
-    if (!f) {
-      std::fprintf(stderr, "luxel bake: --probes: cannot read %s\n", file.c_str());
-      return kExitUsage;
-    }
-    a.settings.probe_positions = text.str();
-  }
+  if (!read_probe_positions(a)) return kExitUsage;
   const bool json = a.connection.json;
   auto conn = Connection::open("bake", a.connection);
   if (!conn) return kExitUsage;

@@ -5,12 +5,8 @@
 #include <functional>
 #include <optional>
 
-#include "bake/bake.h"
+#include "job/bake_job.h"
 #include "output/reference_exr.h"
-#include "post/bake_outputs.h"
-#include "probes/gltf_nodes.h"
-#include "probes/probe_bake.h"
-#include "probes/probe_file.h"
 #include "service/coordinator/coordinator.h"
 #include "service/coordinator/shard_plan.h"
 #include "service/files.h"
@@ -292,84 +288,55 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
     ~OnExit() { f(); }
   } end_on_exit{report_end};
   const bool sharded = options_.coordinator && coordinator::is_sharded(info->settings());
-  coordinator::ShardedJob job{.bake_id = bake_id,
-                              .info = info.value(),
-                              .scene = scene.value().get(),
-                              .scene_main_file = scenes_.main_file_path(scene_info.value()),
-                              .scene_name = scene_info.value().name(),
-                              .settings = &settings.value(),
-                              .ctx = ctx.get(),
-                              .cancel = &running.cancel,
-                              .by_user = &running.by_user,
-                              .finish = &running.finish,
-                              .stopping = &shutting_down_};
-  // The lightmap (unless settings.lightmap is off), then the light probes
-  // (settings.probes) over the same device. A probes-only job checkpoints
-  // and resumes its probe bake; after a lightmap the probe phase runs
-  // without checkpoints (a restart redoes it from zero after the lightmap's
-  // last checkpoint).
-  std::optional<pipeline::BakeResult> lightmap;
-  std::optional<probes::ProbeBake> probe_bake;
-  if (settings->lightmap) {
-    auto result = sharded ? options_.coordinator->run(job)
-                          : pipeline::bake(*scene.value(), settings.value(), *ctx, hooks);
-    if (!result) {
-      ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
-      return finish_failed(bake_id, result.status());
-    }
-    lightmap = std::move(result.value());
-  }
-  if (!settings->probes.empty() &&
-      (!lightmap || lightmap->termination != pipeline::Termination::kCancelled)) {
-    auto spec = probes::parse_probe_spec(settings->probes);
-    if (!spec) return finish_failed(bake_id, spec.status());
-    probes::ProbeBakeSettings ps;
-    ps.placement = spec.value();
-    ps.placement.file_contents = settings->probe_positions;
-    if (ps.placement.mode == probes::PlacementMode::kNodes) {
-      // The nodes tagged in the stored scene file.
-      auto file = read_whole_file(scenes_.main_file_path(scene_info.value()));
-      if (!file) return finish_failed(bake_id, file.status());
-      auto nodes = probes::probe_nodes_json(file.value());
-      if (!nodes) return finish_failed(bake_id, nodes.status());
-      ps.placement.file_contents = nodes.value();
-    }
-    ps.basis = settings->probe_sh_order == 1 ? "sh1" : "sh2";
-    auto window = probes::parse_sh_window(settings->probe_window);
-    if (!window) return finish_failed(bake_id, window.status());
-    ps.window = window.value();
-    pipeline::BakeHooks probe_hooks = hooks;
-    // A probe set is no image: no snapshots of it.
-    probe_hooks.on_snapshot = nullptr;
-    probe_hooks.snapshot_interval_s = 0;
-    if (lightmap) {
-      probe_hooks.resume = nullptr;
-      probe_hooks.on_checkpoint = nullptr;
-      probe_hooks.checkpoint_interval_s = 0;
-      probe_hooks.checkpoint_now = nullptr;
-      last_paths = 0;
-    }
-    auto pb = probes::bake_probes(*scene.value(), settings.value(), ps, *ctx, probe_hooks);
-    if (!pb) {
-      ctx.reset();
-      return finish_failed(bake_id, pb.status());
-    }
-    probe_bake = std::move(pb.value());
-    log_event("probes_baked",
-              {{"bake", bake_id},
-               {"probes", std::to_string(probe_bake->count())},
-               {"inside_flagged", std::to_string(probe_bake->layout.flagged_inside)},
-               {"moved", std::to_string(probe_bake->layout.moved)},
-               {"paths", std::to_string(probe_bake->bake.paths)}});
+  coordinator::ShardedJob sharded_job{.bake_id = bake_id,
+                                      .info = info.value(),
+                                      .scene = scene.value().get(),
+                                      .scene_main_file = scenes_.main_file_path(scene_info.value()),
+                                      .scene_name = scene_info.value().name(),
+                                      .settings = &settings.value(),
+                                      .ctx = ctx.get(),
+                                      .cancel = &running.cancel,
+                                      .by_user = &running.by_user,
+                                      .finish = &running.finish,
+                                      .stopping = &shutting_down_};
+  // The job: the lightmap (unless settings.lightmap is off; a sharded one
+  // through the coordinator), then the light probes, then the outputs,
+  // written into results.partial/ and renamed below.
+  job::JobInput input{.scene = scene.value().get(),
+                      .settings = settings.value(),
+                      .scene_file = scenes_.main_file_path(scene_info.value()),
+                      .scene_sha256 = info->scene_id(),
+                      .scene_name = scene_info.value().name()};
+  job::JobEvents events;
+  events.hooks = hooks;
+  if (sharded) events.bake_lightmap = [&] { return options_.coordinator->run(sharded_job); };
+  events.on_probe_layout = [&](const probes::ProbeLayout&) {
+    if (settings->lightmap) last_paths = 0;  // the probe bake counts its paths from zero
+  };
+  events.on_probes = [&](const probes::ProbeBake& b) {
+    log_event("probes_baked", {{"bake", bake_id},
+                               {"probes", std::to_string(b.count())},
+                               {"inside_flagged", std::to_string(b.layout.flagged_inside)},
+                               {"moved", std::to_string(b.layout.moved)},
+                               {"paths", std::to_string(b.bake.paths)}});
+  };
+  const std::string partial = bakes_.bake_dir(bake_id) + "/results.partial";
+  const std::string final_dir = bakes_.results_dir(bake_id);
+  remove_tree(partial);
+  remove_tree(final_dir);
+  auto done = job::run_bake_job(input, *ctx, events, partial);
+  if (!done) {
+    ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
+    return finish_failed(bake_id, done.status());
   }
   // The figures of the record: the lightmap's, or the probes' alone.
-  const pipeline::BakeResult& r = lightmap ? *lightmap : probe_bake->bake;
+  const pipeline::BakeResult& r = done->figures();
   // The workers traced a sharded lightmap's paths (and count them themselves).
-  if (!(sharded && lightmap)) paths_traced_ += r.paths - std::min(r.paths, last_paths);
+  if (!(sharded && done->lightmap)) paths_traced_ += r.paths - std::min(r.paths, last_paths);
   traced_s = r.seconds;
 
-  if (r.termination == pipeline::Termination::kCancelled ||
-      (probe_bake && probe_bake->bake.termination == pipeline::Termination::kCancelled)) {
+  if (done->cancelled()) {
+    remove_tree(partial);
     const bool by_user = running.by_user.load();
     outcome = by_user ? "cancelled" : "interrupted";
     report_end();
@@ -393,28 +360,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   }
 
   // Results: the whole folder appears at once (rename), then the record.
-  const std::string partial = bakes_.bake_dir(bake_id) + "/results.partial";
-  const std::string final_dir = bakes_.results_dir(bake_id);
-  remove_tree(partial);
-  remove_tree(final_dir);
-  pipeline::OutputPaths written_files;
-  if (lightmap) {
-    auto written = pipeline::write_bake_outputs(
-        partial, *scene.value(), settings.value(), r, info->scene_id(),
-        scenes_.main_file_path(scene_info.value()), scene_info.value().name());
-    if (!written) return finish_failed(bake_id, written.status());
-    written_files = std::move(written.value());
-  } else {
-    std::error_code ec;
-    fs::create_directories(partial, ec);
-    if (ec) return finish_failed(bake_id, internal_error("cannot create " + partial));
-  }
-  if (probe_bake) {
-    if (Status st = probes::write_probe_files(*probe_bake, partial); !st.is_ok())
-      return finish_failed(bake_id, st);
-    written_files.files.push_back("probes.bin");
-    written_files.files.push_back("probes.json");
-  }
+  const std::vector<std::string>& written_files = done->written.files;
   if (Status st = fsync_directory(partial); !st.is_ok()) return finish_failed(bake_id, st);
   if (Status st = rename_durable(partial, final_dir); !st.is_ok())
     return finish_failed(bake_id, st);
@@ -443,7 +389,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
         p->set_eta_s(0);
         p->set_fraction(1);
         b.clear_artifacts();
-        for (const std::string& a : written_files.files) b.add_artifacts(a);
+        for (const std::string& a : written_files) b.add_artifacts(a);
       },
       true);
   // Only once the record says SUCCEEDED: a crash before this line re-runs

@@ -215,6 +215,44 @@ def test_probes(d):
     check(meta["layout"]["mode"] == "file" and len(meta["probes"]) == 3, f"probes.json: {meta['layout']}")
 
 
+def test_one_job_both_paths(d):
+    """The CLI's --local mode and the daemon run the same job (the engine's
+    job module): a lightmap + probes + denoise job gives the same files with
+    the same bytes either way. The manifest, the error series and probes.json
+    carry run times (and the daemon's scene id), so they are compared by
+    their fields."""
+    s = ["--server", d.server]
+    positions = os.path.join(ARGS.work, "job_probes.json")
+    with open(positions, "w") as f:
+        json.dump({"probes": [[0, 1, 0], [0.2, 0.5, -0.1]]}, f)
+    args = ["--probes", "file:" + positions, "--denoise", "atrous", "--samples", 32,
+            "--resolution", 64]
+    remote = os.path.join(ARGS.work, "job_remote")
+    out, _ = luxel("bake", ARGS.scene, *args, "--out", remote, "--json", *s)
+    check(json_lines(out)[-1]["bake"]["state"] == "BAKE_STATE_SUCCEEDED", f"job: {out[-500:]}")
+    local = os.path.join(ARGS.work, "job_local")
+    luxel("bake", ARGS.scene, *args, "--out", local, "--local")
+    names = set(os.listdir(remote))
+    check(names == set(os.listdir(local)), f"files: remote {sorted(names)}, local {sorted(os.listdir(local))}")
+    for required in ("irradiance.exr", "irradiance_denoised.exr", "probes.bin", "probes.json"):
+        check(required in names, f"{required} missing from {sorted(names)}")
+    timed = {"manifest.json", "error_series.csv", "probes.json"}
+    differ = [n for n in sorted(names - timed)
+              if sha256_file(os.path.join(remote, n)) != sha256_file(os.path.join(local, n))]
+    check(not differ, f"remote and local differ in {differ}")
+    with open(os.path.join(remote, "manifest.json")) as f:
+        m_remote = json.load(f)
+    with open(os.path.join(local, "manifest.json")) as f:
+        m_local = json.load(f)
+    for key in ("width", "height", "encodings", "features"):
+        check(m_remote.get(key) == m_local.get(key), f"manifest {key}: {m_remote.get(key)} vs {m_local.get(key)}")
+    with open(os.path.join(remote, "probes.json")) as f:
+        p_remote = json.load(f)
+    with open(os.path.join(local, "probes.json")) as f:
+        p_local = json.load(f)
+    check(p_remote["probes"] == p_local["probes"], "probes.json: the probes differ")
+
+
 def test_changed_buffer_is_uploaded(d, original_id):
     """The same .gltf beside a changed .bin is another scene: `luxel bake`
     must upload it rather than reuse the stored scene with the old buffer."""
@@ -331,6 +369,7 @@ def main():
         d.wait_ready()
         test_main_flow(d)
         test_probes(d)
+        test_one_job_both_paths(d)
         test_changed_buffer_is_uploaded(d, expected_scene_id(ARGS.scene))
         test_errors(d)
     finally:

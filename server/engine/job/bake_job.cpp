@@ -1,0 +1,131 @@
+#include "job/bake_job.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "probes/gltf_nodes.h"
+#include "probes/placement.h"
+#include "probes/probe_file.h"
+#include "probes/sh_window.h"
+#include "settings/probe_spec.h"
+
+namespace luxel::job {
+namespace {
+
+using pipeline::BakeResult;
+using pipeline::Termination;
+
+Result<std::string> read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream bytes;
+  bytes << f.rdbuf();
+  if (!f) return not_found("cannot read " + path);
+  return bytes.str();
+}
+
+// The probe bake's settings from the bake settings: placement, basis and
+// window, with the positions or nodes the placement reads.
+Result<probes::ProbeBakeSettings> probe_settings(const JobInput& in) {
+  const pipeline::BakeSettings& s = in.settings;
+  auto spec = probes::parse_probe_spec(s.probes);
+  if (!spec) return spec.status();
+  probes::ProbeBakeSettings ps;
+  ps.placement = spec.value();
+  ps.placement.file_contents = s.probe_positions;
+  if (ps.placement.mode == probes::PlacementMode::kNodes) {
+    auto file = read_file(in.scene_file);
+    if (!file) return file.status();
+    auto nodes = probes::probe_nodes_json(file.value());
+    if (!nodes) return nodes.status();
+    ps.placement.file_contents = nodes.value();
+  }
+  ps.basis = s.probe_sh_order == 1 ? "sh1" : "sh2";
+  auto window = probes::parse_sh_window(s.probe_window);
+  if (!window) return window.status();
+  ps.window = window.value();
+  return ps;
+}
+
+Result<BakeResult> bake_lightmap(const JobInput& in, device::Context& ctx, const JobEvents& ev) {
+  auto r =
+      ev.bake_lightmap ? ev.bake_lightmap() : pipeline::bake(*in.scene, in.settings, ctx, ev.hooks);
+  if (r && ev.on_lightmap) ev.on_lightmap(r.value());
+  return r;
+}
+
+Result<probes::ProbeBake> bake_probes(const JobInput& in, device::Context& ctx, const JobEvents& ev,
+                                      bool after_lightmap) {
+  auto ps = probe_settings(in);
+  if (!ps) return ps.status();
+  auto layout = probes::place_probes(*in.scene, ps.value().placement);
+  if (!layout) return layout.status();
+  if (ev.on_probe_layout) ev.on_probe_layout(layout.value());
+  pipeline::BakeHooks hooks = ev.hooks;
+  hooks.on_snapshot = nullptr;  // a probe set is no image
+  hooks.snapshot_interval_s = 0;
+  if (after_lightmap) {
+    hooks.resume = nullptr;
+    hooks.on_checkpoint = nullptr;
+    hooks.checkpoint_interval_s = 0;
+    hooks.checkpoint_now = nullptr;
+  }
+  auto b = probes::bake_probe_layout(*in.scene, in.settings, ps.value(), std::move(layout.value()),
+                                     ctx, hooks);
+  if (b && ev.on_probes) ev.on_probes(b.value());
+  return b;
+}
+
+Status write_outputs(const JobInput& in, const std::string& dir, JobResult& job) {
+  if (job.lightmap) {
+    auto written = pipeline::write_bake_outputs(dir, *in.scene, in.settings, *job.lightmap,
+                                                in.scene_sha256, in.scene_file, in.scene_name);
+    if (!written) return written.status();
+    job.written = std::move(written.value());
+  } else {
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) return internal_error("cannot create " + dir + ": " + ec.message());
+  }
+  if (job.probes) {
+    LUXEL_RETURN_IF_ERROR(probes::write_probe_files(*job.probes, dir));
+    job.written.files.push_back("probes.bin");
+    job.written.files.push_back("probes.json");
+  }
+  return Status::ok();
+}
+
+}  // namespace
+
+bool JobResult::cancelled() const {
+  return (lightmap && lightmap->termination == Termination::kCancelled) ||
+         (probes && probes->bake.termination == Termination::kCancelled);
+}
+
+const BakeResult& JobResult::figures() const {
+  return lightmap ? *lightmap : probes->bake;
+}
+
+Result<JobResult> run_bake_job(const JobInput& in, device::Context& ctx, const JobEvents& events,
+                               const std::string& out_dir) {
+  JobResult job;
+  if (in.settings.lightmap) {
+    auto r = bake_lightmap(in, ctx, events);
+    if (!r) return r.status();
+    job.lightmap = std::move(r.value());
+    if (job.cancelled()) return job;
+  }
+  if (!in.settings.probes.empty()) {
+    auto b = bake_probes(in, ctx, events, job.lightmap.has_value());
+    if (!b) return b.status();
+    job.probes = std::move(b.value());
+    if (job.cancelled()) return job;
+  }
+  if (!job.lightmap && !job.probes)
+    return invalid_argument(
+        "settings.lightmap: off, and settings.probes is empty: nothing to bake");
+  LUXEL_RETURN_IF_ERROR(write_outputs(in, out_dir, job));
+  return job;
+}
+
+}  // namespace luxel::job
