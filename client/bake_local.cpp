@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -161,7 +162,12 @@ int run_bake(const std::vector<std::string>& args) {
               ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));
   const bool bar = tty && !a.quiet;
-  job::JobInput input{.scene = &scene.value(), .settings = a.settings, .scene_file = a.scene};
+  // Named as luxeld names an upload by default (its file name), so a local
+  // bake writes the same bytes as the daemon's.
+  job::JobInput input{.scene = &scene.value(),
+                      .settings = a.settings,
+                      .scene_file = a.scene,
+                      .scene_name = std::filesystem::path(a.scene).filename().string()};
   job::JobEvents events;
   if (a.settings.sharded()) {
     // A shard's accumulators.bin carries the bake's fingerprint, as the

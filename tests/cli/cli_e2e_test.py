@@ -222,16 +222,28 @@ def test_one_job_both_paths(d):
     carry run times (and the daemon's scene id), so they are compared by
     their fields."""
     s = ["--server", d.server]
+    # A scene of its own (one more byte), so the daemon stores it under its
+    # file name, the name a local bake gives it too (not an earlier --name).
+    folder = os.path.join(ARGS.work, "job_scene")
+    os.makedirs(folder)
+    scene = os.path.join(folder, os.path.basename(ARGS.scene))
+    with open(ARGS.scene, "rb") as f:
+        gltf = f.read()
+    with open(scene, "wb") as f:
+        f.write(gltf + b"\n")
+    with open(ARGS.scene, encoding="utf-8") as f:
+        bin_uri = json.load(f)["buffers"][0]["uri"]
+    shutil.copyfile(os.path.join(os.path.dirname(ARGS.scene), bin_uri), os.path.join(folder, bin_uri))
     positions = os.path.join(ARGS.work, "job_probes.json")
     with open(positions, "w") as f:
         json.dump({"probes": [[0, 1, 0], [0.2, 0.5, -0.1]]}, f)
     args = ["--probes", "file:" + positions, "--denoise", "atrous", "--samples", 32,
             "--resolution", 64]
     remote = os.path.join(ARGS.work, "job_remote")
-    out, _ = luxel("bake", ARGS.scene, *args, "--out", remote, "--json", *s)
+    out, _ = luxel("bake", scene, *args, "--out", remote, "--json", *s)
     check(json_lines(out)[-1]["bake"]["state"] == "BAKE_STATE_SUCCEEDED", f"job: {out[-500:]}")
     local = os.path.join(ARGS.work, "job_local")
-    luxel("bake", ARGS.scene, *args, "--out", local, "--local")
+    luxel("bake", scene, *args, "--out", local, "--local")
     names = set(os.listdir(remote))
     check(names == set(os.listdir(local)), f"files: remote {sorted(names)}, local {sorted(os.listdir(local))}")
     for required in ("irradiance.exr", "irradiance_denoised.exr", "probes.bin", "probes.json"):
