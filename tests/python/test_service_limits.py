@@ -124,8 +124,9 @@ class StreamLimits(unittest.TestCase):
         idle.release.set()
         self.assertEqual(code, grpc.StatusCode.DEADLINE_EXCEEDED, details)
         self.assertIn("--upload-idle-timeout", details)
+        # The rule fires once the idle time has passed, never before (how much
+        # later depends on the machine's load: not asserted).
         self.assertGreaterEqual(took, IDLE_TIMEOUT_S)
-        self.assertLess(took, IDLE_TIMEOUT_S + 5)
         self.assertEqual(self.staging(), [])
         wait_until(lambda: self.status().uploads == 0, what="upload slot freed")
 
