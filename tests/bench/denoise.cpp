@@ -37,6 +37,7 @@
 
 #include "atlas/sample_info.h"
 #include "bake/bake.h"
+#include "common/clock.h"
 #include "device/context.h"
 #include "output/exr.h"
 #include "post/denoise_guides.h"
@@ -136,10 +137,6 @@ double cpu_seconds() {
   getrusage(RUSAGE_SELF, &u);
   return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
          1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void timing(const std::vector<int>& sizes, device::Context& ctx) {

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/status.h"
 #include "kernels/shared/bake.h"
 #include "shards/checkpoint.h"
@@ -29,11 +30,8 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using luxel::seconds_since;
 using luxel::pipeline::BakeCheckpoint;
-
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 BakeCheckpoint synthetic_shard(size_t texels, uint32_t index, uint32_t count, bool sh2) {
   std::mt19937 rng(1234 + index);

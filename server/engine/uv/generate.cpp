@@ -1,48 +1,19 @@
 #include "uv/generate.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
 
 #include "atlas/chart_geometry.h"
+#include "common/clock.h"
 #include "scene/uv_raster.h"
 #include "uv/bitimage_packer.h"
+#include "uv/generate_layout.h"
 #include "uv/stretch.h"
 
 namespace luxel::uv {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-struct DPoint {
-  double x = 0, y = 0;
-};
-
-// Where the packer puts a shape point (bitimage_packer.h:
-// atlas_texel(p) = rotate(p, rotation) + offset), in double.
-DPoint placed_point(double x, double y, const ShapePlacement& s) {
-  double rx = x, ry = y;
-  switch (s.rotation & 3) {
-    case 1:
-      rx = -y, ry = x;
-      break;
-    case 2:
-      rx = -x, ry = -y;
-      break;
-    case 3:
-      rx = y, ry = -x;
-      break;
-    default:
-      break;
-  }
-  return {rx + s.offset[0], ry + s.offset[1]};
-}
 
 // World-space area of a set of a mesh's triangles under one instance.
 double world_area(const scene::Mesh& mesh, const Mat4& m, const std::vector<uint32_t>& triangles) {
@@ -66,50 +37,6 @@ double world_area(const scene::Mesh& mesh, const Mat4& m, const std::vector<uint
   }
   return area;
 }
-
-// One baked mesh: its charts and the instances that use it.
-struct MeshCharts {
-  std::vector<Chart> charts;
-  std::vector<uint32_t> instances;
-  // Per chart: world texels per chart UV unit at density 1 (sqrt of world
-  // area over chart area) for a mesh used once; for an instanced mesh, per
-  // instance (the mesh's mean).
-  std::vector<double> chart_scale;
-  std::vector<double> instance_scale;
-  // The instance scale the mesh's own layout is packed at: the smallest
-  // instance's, raised to a kMaxGrow-th of the largest's. Each instance is
-  // the layout grown by grow(k) >= 1, so padding never shrinks below
-  // padding_texels; the layout's fixed costs (padding, whole texels per
-  // chart) grow with it, and bounding the growth bounds that waste. Smaller
-  // instances than layout_scale get more texels per unit than asked for
-  // (UvReport::density_spread says how much).
-  double layout_scale = 0;
-  static constexpr double kMaxGrow = 4;
-  double grow(size_t k) const { return std::max(instance_scale[k], layout_scale) / layout_scale; }
-};
-
-// A shape handed to the packer: a chart of a mesh used once, or one
-// instance of an instanced mesh's own layout.
-struct ShapeSource {
-  uint32_t mesh = 0;
-  uint32_t chart = 0;     // chart of a mesh used once
-  int32_t instance = -1;  // instance of an instanced mesh (-1: a chart)
-};
-
-// An instanced mesh's own layout, packed once per density.
-struct MeshLayout {
-  int width = 0, height = 0;
-  std::vector<ShapePlacement> placements;  // per chart
-  double scale = 0;                        // texels per chart UV unit in the layout
-};
-
-struct PackAttempt {
-  PackResult pack;  // one page: placements in page texels; multi-page: the pages' concatenated
-  std::vector<ShapeSource> sources;
-  std::vector<MeshLayout> layouts;  // per mesh (instanced ones only)
-  std::vector<int> page;            // per shape (all 0 on one page)
-  int pages = 1;
-};
 
 PackShape chart_shape(const Chart& chart, double scale, bool allow_rotation) {
   PackShape s;
@@ -417,24 +344,9 @@ Result<std::pair<double, PackAttempt>> fit_resolution(const std::vector<MeshChar
                 side, side, density));
 }
 
-}  // namespace
-
-Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
-                                           const GenerateOptions& options) {
-  const Clock::time_point t0 = Clock::now();
-  const atlas::AtlasSettings& as = options.atlas;
-  if (scene.instances.empty())
-    return invalid_argument("scene has no geometry: it has no mesh instances to bake");
-  if (as.resolution == 0 && !(std::isfinite(as.texel_density) && as.texel_density > 0))
-    return invalid_argument(strprintf(
-        "texel_density is %g with resolution 0; set a resolution >= 1 or a finite texel_density "
-        "> 0 (texels per world unit)",
-        static_cast<double>(as.texel_density)));
-
-  GeneratedUvs out;
-  UvReport& report = out.report;
-
-  // 1. Charts of every instanced mesh, and their world scales.
+// 1. Charts of every instanced mesh, and their world scales.
+Result<std::vector<MeshCharts>> chart_meshes(const scene::Scene& scene,
+                                             const GenerateOptions& options) {
   std::vector<MeshCharts> meshes(scene.meshes.size());
   for (uint32_t i = 0; i < scene.instances.size(); ++i) {
     const int m = scene.instances[i].mesh;
@@ -443,7 +355,6 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
                                         scene.instances[i].name.c_str(), m, scene.meshes.size()));
     meshes[static_cast<size_t>(m)].instances.push_back(i);
   }
-  const Clock::time_point t_charts = Clock::now();
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     MeshCharts& mc = meshes[m];
     if (mc.instances.empty()) continue;
@@ -486,14 +397,19 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
         return invalid_argument(
             strprintf("mesh '%s' has a non-finite world area", mesh.name.c_str()));
   }
-  report.chart_seconds = seconds_since(t_charts);
+  return meshes;
+}
 
-  // 2. Packing at one density.
-  const Clock::time_point t_pack = Clock::now();
+// 2. Packing at one density: the density that fills the requested
+// resolution, or the requested density (on several pages when one
+// max_resolution square is too small).
+Result<PackAttempt> pack_meshes(const std::vector<MeshCharts>& meshes,
+                                const GenerateOptions& options, double& density, UvReport& report) {
+  const atlas::AtlasSettings& as = options.atlas;
   PackOptions pack;
   pack.padding_texels = as.padding_texels;
   pack.max_resolution = as.max_resolution;
-  double density = as.texel_density;
+  density = as.texel_density;
   PackAttempt attempt;
   if (as.resolution > 0) {
     auto fitted = fit_resolution(meshes, as.resolution, pack, &report.pack_attempts);
@@ -512,180 +428,14 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     attempt = std::move(a.value());
   }
   report.pages = attempt.pages;
-  report.pack_seconds = seconds_since(t_pack);
   report.efficiency = attempt.pack.efficiency;
+  return attempt;
+}
 
-  // 3. Assembly: new vertices on seams, TEXCOORD_1, placements.
-  out.scene = scene;
-  out.vertex_origin.resize(scene.meshes.size());
-  atlas::Atlas& at = out.atlas;
-  at.mode = atlas::AtlasMode::kGenerated;
-  // Pages are stacked from the top in one image of pages x page height:
-  // the bake sees one lightmap; the outputs cut it into pages again.
-  at.width = attempt.pack.width;
-  at.height = attempt.pack.height * attempt.pages;
-  at.pages = attempt.pages;
-  at.texels_per_unit = density;
-  at.placements.resize(scene.instances.size());
-  for (uint32_t i = 0; i < scene.instances.size(); ++i) at.placements[i].instance = i;
-  const double aw = at.width, ah = at.height;
-
-  // Chart vertex -> mesh vertex, splitting a vertex already given a UV.
-  auto assemble_mesh = [&](uint32_t m, auto&& chart_uv) {
-    const scene::Mesh& in = scene.meshes[m];
-    scene::Mesh& mesh = out.scene.meshes[m];
-    std::vector<uint32_t>& origin = out.vertex_origin[m];
-    origin.resize(in.positions.size());
-    for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
-    std::vector<bool> assigned(in.positions.size(), false);
-    // Material textures on texCoord 1 keep reading the file's TEXCOORD_1.
-    if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
-    mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
-    mesh.has_lightmap_uvs = true;
-    std::vector<bool> placed(in.triangle_count(), false);
-    const MeshCharts& mc = meshes[m];
-    for (uint32_t c = 0; c < mc.charts.size(); ++c) {
-      const Chart& chart = mc.charts[c];
-      std::vector<uint32_t> target(chart.vertices.size());
-      for (size_t k = 0; k < chart.vertices.size(); ++k) {
-        const uint32_t v = chart.vertices[k];
-        const Vec2 uv = chart_uv(c, chart.uv[k]);
-        if (!assigned[v]) {
-          assigned[v] = true;
-          mesh.uv1[v] = uv;
-          target[k] = v;
-          continue;
-        }
-        target[k] = static_cast<uint32_t>(mesh.positions.size());
-        origin.push_back(v);
-        mesh.positions.push_back(in.positions[v]);
-        mesh.normals.push_back(in.normals[v]);
-        mesh.uv0.push_back(in.uv0[v]);
-        if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
-        if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
-        mesh.uv1.push_back(uv);
-        ++report.seam_vertices;
-      }
-      for (size_t k = 0; k < chart.triangles.size(); ++k) {
-        const uint32_t t = chart.triangles[k];
-        placed[t] = true;
-        for (int j = 0; j < 3; ++j)
-          mesh.indices[3 * t + static_cast<size_t>(j)] =
-              target[chart.indices[3 * k + static_cast<size_t>(j)]];
-      }
-    }
-    // A triangle in no chart (degenerate) collapses onto one UV point, so it
-    // covers no texel: a point of the first chart, which every placement of
-    // the mesh keeps inside the atlas.
-    const Vec2 anchor = chart_uv(0, mc.charts[0].uv[0]);
-    for (uint32_t t = 0; t < placed.size(); ++t) {
-      if (placed[t]) continue;
-      ++report.unplaced_triangles;
-      for (int j = 0; j < 3; ++j) {
-        const uint32_t v = in.indices[3 * t + static_cast<size_t>(j)];
-        const uint32_t copy = static_cast<uint32_t>(mesh.positions.size());
-        origin.push_back(v);
-        mesh.positions.push_back(in.positions[v]);
-        mesh.normals.push_back(in.normals[v]);
-        mesh.uv0.push_back(in.uv0[v]);
-        if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
-        if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
-        mesh.uv1.push_back(anchor);
-        mesh.indices[3 * t + static_cast<size_t>(j)] = copy;
-      }
-    }
-    ++report.meshes;
-    report.charts += mc.charts.size();
-    report.triangles += in.triangle_count();
-  };
-
-  // Shape index ranges per mesh in attempt.sources order.
-  std::vector<std::vector<size_t>> shape_of_chart(meshes.size());
-  std::vector<std::vector<size_t>> shape_of_instance(meshes.size());
-  for (size_t s = 0; s < attempt.sources.size(); ++s) {
-    const ShapeSource& src = attempt.sources[s];
-    if (src.instance < 0) {
-      auto& v = shape_of_chart[src.mesh];
-      if (v.size() <= src.chart) v.resize(src.chart + 1);
-      v[src.chart] = s;
-    } else {
-      shape_of_instance[src.mesh].push_back(s);
-    }
-  }
-
-  // A shape's placement in the stacked image.
-  const double page_height = attempt.pack.height;
-  auto stacked = [&](DPoint p, size_t shape) {
-    return DPoint{p.x, p.y + page_height * attempt.page[shape]};
-  };
-
-  for (uint32_t m = 0; m < meshes.size(); ++m) {
-    const MeshCharts& mc = meshes[m];
-    if (mc.instances.empty()) continue;
-    if (mc.charts.empty()) {
-      // Nothing but degenerate triangles: every UV collapses onto the atlas
-      // corner, so the file's TEXCOORD_1 (if any) cannot cover texels that
-      // charts own; material textures keep reading it.
-      const scene::Mesh& in = scene.meshes[m];
-      scene::Mesh& mesh = out.scene.meshes[m];
-      if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
-      mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
-      mesh.has_lightmap_uvs = true;
-      std::vector<uint32_t>& origin = out.vertex_origin[m];
-      origin.resize(in.positions.size());
-      for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
-      report.unplaced_triangles += in.triangle_count();
-      report.triangles += in.triangle_count();
-      continue;
-    }
-    if (mc.instances.size() == 1) {
-      // Atlas UVs directly.
-      assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
-        const double k = density * mc.chart_scale[c];
-        const size_t shape = shape_of_chart[m][c];
-        const DPoint p =
-            stacked(placed_point(uv.x * k, uv.y * k, attempt.pack.placements[shape]), shape);
-        return Vec2{static_cast<float>(p.x / aw), static_cast<float>(p.y / ah)};
-      });
-      atlas::InstancePlacement& p = at.placements[mc.instances[0]];
-      // Its page (a page holds whole instances).
-      p.page = attempt.page[shape_of_chart[m][0]];
-      p.rect[1] = static_cast<int>(page_height) * p.page;
-      p.rect[2] = at.width;
-      p.rect[3] = static_cast<int>(page_height);
-      continue;
-    }
-    const MeshLayout& layout = attempt.layouts[m];
-    const double lw = layout.width, lh = layout.height;
-    assemble_mesh(m, [&](uint32_t c, Vec2 uv) {
-      const DPoint p = placed_point(uv.x * layout.scale, uv.y * layout.scale, layout.placements[c]);
-      return Vec2{static_cast<float>(p.x / lw), static_cast<float>(p.y / lh)};
-    });
-    for (size_t k = 0; k < mc.instances.size(); ++k) {
-      const size_t shape = shape_of_instance[m][k];
-      const ShapePlacement& sp = attempt.pack.placements[shape];
-      const double grow = mc.grow(k);
-      atlas::InstancePlacement& p = at.placements[mc.instances[k]];
-      // atlas texel = layout texel * grow + offset (no turn: allow_rotation
-      // was false), so atlas_uv = uv1 * (l * grow / a) + offset / a.
-      const DPoint origin = stacked(placed_point(0, 0, sp), shape);
-      p.page = attempt.page[shape];
-      p.scale[0] = static_cast<float>(lw * grow / aw);
-      p.scale[1] = static_cast<float>(lh * grow / ah);
-      p.offset[0] = static_cast<float>(origin.x / aw);
-      p.offset[1] = static_cast<float>(origin.y / ah);
-      // The texels the instance's conservative mask covers.
-      for (int axis = 0; axis < 2; ++axis) {
-        p.rect[axis] = sp.mask_origin[axis];
-        p.rect[2 + axis] = sp.mask_size[axis];
-      }
-      p.rect[1] += static_cast<int>(page_height) * p.page;
-    }
-  }
-  if (report.meshes == 0) return invalid_argument("scene has no triangle that can be laid out");
-
-  // Stretch over the laid-out charts (Sander et al. 2001: L2 combines as
-  // the root of the area-weighted mean of squares).
+// 4. Stretch over the laid-out charts (Sander et al. 2001: L2 combines as
+// the root of the area-weighted mean of squares).
+void measure_stretch(const scene::Scene& scene, const std::vector<MeshCharts>& meshes,
+                     UvReport& report) {
   double l2_sq = 0, area = 0;
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     if (meshes[m].charts.empty()) continue;
@@ -695,7 +445,38 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
     report.stretch_linf = std::max(report.stretch_linf, st.linf);
   }
   if (area > 0) report.stretch_l2 = std::sqrt(l2_sq / area);
-  measure_layout(out.scene, at, &report);
+}
+
+}  // namespace
+
+Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
+                                           const GenerateOptions& options) {
+  const SteadyClock::time_point t0 = SteadyClock::now();
+  const atlas::AtlasSettings& as = options.atlas;
+  if (scene.instances.empty())
+    return invalid_argument("scene has no geometry: it has no mesh instances to bake");
+  if (as.resolution == 0 && !(std::isfinite(as.texel_density) && as.texel_density > 0))
+    return invalid_argument(strprintf(
+        "texel_density is %g with resolution 0; set a resolution >= 1 or a finite texel_density "
+        "> 0 (texels per world unit)",
+        static_cast<double>(as.texel_density)));
+  GeneratedUvs out;
+  UvReport& report = out.report;
+  const SteadyClock::time_point t_charts = SteadyClock::now();
+  auto meshes = chart_meshes(scene, options);
+  if (!meshes) return meshes.status();
+  report.chart_seconds = seconds_since(t_charts);
+  const SteadyClock::time_point t_pack = SteadyClock::now();
+  double density = 0;
+  auto attempt = pack_meshes(meshes.value(), options, density, report);
+  if (!attempt) return attempt.status();
+  report.pack_seconds = seconds_since(t_pack);
+  // 3. Assembly: new vertices on seams, TEXCOORD_1, placements
+  // (generate_assembly.cpp).
+  assemble_atlas(scene, meshes.value(), attempt.value(), density, out);
+  if (report.meshes == 0) return invalid_argument("scene has no triangle that can be laid out");
+  measure_stretch(scene, meshes.value(), report);
+  measure_layout(out.scene, out.atlas, &report);
   report.total_seconds = seconds_since(t0);
   return out;
 }
