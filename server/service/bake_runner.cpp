@@ -26,23 +26,9 @@ BakeRunner::~BakeRunner() {
   shutdown();
 }
 
-// A forced exit (a second SIGTERM, kill -9) can stop an atomic write
-// (common/atomic_file.h) between its temporary file and the rename: the
-// temporary is never valid, and nothing writes while the daemon starts.
-static void remove_stale_temporaries(const std::string& dir, const std::string& bake_id) {
-  std::error_code ec;
-  for (const auto& f : fs::directory_iterator(dir, ec)) {
-    if (f.path().extension() != ".tmp") continue;
-    std::error_code removed;
-    fs::remove(f.path(), removed);
-    log_event("stale_temporary_removed", {{"bake", bake_id}, {"file", f.path().string()}});
-  }
-}
-
 Status BakeRunner::recover() {
   for (const v1::BakeInfo& info : bakes_.list({})) {
     const std::string& id = info.bake_id();
-    remove_stale_temporaries(bakes_.bake_dir(id), id);
     if (info.state() == v1::BAKE_STATE_RUNNING) {
       LUXEL_RETURN_IF_ERROR(bakes_.update(
           id,
