@@ -9,6 +9,20 @@
 namespace luxel::uv {
 namespace {
 
+// Appends a copy of input vertex v with lightmap UV `uv`; returns its index.
+uint32_t copy_vertex(const scene::Mesh& in, uint32_t v, Vec2 uv, scene::Mesh& mesh,
+                     std::vector<uint32_t>& origin) {
+  const uint32_t copy = static_cast<uint32_t>(mesh.positions.size());
+  origin.push_back(v);
+  mesh.positions.push_back(in.positions[v]);
+  mesh.normals.push_back(in.normals[v]);
+  mesh.uv0.push_back(in.uv0[v]);
+  if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
+  if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
+  mesh.uv1.push_back(uv);
+  return copy;
+}
+
 // Chart vertex -> mesh vertex, splitting a vertex already given a UV;
 // chart_uv(chart, uv) is the chart point's lightmap UV.
 template <typename ChartUv>
@@ -37,14 +51,7 @@ void assemble_mesh(const scene::Scene& scene, const MeshCharts& mc, uint32_t m, 
         target[k] = v;
         continue;
       }
-      target[k] = static_cast<uint32_t>(mesh.positions.size());
-      origin.push_back(v);
-      mesh.positions.push_back(in.positions[v]);
-      mesh.normals.push_back(in.normals[v]);
-      mesh.uv0.push_back(in.uv0[v]);
-      if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
-      if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
-      mesh.uv1.push_back(uv);
+      target[k] = copy_vertex(in, v, uv, mesh, origin);
       ++out.report.seam_vertices;
     }
     for (size_t k = 0; k < chart.triangles.size(); ++k) {
@@ -64,15 +71,7 @@ void assemble_mesh(const scene::Scene& scene, const MeshCharts& mc, uint32_t m, 
     ++out.report.unplaced_triangles;
     for (int j = 0; j < 3; ++j) {
       const uint32_t v = in.indices[3 * t + static_cast<size_t>(j)];
-      const uint32_t copy = static_cast<uint32_t>(mesh.positions.size());
-      origin.push_back(v);
-      mesh.positions.push_back(in.positions[v]);
-      mesh.normals.push_back(in.normals[v]);
-      mesh.uv0.push_back(in.uv0[v]);
-      if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
-      if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
-      mesh.uv1.push_back(anchor);
-      mesh.indices[3 * t + static_cast<size_t>(j)] = copy;
+      mesh.indices[3 * t + static_cast<size_t>(j)] = copy_vertex(in, v, anchor, mesh, origin);
     }
   }
   ++out.report.meshes;
