@@ -260,7 +260,10 @@ class Coordinator(unittest.TestCase):
         samples = read_exr(out / "samples.exr")
         # The merged counts are the shards' union: they add up to the paths.
         self.assertEqual(int(round(samples[..., 0].sum())), info.progress.paths)
-        self.assertLess(info.progress.paths, self.reference_info.progress.paths)
+        # A rule on samples or error ends before the reference's samples; how
+        # many paths a time budget buys depends on the machine and its load.
+        if termination != "time":
+            self.assertLess(info.progress.paths, self.reference_info.progress.paths)
         got = read_exr(out / "irradiance.exr")[..., :3]
         ref = self.reference[..., :3]
         # Pooled over the lightmap, within 4 standard errors of the merged
