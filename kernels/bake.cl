@@ -2,28 +2,10 @@
  * every bake stage except ray traversal (kernels/intersect.cl) and the data-
  * parallel primitives (radix_sort.cl, compact.cl, offset_buffer.cl).
  *
- * Features (-D from the bake's FeatureSet; absent = compiled out):
- *   LUX_LIGHT_POINT / _SPOT / _DIRECTIONAL / _EMISSIVE, LUX_SKY, LUX_SKY_IMAGE
- *                        light types present (kernels/shading/lights.h)
- *   LUX_NEE              any light at all: next-event estimation
- *   LUX_TEXTURES         material textures (base colour, metallic-roughness)
- *   LUX_EMISSIVE_TEXTURE an emissive material has a texture
- *   LUX_SPECULAR         some material needs the GGX layer
- *   LUX_SORT_DIRECTIONS  extension rays are tagged with their octant (§5.4)
- *   LUX_COMPACTION       live paths are compacted between bounces (§5.1);
- *                        without it every slot runs and dead ones return
- *   LUX_FILTER_GAUSSIAN  1.5-texel Gaussian accumulation filter (§3.2.2)
- *   LUX_SEQUENCE_RANDOM  independent random numbers instead of Sobol (ablation)
- *   LUX_ADAPTIVE         adaptive sampling: iterations after the warm-up
- *                        allocate paths by per-texel error (bake/adaptive.h);
- *                        without it the alloc_* kernels are empty
- *   LUX_DIRECT_ANALYTIC  irradiance lightmaps with lights of closed-form
- *                        irradiance: exact unshadowed direct light at the
- *                        texel point, sampled visibility (bake/raygen.h)
- *   LUX_BASIS            directional encodings (SH, SG, Ambient Dice): the
- *                        first segment is sampled uniformly over the
- *                        hemisphere and each path leaves a LuxBasisSample
- *                        for the accumulator (bake/basis.h)
+ * Features: -D options from the bake's FeatureSet, absent = compiled out.
+ * They are listed, each with what it compiles in, once for host and device
+ * in kernels/shared/features.h (LUX_FEATURES); the lights, materials and
+ * bake groups there are this program's.
  *
  * Each kernel is a thin entry point over its stage in kernels/bake/ (one
  * header per stage); its parameters come from the buffer groups of
@@ -36,6 +18,7 @@
 #include "bake/shade.h"
 #include "bake/stats.h"
 #include "bake/texel_domain.h"
+#include "shared/features.h"
 
 __kernel void texel_domain(LUX_STAGE_PARAMS(texel_domain)) {
   lux_texel_domain((uint)get_global_id(0), LUX_STAGE_ARGS(texel_domain));

@@ -4,15 +4,12 @@
  * counts stay on the device) and are launched over the ray buffer's capacity;
  * work-items past the count return at once.
  *
- * Features (-D from the FeatureSet):
- *   LUX_ALPHA_MASK  the scene has alphaMode MASK triangles: candidate hits on
- *                   masked triangles run the shared alpha test. Without it
- *                   the alpha buffers are not even arguments' targets.
- *   LUX_BVH4        nodes are LuxBvh4Node (four SoA child boxes per node,
- *                   kernels/intersect/trace_bvh4.h) instead of the fat
- *                   BVH2's LuxBvhNode (kernels/intersect/trace_bvh2.h). */
+ * Features: -D options from the tracer's FeatureSet, the ray-query group of
+ * kernels/shared/features.h (LUX_ALPHA_MASK, LUX_BVH4, LUX_STACK_SIZE).
+ * Without LUX_ALPHA_MASK the alpha buffers are not even arguments. */
 
 #include "intersect/traverse.h"
+#include "shared/features.h"
 #include "shared/geometry.h"
 
 #if LUX_ALPHA_MASK

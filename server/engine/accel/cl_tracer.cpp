@@ -7,9 +7,9 @@ Result<std::unique_ptr<ClTracer>> ClTracer::create(device::Context& ctx, const D
   // The private traversal stack is sized to this BVH (rounded up so similar
   // scenes share a cached program).
   const unsigned stack = (required_stack_size(bvh) + 7u) / 8u * 8u;
-  t->features_.set("STACK_SIZE", static_cast<int>(std::max(stack, 16u)));
-  if (bvh.has_alpha_masks()) t->features_.set("ALPHA_MASK");
-  if (bvh.width == 4) t->features_.set("BVH4");
+  t->features_.set(device::Feature::STACK_SIZE, static_cast<int>(std::max(stack, 16u)));
+  if (bvh.has_alpha_masks()) t->features_.set(device::Feature::ALPHA_MASK);
+  if (bvh.width == 4) t->features_.set(device::Feature::BVH4);
 
   auto nodes =
       bvh.width == 4 ? ctx.upload(bvh.nodes4, "bvh4 nodes") : ctx.upload(bvh.nodes, "bvh nodes");
@@ -53,7 +53,7 @@ Result<std::unique_ptr<ClTracer>> ClTracer::create(device::Context& ctx, const D
 // buffers are arguments only in programs compiled with LUX_ALPHA_MASK.
 template <typename... Args>
 Status ClTracer::launch_with_scene(device::Kernel& kernel, size_t capacity, const Args&... args) {
-  if (features_.has("ALPHA_MASK")) {
+  if (features_.has(device::Feature::ALPHA_MASK)) {
     LUXEL_RETURN_IF_ERROR(
         kernel.set_args(nodes_, triangles_, uvs_, masks_, alpha_texels_, args...));
   } else {

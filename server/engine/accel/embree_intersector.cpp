@@ -57,7 +57,7 @@ Result<std::unique_ptr<EmbreeIntersector>> EmbreeIntersector::create(device::Con
   if (!tracer) return tracer.status();
   std::unique_ptr<EmbreeIntersector> out(new EmbreeIntersector(ctx));
   out->tracer_ = std::move(tracer.value());
-  out->features_.set("INTERSECTOR_EMBREE");
+  out->features_.set(device::Feature::INTERSECTOR_EMBREE);
   return out;
 }
 

@@ -104,9 +104,7 @@ void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeRes
   }
   r.atlas = setup.atlas;
   r.covered_texels = covered;
-  device::FeatureSet reported = setup.features;
-  for (const auto& [name, value] : setup.tracer->features().values()) reported.set(name, value);
-  r.features = reported.describe();
+  r.features = device::FeatureSet(setup.features).merge(setup.tracer->features()).describe();
   r.intersector = accel::intersector_name(setup.tracer->kind());
   r.sample_info_bytes = setup.info.bytes();
 }

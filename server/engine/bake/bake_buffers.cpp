@@ -71,8 +71,8 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
 
   // Lights, sky and textures only when the features use them.
   LightArgs& l = args.lights;
-  const bool nee = s.features.has("NEE");
-  const bool image_sky = s.features.has("SKY_IMAGE");
+  const bool nee = s.features.has(device::Feature::NEE);
+  const bool image_sky = s.features.has(device::Feature::SKY_IMAGE);
   l.sky = s.lights.sky;
   LUXEL_RETURN_IF_ERROR(a.upload(l.lights, s.lights.lights, "lights", nee));
   LUXEL_RETURN_IF_ERROR(a.upload(l.light_select, s.lights.select, "light selection", nee));
@@ -83,9 +83,10 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
       a.upload(l.sky_texel_cdfs, s.lights.sky_texel_cdfs, "sky texel cdfs", image_sky));
 
   TextureArgs& t = args.textures;
-  const bool normal_map = s.features.has("NORMAL_MAP");
+  const bool normal_map = s.features.has(device::Feature::NORMAL_MAP);
   LUXEL_RETURN_IF_ERROR(a.upload(t.tangents, s.data.tangents, "normal-map tangents", normal_map));
-  if (!s.features.has("TEXTURES") && !s.features.has("EMISSIVE_TEXTURE") && !normal_map) {
+  if (!s.features.has(device::Feature::TEXTURES) &&
+      !s.features.has(device::Feature::EMISSIVE_TEXTURE) && !normal_map) {
     LUXEL_RETURN_IF_ERROR(a.upload(t.textures, std::vector<cl::LuxTexture>{}, "textures", false));
     LUXEL_RETURN_IF_ERROR(a.upload(t.texels, std::vector<uint32_t>{}, "texels", false));
     return a.upload(t.material_uv1, std::vector<cl::LuxTriangleUV>{}, "material uv1", false);
@@ -94,7 +95,8 @@ Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
   if (!pack) return pack.status();
   LUXEL_RETURN_IF_ERROR(a.upload(t.textures, pack.value().textures, "textures"));
   LUXEL_RETURN_IF_ERROR(a.upload(t.texels, pack.value().texels, "texture texels"));
-  return a.upload(t.material_uv1, s.data.material_uv1, "material uv1", s.features.has("TEXCOORD1"));
+  return a.upload(t.material_uv1, s.data.material_uv1, "material uv1",
+                  s.features.has(device::Feature::TEXCOORD1));
 }
 
 // slots: covered texels (the offset buffer is indexed by covered slot).
@@ -146,7 +148,7 @@ Status allocate_encodings(Allocator& a, const BakeSetup& s, size_t t, EncodingAr
 // Adaptive sampling's weights per covered slot and block sums (one per
 // LUX_ALLOC_GROUP slots, plus the total); placeholders without it.
 Status allocate_alloc(Allocator& a, const BakeSetup& s, size_t c, AllocArgs& g) {
-  const bool on = s.features.has("ADAPTIVE");
+  const bool on = s.features.has(device::Feature::ADAPTIVE);
   const size_t blocks = (c + LUX_ALLOC_GROUP - 1) / LUX_ALLOC_GROUP + 1;
   LUXEL_RETURN_IF_ERROR(a.alloc(g.alloc_weights, on ? c * 4 : 16, "adaptive weights"));
   return a.alloc(g.alloc_blocks, on ? blocks * 8 : 16, "adaptive block sums");
@@ -190,7 +192,7 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
   return texel_state_bytes(s.plan.bytes_per_texel(),
-                           s.features.has("ADAPTIVE"));  // resource_estimate.h
+                           s.features.has(device::Feature::ADAPTIVE));  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {

@@ -49,27 +49,28 @@ bool wants_analytic(DirectLight direct, const LightTable& table) {
 
 device::FeatureSet derive_bake_features(const BakeSettings& settings, const LightTable& lights,
                                         const SceneData& data, const EncodingPlan& plan) {
+  using device::Feature;
   device::FeatureSet f;
   add_light_features(lights, &f);
-  if (!lights.lights.empty()) f.set("NEE");
-  if (data.uses_textures) f.set("TEXTURES");
-  if (data.uses_emissive_texture && lights.has_emissive) f.set("EMISSIVE_TEXTURE");
-  if (data.needs_specular) f.set("SPECULAR");
-  if (data.uses_normal_map) f.set("NORMAL_MAP");
+  if (!lights.lights.empty()) f.set(Feature::NEE);
+  if (data.uses_textures) f.set(Feature::TEXTURES);
+  if (data.uses_emissive_texture && lights.has_emissive) f.set(Feature::EMISSIVE_TEXTURE);
+  if (data.needs_specular) f.set(Feature::SPECULAR);
+  if (data.uses_normal_map) f.set(Feature::NORMAL_MAP);
   if (data.uses_texcoord1 &&
-      (f.has("TEXTURES") || f.has("EMISSIVE_TEXTURE") || f.has("NORMAL_MAP")))
-    f.set("TEXCOORD1");
-  if (settings.sort_directions) f.set("SORT_DIRECTIONS");
-  if (settings.compaction) f.set("COMPACTION");
-  if (settings.adaptive) f.set("ADAPTIVE");
-  if (settings.filter == Filter::kGaussian) f.set("FILTER_GAUSSIAN");
-  if (settings.random_sequence) f.set("SEQUENCE_RANDOM");
-  if (!plan.empty()) f.set("BASIS");
+      (f.has(Feature::TEXTURES) || f.has(Feature::EMISSIVE_TEXTURE) || f.has(Feature::NORMAL_MAP)))
+    f.set(Feature::TEXCOORD1);
+  if (settings.sort_directions) f.set(Feature::SORT_DIRECTIONS);
+  if (settings.compaction) f.set(Feature::COMPACTION);
+  if (settings.adaptive) f.set(Feature::ADAPTIVE);
+  if (settings.filter == Filter::kGaussian) f.set(Feature::FILTER_GAUSSIAN);
+  if (settings.random_sequence) f.set(Feature::SEQUENCE_RANDOM);
+  if (!plan.empty()) f.set(Feature::BASIS);
   // Analytic direct light: irradiance lightmaps only (directional encodings
   // keep plain NEE), and only when some light has a closed form, so other
   // scenes compile nothing new. Every path loops over the light table once
   // (kernels/bake/raygen.h), hence the cap on the table's size.
-  if (plan.empty() && wants_analytic(settings.direct, lights)) f.set("DIRECT_ANALYTIC");
+  if (plan.empty() && wants_analytic(settings.direct, lights)) f.set(Feature::DIRECT_ANALYTIC);
   return f;
 }
 

@@ -86,7 +86,7 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
     s.plan.stride += LUX_PROBE_VIS_BINS;
   }
   s.features = derive_bake_features(settings, s.lights, s.data, s.plan);
-  if (probes) s.features.set("PROBES");
+  if (probes) s.features.set(device::Feature::PROBES);
 
   // Batch size: the paths-per-iteration budget (the device's for auto,
   // resource_estimate.h), at most the device's iteration cap

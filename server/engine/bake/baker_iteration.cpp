@@ -92,7 +92,7 @@ Result<bool> Baker::run_iteration(uint32_t batch) {
   interruptible_ = iteration_interruptible(*hooks_, batch, ctx_.info().is_gpu);
   rerun_after_checkpoint_ = std::exchange(gave_up_for_checkpoint_, false);
   const size_t cap = s_.capacity;
-  const bool nee = s_.features.has("NEE");
+  const bool nee = s_.features.has(device::Feature::NEE);
   const bool sort_directions = settings_.sort_directions;
   bool adaptive = false;
   if (settings_.adaptive) {

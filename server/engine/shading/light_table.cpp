@@ -99,11 +99,12 @@ Result<LightTable> build_light_table(const scene::Scene& scene, const accel::Tri
 }
 
 void add_light_features(const LightTable& table, device::FeatureSet* features) {
-  if (table.has_point) features->set("LIGHT_POINT");
-  if (table.has_spot) features->set("LIGHT_SPOT");
-  if (table.has_directional) features->set("LIGHT_DIRECTIONAL");
-  if (table.has_emissive) features->set("LIGHT_EMISSIVE");
-  if (table.has_sky) features->set(table.sky_is_image ? "SKY_IMAGE" : "SKY");
+  using device::Feature;
+  if (table.has_point) features->set(Feature::LIGHT_POINT);
+  if (table.has_spot) features->set(Feature::LIGHT_SPOT);
+  if (table.has_directional) features->set(Feature::LIGHT_DIRECTIONAL);
+  if (table.has_emissive) features->set(Feature::LIGHT_EMISSIVE);
+  if (table.has_sky) features->set(table.sky_is_image ? Feature::SKY_IMAGE : Feature::SKY);
 }
 
 }  // namespace luxel::pipeline

@@ -102,7 +102,7 @@ class AccelTest : public ::testing::TestWithParam<unsigned> {
     ASSERT_EQ(bvh_.width, GetParam());
     auto cl = ClTracer::create(*ctx_, bvh_);
     ASSERT_TRUE(cl.is_ok()) << cl.status().to_string();
-    EXPECT_EQ(cl.value()->features().has("BVH4"), GetParam() == 4);
+    EXPECT_EQ(cl.value()->features().has(device::Feature::BVH4), GetParam() == 4);
     cl_ = std::move(cl.value());
     auto em = EmbreeTracer::create(bvh_);
     ASSERT_TRUE(em.is_ok()) << em.status().to_string();
@@ -278,7 +278,7 @@ TEST_P(AccelTest, AlphaMaskCutsOutAndMatchesEmbree) {
   // An opaque floor below catches what passes.
   add_grid(b, 1, 1.0f, translate(0, 0, -1));
   build(b.s);
-  ASSERT_TRUE(cl_->features().has("ALPHA_MASK"));
+  ASSERT_TRUE(cl_->features().has(device::Feature::ALPHA_MASK));
   std::vector<LuxRay> rays;
   for (int i = 0; i < 200; ++i) {
     const float x = 0.0025f + 0.005f * i;
@@ -309,7 +309,7 @@ TEST_P(AccelTest, OpaqueScenesCompileWithoutAlphaCode) {
   SceneBuilder b;
   add_grid(b, 2, 1.0f);
   build(b.s);
-  EXPECT_FALSE(cl_->features().has("ALPHA_MASK"));
+  EXPECT_FALSE(cl_->features().has(device::Feature::ALPHA_MASK));
   EXPECT_TRUE(bvh_.uvs.empty());
 }
 
@@ -573,7 +573,8 @@ TEST_P(AccelTest, NodeLayoutIsATreeWithContainingBounds) {
   walk(0, everything);
   for (int s : node_seen) EXPECT_EQ(s, 1);
   for (int s : tri_seen) EXPECT_EQ(s, 1);
-  EXPECT_LE(required_stack_size(bvh_), static_cast<unsigned>(cl_->features().value("STACK_SIZE")));
+  EXPECT_LE(required_stack_size(bvh_),
+            static_cast<unsigned>(cl_->features().value(device::Feature::STACK_SIZE)));
 }
 
 INSTANTIATE_TEST_SUITE_P(Widths, AccelTest, ::testing::Values(2u, 4u),

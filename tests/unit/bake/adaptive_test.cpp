@@ -63,7 +63,7 @@ class AdaptiveAllocationTest : public ::testing::Test {
                        std::vector<uint32_t>& keys, std::vector<uint32_t>& weights) {
     device::Context& ctx = *ctx_;
     device::FeatureSet f;
-    f.set("ADAPTIVE");
+    f.set(device::Feature::ADAPTIVE);
     auto kernels = pipeline::BakeKernels::create(ctx, f);
     ASSERT_TRUE(kernels) << kernels.status().to_string();
     pipeline::BakeArgs a;

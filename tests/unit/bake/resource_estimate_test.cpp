@@ -210,7 +210,8 @@ TEST(ResourceEstimate, PerPathBytesMatchTheBakeBuffers) {
     const size_t sort_delta = sort2.value()->device_bytes() - sort1.value()->device_bytes();
     EXPECT_GE(sort_delta, (c2 - c1) * scratch);
     EXPECT_LT(sort_delta, (c2 - c1) * (scratch + 1));  // + the histogram, small
-    EXPECT_EQ(pipeline::texel_state_bytes(b.plan.bytes_per_texel(), b.features.has("ADAPTIVE")),
+    EXPECT_EQ(pipeline::texel_state_bytes(b.plan.bytes_per_texel(),
+                                          b.features.has(device::Feature::ADAPTIVE)),
               pipeline::BakeBuffers::per_slot_bytes(b));
   }
 }

@@ -395,7 +395,7 @@ TEST(LightSampling, AbsentLightTypesCompileOut) {
   auto table = build_light_table(m.b.s, m.b.soup(), {}, Bounds3{});
   ASSERT_TRUE(table.is_ok()) << table.status().to_string();
   device::FeatureSet point_only;
-  point_only.set("LIGHT_POINT");
+  point_only.set(device::Feature::LIGHT_POINT);
   auto probe = test::LightProbe::create(table.value(), point_only);
   ASSERT_TRUE(probe.is_ok()) << probe.status().to_string();
   const size_t n = 2000;

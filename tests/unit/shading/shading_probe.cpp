@@ -30,8 +30,9 @@ device::Context& shared_context() {
 
 device::FeatureSet all_light_features() {
   device::FeatureSet f;
-  for (const char* name :
-       {"LIGHT_POINT", "LIGHT_SPOT", "LIGHT_DIRECTIONAL", "LIGHT_EMISSIVE", "SKY", "SKY_IMAGE"})
+  using device::Feature;
+  for (Feature name : {Feature::LIGHT_POINT, Feature::LIGHT_SPOT, Feature::LIGHT_DIRECTIONAL,
+                       Feature::LIGHT_EMISSIVE, Feature::SKY, Feature::SKY_IMAGE})
     f.set(name);
   return f;
 }

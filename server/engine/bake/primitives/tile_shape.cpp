@@ -66,9 +66,9 @@ Result<TiledKernels> build_tiled_kernels(device::Context& ctx, const std::string
   std::string why_smaller;
   for (; shape.group_size >= 1; shape.group_size /= 2) {
     device::FeatureSet features;
-    features.set("PRIM_WG", static_cast<int>(shape.group_size))
-        .set("PRIM_ITEMS", static_cast<int>(shape.items_per_item))
-        .set("PRIM_LOCAL_REORDER", shape.local_reorder ? 1 : 0);
+    features.set(device::Feature::PRIM_WG, static_cast<int>(shape.group_size))
+        .set(device::Feature::PRIM_ITEMS, static_cast<int>(shape.items_per_item))
+        .set(device::Feature::PRIM_LOCAL_REORDER, shape.local_reorder ? 1 : 0);
     auto program = ctx.programs().get(entry, features);
     if (!program) return program.status();
     TiledKernels out{shape, {}};

@@ -10,8 +10,8 @@ namespace {
 
 device::FeatureSet features(Build build) {
   device::FeatureSet f;
-  if (build == Build::kSobolSpecular) f.set("SPECULAR");
-  if (build == Build::kRandomDiffuseOnly) f.set("SEQUENCE_RANDOM");
+  if (build == Build::kSobolSpecular) f.set(device::Feature::SPECULAR);
+  if (build == Build::kRandomDiffuseOnly) f.set(device::Feature::SEQUENCE_RANDOM);
   return f;
 }
 
