@@ -101,7 +101,8 @@ typedef struct LuxPath {
 } LuxPath;
 
 /* Per-bake constants and the iteration's counts, passed by value to every
- * bake kernel (kernels/shared/bake_args.h). 80 bytes. */
+ * bake kernel (kernels/shared/bake_args.h). 104 bytes, 8-aligned (the ulong
+ * first_path; server/engine/bake/layout_check.cpp). */
 typedef struct LuxBakeParams {
   uint width;
   uint height;
