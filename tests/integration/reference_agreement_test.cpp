@@ -74,8 +74,7 @@ class ReferenceAgreement : public ::testing::Test {
         settings.seed = 1000u + static_cast<uint32_t>(r);
         auto result = pipeline::bake(scene.value(), settings, *ctx.value());
         if (!result)
-          return fail(strprintf("engine bake (%s, seed %u): ", accel::intersector_name(kind),
-                                settings.seed) +
+          return fail(strprintf("engine bake (%s, seed %u): ", choice_name(kind), settings.seed) +
                       result.status().to_string());
         bakes->engine.seconds += result.value().seconds;
         bakes->engine.paths += result.value().paths;

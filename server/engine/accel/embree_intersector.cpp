@@ -7,18 +7,6 @@
 
 namespace luxel::accel {
 
-const char* intersector_name(IntersectorKind k) {
-  switch (k) {
-    case IntersectorKind::kAuto:
-      return "auto";
-    case IntersectorKind::kEmbree:
-      return "embree";
-    case IntersectorKind::kOpenCl:
-      return "opencl";
-  }
-  return "?";
-}
-
 namespace {
 
 // A buffer mapped for the duration of one query; unmapped on scope exit.

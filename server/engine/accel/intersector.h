@@ -16,14 +16,16 @@
 #include <string>
 
 #include "accel/bvh_builder.h"
+#include "common/choices.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "device/feature_set.h"
 
 namespace luxel::accel {
 
-enum class IntersectorKind { kAuto, kEmbree, kOpenCl };
-const char* intersector_name(IntersectorKind k);  // "auto", "embree", "opencl"
+// The settings' intersector choice (choice_name: "auto", "embree", "opencl").
+#define LUXEL_INTERSECTOR_CHOICES(X) X(kAuto, "auto") X(kEmbree, "embree") X(kOpenCl, "opencl")
+LUXEL_CHOICE_ENUM(IntersectorKind, LUXEL_INTERSECTOR_CHOICES)
 
 class Intersector {
  public:

@@ -105,7 +105,7 @@ void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeRes
   r.atlas = setup.atlas;
   r.covered_texels = covered;
   r.features = device::FeatureSet(setup.features).merge(setup.tracer->features()).describe();
-  r.intersector = accel::intersector_name(setup.tracer->kind());
+  r.intersector = choice_name(setup.tracer->kind());
   r.sample_info_bytes = setup.info.bytes();
 }
 

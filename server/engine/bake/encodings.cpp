@@ -9,29 +9,6 @@
 
 namespace luxel::pipeline {
 
-const char* solver_name(EncodingSolver s) {
-  switch (s) {
-    case EncodingSolver::kAuto:
-      return "auto";
-    case EncodingSolver::kProjection:
-      return "projection";
-    case EncodingSolver::kProgressive:
-      return "progressive";
-    case EncodingSolver::kProgressiveNonNegative:
-      return "progressive-nn";
-  }
-  return "?";
-}
-
-Result<EncodingSolver> parse_solver(const std::string& name) {
-  for (auto s : {EncodingSolver::kAuto, EncodingSolver::kProjection, EncodingSolver::kProgressive,
-                 EncodingSolver::kProgressiveNonNegative})
-    if (name == solver_name(s)) return s;
-  return invalid_argument(
-      strprintf("unknown solver '%s': expected auto, projection, progressive or progressive-nn",
-                name.c_str()));
-}
-
 Result<std::vector<std::string>> parse_encoding_list(const std::string& list) {
   std::vector<std::string> names;
   size_t start = 0;
@@ -74,7 +51,7 @@ std::string Encoding::describe_json(const std::string& file, float acceleration,
           ? "tangent: z = interpolated shading normal, x = surface direction of "
             "increasing lightmap u (TEXCOORD_1) projected onto the tangent plane, y = z x x"
           : "world (glTF scene space, +y up)";
-  j["solver"] = solver_name(solver);
+  j["solver"] = choice_name(solver);
   if (solver != EncodingSolver::kProjection) j["acceleration"] = acceleration;
   j["quantity"] =
       "incident radiance L(w) in W/(m^2 sr); reconstructed irradiance is in W/m^2 "

@@ -17,22 +17,20 @@
 #include <string>
 #include <vector>
 
+#include "common/choices.h"
 #include "common/status.h"
 #include "encode/basis.h"
 #include "kernels/shared/bake.h"
 
 namespace luxel::pipeline {
 
-enum class EncodingSolver {
-  kAuto,                    // SH: projection; SG, Ambient Dice: progressive non-negative
-  kProjection,              // naive projection (Monte Carlo moments)
-  kProgressive,             // Listing 7.1, Gauss-Seidel
-  kProgressiveNonNegative,  // Listing 7.1 with amplitudes clamped >= 0 (§7.3.1)
-};
-
-const char* solver_name(EncodingSolver s);
-// "auto", "projection", "progressive", "progressive-nn"; INVALID_ARGUMENT otherwise.
-Result<EncodingSolver> parse_solver(const std::string& name);
+// The settings' solver choice (common/choices.h).
+#define LUXEL_SOLVER_CHOICES(X)                                                                   \
+  X(kAuto, "auto")               /* SH: projection; SG, Ambient Dice: progressive non-negative */ \
+  X(kProjection, "projection")   /* naive projection (Monte Carlo moments) */                     \
+  X(kProgressive, "progressive") /* Listing 7.1, Gauss-Seidel */                                  \
+  X(kProgressiveNonNegative, "progressive-nn") /* Listing 7.1, amplitudes >= 0 (§7.3.1) */
+LUXEL_CHOICE_ENUM(EncodingSolver, LUXEL_SOLVER_CHOICES)
 
 struct EncodingSettings {
   // Directional encodings besides irradiance (always baked): "sh1", "sh2",

@@ -13,7 +13,7 @@ namespace luxel::probes {
 
 std::string ProbeLayout::describe_json() const {
   nlohmann::json j;
-  j["mode"] = placement_mode_name(mode);
+  j["mode"] = choice_name(mode);
   j["count"] = positions.size();
   if (grid) {
     j["grid"] = {

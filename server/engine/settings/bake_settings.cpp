@@ -9,57 +9,6 @@
 
 namespace luxel::pipeline {
 
-const char* uv_mode_name(UvMode m) {
-  switch (m) {
-    case UvMode::kGenerate:
-      return "generate";
-    case UvMode::kExisting:
-      return "existing";
-    case UvMode::kAuto:
-      break;
-  }
-  return "auto";
-}
-
-const char* filter_name(Filter f) {
-  return f == Filter::kGaussian ? "gaussian" : "box";
-}
-
-const char* direct_light_name(DirectLight d) {
-  switch (d) {
-    case DirectLight::kAnalytic:
-      return "analytic";
-    case DirectLight::kSampled:
-      return "sampled";
-    case DirectLight::kAuto:
-      break;
-  }
-  return "auto";
-}
-
-const char* error_metric_name(ErrorMetric m) {
-  switch (m) {
-    case ErrorMetric::kEstimate:
-      return "estimate";
-    case ErrorMetric::kRmse:
-      return "rmse";
-    case ErrorMetric::kRelMse:
-      return "relmse";
-  }
-  return "?";
-}
-
-Result<ErrorMetric> parse_error_metric(const std::string& name) {
-  for (auto m : {ErrorMetric::kEstimate, ErrorMetric::kRmse, ErrorMetric::kRelMse})
-    if (name == error_metric_name(m)) return m;
-  return invalid_argument(
-      strprintf("unknown error metric '%s': expected estimate, rmse or relmse", name.c_str()));
-}
-
-const char* denoise_name(Denoise d) {
-  return d == Denoise::kAtrous ? "atrous" : "off";
-}
-
 uint32_t BakeSettings::shard_samples() const {
   return cl::lux_shard_samples(samples_per_texel, shard_index, shard_count);
 }
@@ -74,8 +23,7 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   if (sharded()) m["shard"] = strprintf("%u/%u", shard_index, shard_count);
   m["time_budget_s"] = strprintf("%g", time_budget_s);
   m["target_error"] = strprintf("%g", target_error);
-  if (target_metric != ErrorMetric::kEstimate)
-    m["target_metric"] = error_metric_name(target_metric);
+  if (target_metric != ErrorMetric::kEstimate) m["target_metric"] = choice_name(target_metric);
   if (reference) m["reference"] = reference_name.empty() ? "given" : reference_name;
   m["max_bounces"] = std::to_string(max_bounces);
   m["rr_depth"] = std::to_string(rr_depth);
@@ -83,10 +31,10 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   if (device_memory_budget_mib > 0)
     m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
   m["seed"] = std::to_string(seed);
-  m["filter"] = filter_name(filter);
+  m["filter"] = choice_name(filter);
   // Only when not the default: bake fingerprints (checkpoint resume) and
   // manifests of default bakes stay what they were before the setting.
-  if (direct != DirectLight::kAuto) m["direct"] = direct_light_name(direct);
+  if (direct != DirectLight::kAuto) m["direct"] = choice_name(direct);
   if (!probes.empty()) {
     m["probes"] = probes;
     m["probe_sh_order"] = std::to_string(probe_sh_order);
@@ -99,8 +47,8 @@ std::map<std::string, std::string> BakeSettings::describe() const {
     }
   }
   if (!lightmap) m["lightmap"] = "off";
-  m["intersector"] = accel::intersector_name(intersector);
-  m["uv"] = uv_mode_name(uv);
+  m["intersector"] = choice_name(intersector);
+  m["uv"] = choice_name(uv);
   if (!node_placements.empty()) {
     // node[/element]:sx,sy,ox,oy@page, exact to the float (%.9g).
     std::string list;
@@ -121,14 +69,14 @@ std::map<std::string, std::string> BakeSettings::describe() const {
   m["dilation_texels"] = std::to_string(dilation_texels);
   // Only when not the default (as direct): fingerprints of default bakes stay
   // what they were; the filter never changes what the bake accumulates.
-  if (denoise != Denoise::kOff) m["denoise"] = denoise_name(denoise);
+  if (denoise != Denoise::kOff) m["denoise"] = choice_name(denoise);
   m["seam_stitch"] = seam_stitch ? "on" : "off";
   if (!encodings.names.empty()) {
     std::string list = "irradiance";
     for (const auto& n : encodings.names) list += "," + n;
     m["encodings"] = list;
     m["sg_sharpness"] = strprintf("%g", encodings.sg_sharpness);
-    m["solver"] = solver_name(encodings.solver);
+    m["solver"] = choice_name(encodings.solver);
     m["acceleration"] = strprintf("%g", encodings.acceleration);
   }
   const auto& sky = lights.sky;
@@ -184,7 +132,7 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   const bool has_reference = s.reference || !s.job.reference_bake_id.empty();
   if (s.target_metric != ErrorMetric::kEstimate && !has_reference)
     return bad("target_metric",
-               strprintf("'%s' needs a reference lightmap", error_metric_name(s.target_metric)));
+               strprintf("'%s' needs a reference lightmap", choice_name(s.target_metric)));
   // Products of settings that are each in range but overflow together
   // (3e38 x 10): caught here, at submit, not when the light table is built.
   auto product_finite = [](Vec3 c, float k) {
@@ -257,7 +205,7 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
                        strprintf("encoding '%s' uses the %s solver, whose state depends on the "
                                  "order of the samples and cannot be merged across shards "
                                  "(use solver=projection, or shard_count<=1)",
-                                 e.name().c_str(), solver_name(e.solver)));
+                                 e.name().c_str(), choice_name(e.solver)));
       }
     }
   }

@@ -14,38 +14,49 @@
 #include "accel/intersector.h"
 #include "atlas/atlas.h"
 #include "bake/encodings.h"
+#include "common/choices.h"
 #include "common/status.h"
 #include "shading/light_settings.h"
 
 namespace luxel::pipeline {
 
-enum class Filter { kBox, kGaussian };
+// The settings' choices, each declared once with its names in the order
+// the schema lists them (common/choices.h: choice_name, parse_choice,
+// choice_list).
+
+// Accumulation filter (kernels/bake/accumulate.h).
+#define LUXEL_FILTER_CHOICES(X) X(kBox, "box") X(kGaussian, "gaussian")
+LUXEL_CHOICE_ENUM(Filter, LUXEL_FILTER_CHOICES)
 
 // Denoising of the finished lightmap (post/denoise.h): an extra output
 // irradiance_denoised.exr; the raw irradiance.exr is always written too.
-enum class Denoise { kOff, kAtrous };
-const char* denoise_name(Denoise d);
+#define LUXEL_DENOISE_CHOICES(X) X(kOff, "off") X(kAtrous, "atrous")
+LUXEL_CHOICE_ENUM(Denoise, LUXEL_DENOISE_CHOICES)
+
 // Direct light at the texel point (irradiance lightmaps): the exact
 // unshadowed irradiance of analytic lights with sampled visibility
 // (kernels/bake/raygen.h), or plain next-event estimation. kAuto takes the
 // analytic form where it was measured to win: when every analytic light of
 // the scene is punctual (bake/bake_features.cpp; docs/accuracy.md
 // "Analytic direct light").
-enum class DirectLight { kAnalytic, kSampled, kAuto };
+#define LUXEL_DIRECT_LIGHT_CHOICES(X) \
+  X(kAuto, "auto") X(kAnalytic, "analytic") X(kSampled, "sampled")
+LUXEL_CHOICE_ENUM(DirectLight, LUXEL_DIRECT_LIGHT_CHOICES)
 
 // Where the lightmap UVs come from (bake/lightmap_layout.h).
-enum class UvMode { kAuto, kGenerate, kExisting };
+#define LUXEL_UV_MODE_CHOICES(X) X(kAuto, "auto") X(kGenerate, "generate") X(kExisting, "existing")
+LUXEL_CHOICE_ENUM(UvMode, LUXEL_UV_MODE_CHOICES)
 
 // What target_error is compared with: the reference-free estimate (mean
 // relative standard error), or, with a reference lightmap, RMSE or relMSE.
-enum class ErrorMetric { kEstimate, kRmse, kRelMse };
-const char* error_metric_name(ErrorMetric m);
-// "estimate", "rmse", "relmse"; INVALID_ARGUMENT otherwise.
-Result<ErrorMetric> parse_error_metric(const std::string& name);
+#define LUXEL_ERROR_METRIC_CHOICES(X) X(kEstimate, "estimate") X(kRmse, "rmse") X(kRelMse, "relmse")
+LUXEL_CHOICE_ENUM(ErrorMetric, LUXEL_ERROR_METRIC_CHOICES)
 
 // How the daemon runs and delivers a bake; not read by the engine. Part of
 // BakeSettings so that one schema describes every setting of a SubmitBake.
-enum class SnapshotFormat { kPng, kExr, kNone };
+#define LUXEL_SNAPSHOT_FORMAT_CHOICES(X) X(kPng, "png") X(kExr, "exr") X(kNone, "none")
+LUXEL_CHOICE_ENUM(SnapshotFormat, LUXEL_SNAPSHOT_FORMAT_CHOICES)
+
 struct JobSettings {
   int priority = 0;                // higher runs first; FIFO among equals
   double snapshot_interval_s = 5;  // seconds between snapshots
@@ -159,9 +170,5 @@ struct BakeSettings {
 // `resolution_limit` names where atlas.max_resolution comes from in errors.
 Status validate_settings(const BakeSettings& settings,
                          const char* resolution_limit = "the engine's limit max_resolution");
-
-const char* filter_name(Filter f);
-const char* direct_light_name(DirectLight d);
-const char* uv_mode_name(UvMode m);
 
 }  // namespace luxel::pipeline

@@ -6,20 +6,6 @@
 
 namespace luxel::probes {
 
-const char* placement_mode_name(PlacementMode m) {
-  switch (m) {
-    case PlacementMode::kGrid:
-      return "grid";
-    case PlacementMode::kFile:
-      return "file";
-    case PlacementMode::kAdaptive:
-      return "adaptive";
-    case PlacementMode::kNodes:
-      return "nodes";
-  }
-  return "?";
-}
-
 namespace {
 
 Status bad_spec(const std::string& spec, const std::string& why) {
@@ -43,25 +29,23 @@ Result<float> parse_float(const std::string& text) {
 
 Result<PlacementSettings> parse_probe_spec(const std::string& spec) {
   PlacementSettings s;
-  if (spec == "nodes") {
+  if (spec == choice_name(PlacementMode::kNodes)) {
     s.mode = PlacementMode::kNodes;
     return s;
   }
   const size_t colon = spec.find(':');
   if (colon == std::string::npos) return bad_spec(spec, "no mode");
   const std::string mode = spec.substr(0, colon), rest = spec.substr(colon + 1);
-  if (mode == "file") {
+  const auto parsed = parse_choice<PlacementMode>(mode);
+  // nodes takes no argument: "nodes:..." is not a spec.
+  if (!parsed || *parsed == PlacementMode::kNodes)
+    return bad_spec(spec, "unknown mode '" + mode + "'");
+  s.mode = *parsed;
+  if (s.mode == PlacementMode::kFile) {
     if (rest.empty()) return bad_spec(spec, "no file");
-    s.mode = PlacementMode::kFile;
     s.file = rest;
     return s;
   }
-  if (mode == "grid")
-    s.mode = PlacementMode::kGrid;
-  else if (mode == "adaptive")
-    s.mode = PlacementMode::kAdaptive;
-  else
-    return bad_spec(spec, "unknown mode '" + mode + "'");
   const size_t next = rest.find(':');
   auto spacing = parse_float(rest.substr(0, next));
   if (!spacing || !(spacing.value() > 0)) return bad_spec(spec, "spacing must be a number > 0");
@@ -88,7 +72,7 @@ Result<PlacementSettings> parse_probe_spec(const std::string& spec) {
 std::string describe_probe_spec(const PlacementSettings& s) {
   if (s.mode == PlacementMode::kFile) return "file:" + s.file;
   if (s.mode == PlacementMode::kNodes) return "nodes";
-  std::string out = strprintf("%s:%g", placement_mode_name(s.mode), double(s.spacing));
+  std::string out = strprintf("%s:%g", choice_name(s.mode), double(s.spacing));
   if (s.has_box)
     out +=
         strprintf(":box=%g,%g,%g,%g,%g,%g", double(s.box.lo.x), double(s.box.lo.y),

@@ -6,14 +6,16 @@
 #include <cstddef>
 #include <string>
 
+#include "common/choices.h"
 #include "common/math.h"
 #include "common/status.h"
 
 namespace luxel::probes {
 
-enum class PlacementMode { kGrid, kFile, kAdaptive, kNodes };
-// "grid", "file", "adaptive", "nodes"
-const char* placement_mode_name(PlacementMode m);
+// The modes, named as the spec names them (common/choices.h).
+#define LUXEL_PLACEMENT_MODES(X) \
+  X(kGrid, "grid") X(kFile, "file") X(kAdaptive, "adaptive") X(kNodes, "nodes")
+LUXEL_CHOICE_ENUM(PlacementMode, LUXEL_PLACEMENT_MODES)
 
 struct PlacementSettings {
   PlacementMode mode = PlacementMode::kGrid;

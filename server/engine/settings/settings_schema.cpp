@@ -29,18 +29,26 @@ using Scope = SettingScope;
 #define LUXEL_TEXT(member)                                                      \
   .get = [](const BakeSettings& s) { return SettingValue::of_text(s.member); }, \
   .set = [](BakeSettings& s, const SettingValue& v) { s.member = v.text; }
+// A member of a choice enum (common/choices.h); .choices = choice_list<E>()
+// gives its names. check_setting admits only those, hence the CHECK.
+#define LUXEL_CHOICE(member)                                                                 \
+  .get = [](const BakeSettings& s) { return SettingValue::of_text(choice_name(s.member)); }, \
+  .set = [](BakeSettings& s, const SettingValue& v) {                                        \
+    const auto c = parse_choice<std::remove_cvref_t<decltype(s.member)>>(v.text);            \
+    LUXEL_CHECK_MSG(c.has_value(), "a choice reaches its setter checked");                   \
+    s.member = *c;                                                                           \
+  }
 
 constexpr double kU32Max = 4294967295.0;
 constexpr double kI32Max = 2147483647.0;
 
-const char* const kSkyKinds[] = {"none", "constant", "equirect"};
-const char* const kSnapshotFormats[] = {"png", "exr", "none"};
+using SkyKind = SkySettings::Kind;
 
 bool has_sky(const BakeSettings& s) {
-  return s.lights.sky.kind != SkySettings::Kind::kNone;
+  return s.lights.sky.kind != SkyKind::kNone;
 }
 bool has_equirect_sky(const BakeSettings& s) {
-  return s.lights.sky.kind == SkySettings::Kind::kEquirect;
+  return s.lights.sky.kind == SkyKind::kEquirect;
 }
 bool has_sun(const BakeSettings& s) {
   return s.lights.sun.enabled;
@@ -83,22 +91,16 @@ std::vector<Setting> make_schema() {
                .min = 0,
                .api_zero = ApiZero::kValue,
                LUXEL_NUMBER(target_error)});
-  t.push_back(
-      {.name = "target_metric",
-       .type = Type::kChoice,
-       .units = "",
-       .help = "what target_error bounds: the mean relative standard error estimate, "
-               "or rmse / relmse against the reference",
-       .flag = "--target-metric",
-       .metavar = "M",
-       .default_value = SettingValue::of_text("estimate"),
-       .choices = {"estimate", "rmse", "relmse"},
-       .get =
-           [](const BakeSettings& s) {
-             return SettingValue::of_text(error_metric_name(s.target_metric));
-           },
-       .set = [](BakeSettings& s,
-                 const SettingValue& v) { s.target_metric = parse_error_metric(v.text).value(); }});
+  t.push_back({.name = "target_metric",
+               .type = Type::kChoice,
+               .units = "",
+               .help = "what target_error bounds: the mean relative standard error estimate, "
+                       "or rmse / relmse against the reference",
+               .flag = "--target-metric",
+               .metavar = "M",
+               .default_value = SettingValue::of_text(choice_name(ErrorMetric::kEstimate)),
+               .choices = choice_list<ErrorMetric>(),
+               LUXEL_CHOICE(target_metric)});
   t.push_back({.name = "reference",
                .type = Type::kText,
                .units = "",
@@ -260,75 +262,47 @@ std::vector<Setting> make_schema() {
                .max = kU32Max,
                .api_note = "0 (unset) means 1",
                LUXEL_NUMBER(seed)});
-  t.push_back(
-      {.name = "filter",
-       .type = Type::kChoice,
-       .units = "",
-       .help = "accumulation filter (gaussian: 1.5-texel truncated Gaussian)",
-       .flag = "--filter",
-       .metavar = "F",
-       .default_value = SettingValue::of_text("box"),
-       .choices = {"box", "gaussian"},
-       .get = [](const BakeSettings& s) { return SettingValue::of_text(filter_name(s.filter)); },
-       .set =
-           [](BakeSettings& s, const SettingValue& v) {
-             s.filter = v.text == "gaussian" ? Filter::kGaussian : Filter::kBox;
-           }});
-  t.push_back(
-      {.name = "direct",
-       .type = Type::kChoice,
-       .units = "",
-       .help = "direct light at the texel point: analytic (exact unshadowed irradiance of "
-               "untextured emissive triangles and punctual lights, sampled shadows; irradiance "
-               "only), sampled (plain next-event estimation), or auto (analytic when every "
-               "analytic light of the scene is punctual, else sampled)",
-       .flag = "--direct",
-       .metavar = "D",
-       .default_value = SettingValue::of_text("auto"),
-       .choices = {"auto", "analytic", "sampled"},
-       .get =
-           [](const BakeSettings& s) { return SettingValue::of_text(direct_light_name(s.direct)); },
-       .set =
-           [](BakeSettings& s, const SettingValue& v) {
-             s.direct = v.text == "sampled"    ? DirectLight::kSampled
-                        : v.text == "analytic" ? DirectLight::kAnalytic
-                                               : DirectLight::kAuto;
-           }});
+  t.push_back({.name = "filter",
+               .type = Type::kChoice,
+               .units = "",
+               .help = "accumulation filter (gaussian: 1.5-texel truncated Gaussian)",
+               .flag = "--filter",
+               .metavar = "F",
+               .default_value = SettingValue::of_text(choice_name(Filter::kBox)),
+               .choices = choice_list<Filter>(),
+               LUXEL_CHOICE(filter)});
+  t.push_back({.name = "direct",
+               .type = Type::kChoice,
+               .units = "",
+               .help =
+                   "direct light at the texel point: analytic (exact unshadowed irradiance of "
+                   "untextured emissive triangles and punctual lights, sampled shadows; irradiance "
+                   "only), sampled (plain next-event estimation), or auto (analytic when every "
+                   "analytic light of the scene is punctual, else sampled)",
+               .flag = "--direct",
+               .metavar = "D",
+               .default_value = SettingValue::of_text(choice_name(DirectLight::kAuto)),
+               .choices = choice_list<DirectLight>(),
+               LUXEL_CHOICE(direct)});
   t.push_back({.name = "intersector",
                .type = Type::kChoice,
                .units = "",
                .help = "ray queries: auto (Embree on CPU devices, OpenCL on GPUs), embree, opencl",
                .flag = "--intersector",
                .metavar = "I",
-               .default_value = SettingValue::of_text("auto"),
-               .choices = {"auto", "embree", "opencl"},
-               .get =
-                   [](const BakeSettings& s) {
-                     return SettingValue::of_text(accel::intersector_name(s.intersector));
-                   },
-               .set =
-                   [](BakeSettings& s, const SettingValue& v) {
-                     s.intersector = v.text == "embree"   ? accel::IntersectorKind::kEmbree
-                                     : v.text == "opencl" ? accel::IntersectorKind::kOpenCl
-                                                          : accel::IntersectorKind::kAuto;
-                   }});
-  t.push_back(
-      {.name = "uv",
-       .type = Type::kChoice,
-       .units = "",
-       .help = "lightmap UVs: auto (TEXCOORD_1 when valid, else generated), generate, "
-               "existing",
-       .flag = "--uv",
-       .metavar = "M",
-       .default_value = SettingValue::of_text("auto"),
-       .choices = {"auto", "generate", "existing"},
-       .get = [](const BakeSettings& s) { return SettingValue::of_text(uv_mode_name(s.uv)); },
-       .set =
-           [](BakeSettings& s, const SettingValue& v) {
-             s.uv = v.text == "generate"   ? UvMode::kGenerate
-                    : v.text == "existing" ? UvMode::kExisting
-                                           : UvMode::kAuto;
-           }});
+               .default_value = SettingValue::of_text(choice_name(accel::IntersectorKind::kAuto)),
+               .choices = choice_list<accel::IntersectorKind>(),
+               LUXEL_CHOICE(intersector)});
+  t.push_back({.name = "uv",
+               .type = Type::kChoice,
+               .units = "",
+               .help = "lightmap UVs: auto (TEXCOORD_1 when valid, else generated), generate, "
+                       "existing",
+               .flag = "--uv",
+               .metavar = "M",
+               .default_value = SettingValue::of_text(choice_name(UvMode::kAuto)),
+               .choices = choice_list<UvMode>(),
+               LUXEL_CHOICE(uv)});
   t.push_back({.name = "clamp_luminance",
                .type = Type::kFloat,
                .units = "W/m^2/sr",
@@ -345,18 +319,10 @@ std::vector<Setting> make_schema() {
                .units = "",
                .help = "sky: none, a constant radiance, or an equirectangular image (set by "
                        "--sky / --sky-image)",
-               .default_value = SettingValue::of_text("none"),
-               .choices = {kSkyKinds[0], kSkyKinds[1], kSkyKinds[2]},
-               .local_choices = {"equirect"},
-               .get =
-                   [](const BakeSettings& s) {
-                     return SettingValue::of_text(kSkyKinds[int(s.lights.sky.kind)]);
-                   },
-               .set =
-                   [](BakeSettings& s, const SettingValue& v) {
-                     for (int k = 0; k < 3; ++k)
-                       if (v.text == kSkyKinds[k]) s.lights.sky.kind = SkySettings::Kind(k);
-                   }});
+               .default_value = SettingValue::of_text(choice_name(SkyKind::kNone)),
+               .choices = choice_list<SkyKind>(),
+               .local_choices = {choice_name(SkyKind::kEquirect)},
+               LUXEL_CHOICE(lights.sky.kind)});
   t.push_back({.name = "sky.color",
                .type = Type::kVec3,
                .units = "W/m^2/sr",
@@ -366,7 +332,7 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of_vec({1, 1, 1}),
                .min = 0,
                .api_note = "empty: 1,1,1",
-               .implies = [](BakeSettings& s) { s.lights.sky.kind = SkySettings::Kind::kConstant; },
+               .implies = [](BakeSettings& s) { s.lights.sky.kind = SkyKind::kConstant; },
                LUXEL_VEC3(lights.sky.color),
                .active = has_sky});
   t.push_back({.name = "sky.intensity",
@@ -388,7 +354,7 @@ std::vector<Setting> make_schema() {
                .metavar = "FILE",
                .default_value = SettingValue::of_text(""),
                .scope = Scope::kLocalOnly,
-               .implies = [](BakeSettings& s) { s.lights.sky.kind = SkySettings::Kind::kEquirect; },
+               .implies = [](BakeSettings& s) { s.lights.sky.kind = SkyKind::kEquirect; },
                LUXEL_TEXT(lights.sky.equirect_path),
                .active = has_equirect_sky});
   t.push_back({.name = "sky.rotation_degrees",
@@ -493,22 +459,16 @@ std::vector<Setting> make_schema() {
                .max = 256,
                .api_note = "0 (unset) means 3.4",
                LUXEL_NUMBER(encodings.sg_sharpness)});
-  t.push_back(
-      {.name = "solver",
-       .type = Type::kChoice,
-       .units = "",
-       .help = "auto (SH: projection; SG, Ambient Dice: progressive-nn), projection, "
-               "progressive (Listing 7.1), progressive-nn (amplitudes >= 0)",
-       .flag = "--solver",
-       .metavar = "S",
-       .default_value = SettingValue::of_text("auto"),
-       .choices = {"auto", "projection", "progressive", "progressive-nn"},
-       .get =
-           [](const BakeSettings& s) {
-             return SettingValue::of_text(solver_name(s.encodings.solver));
-           },
-       .set = [](BakeSettings& s,
-                 const SettingValue& v) { s.encodings.solver = parse_solver(v.text).value(); }});
+  t.push_back({.name = "solver",
+               .type = Type::kChoice,
+               .units = "",
+               .help = "auto (SH: projection; SG, Ambient Dice: progressive-nn), projection, "
+                       "progressive (Listing 7.1), progressive-nn (amplitudes >= 0)",
+               .flag = "--solver",
+               .metavar = "S",
+               .default_value = SettingValue::of_text(choice_name(EncodingSolver::kAuto)),
+               .choices = choice_list<EncodingSolver>(),
+               LUXEL_CHOICE(encodings.solver)});
   t.push_back({.name = "acceleration",
                .type = Type::kFloat,
                .units = "",
@@ -578,13 +538,9 @@ std::vector<Setting> make_schema() {
                "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; off: none)",
        .flag = "--denoise",
        .metavar = "D",
-       .default_value = SettingValue::of_text("off"),
-       .choices = {"off", "atrous"},
-       .get = [](const BakeSettings& s) { return SettingValue::of_text(denoise_name(s.denoise)); },
-       .set =
-           [](BakeSettings& s, const SettingValue& v) {
-             s.denoise = v.text == "atrous" ? Denoise::kAtrous : Denoise::kOff;
-           }});
+       .default_value = SettingValue::of_text(choice_name(Denoise::kOff)),
+       .choices = choice_list<Denoise>(),
+       LUXEL_CHOICE(denoise)});
   t.push_back({.name = "seam_stitch",
                .type = Type::kBool,
                .units = "",
@@ -679,18 +635,10 @@ std::vector<Setting> make_schema() {
                        "events only",
                .flag = "--snapshot-format",
                .metavar = "F",
-               .default_value = SettingValue::of_text("png"),
-               .choices = {kSnapshotFormats[0], kSnapshotFormats[1], kSnapshotFormats[2]},
+               .default_value = SettingValue::of_text(choice_name(SnapshotFormat::kPng)),
+               .choices = choice_list<SnapshotFormat>(),
                .scope = Scope::kApiOnly,
-               .get =
-                   [](const BakeSettings& s) {
-                     return SettingValue::of_text(kSnapshotFormats[int(s.job.snapshot_format)]);
-                   },
-               .set =
-                   [](BakeSettings& s, const SettingValue& v) {
-                     for (int k = 0; k < 3; ++k)
-                       if (v.text == kSnapshotFormats[k]) s.job.snapshot_format = SnapshotFormat(k);
-                   }});
+               LUXEL_CHOICE(job.snapshot_format)});
   t.push_back({.name = "denoise_snapshots",
                .type = Type::kBool,
                .units = "",
@@ -746,6 +694,7 @@ std::vector<Setting> make_schema() {
 #undef LUXEL_BOOL
 #undef LUXEL_VEC3
 #undef LUXEL_TEXT
+#undef LUXEL_CHOICE
 
 std::string fmt_number(double x) {
   if (std::isinf(x)) return x > 0 ? "inf" : "-inf";

@@ -8,6 +8,7 @@
 
 #include <string>
 
+#include "common/choices.h"
 #include "common/math.h"
 
 namespace luxel::pipeline {
@@ -18,7 +19,9 @@ namespace luxel::pipeline {
 inline constexpr float kMaxAngularRadiusDegrees = 90;
 
 struct SkySettings {
-  enum class Kind { kNone, kConstant, kEquirect };
+  // The settings' sky.kind choice (common/choices.h).
+#define LUXEL_SKY_KIND_CHOICES(X) X(kNone, "none") X(kConstant, "constant") X(kEquirect, "equirect")
+  LUXEL_MEMBER_CHOICE_ENUM(Kind, LUXEL_SKY_KIND_CHOICES)
   Kind kind = Kind::kNone;
   Vec3 color{1, 1, 1};  // multiplies the image too
   float intensity = 1;

@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "settings/bake_settings.h"
 
@@ -134,6 +137,34 @@ TEST(SettingsValidation, Choices) {
   EXPECT_EQ(cli_error("target_metric", "psnr"),
             "settings.target_metric: 'psnr' is not one of estimate, rmse, relmse");
   EXPECT_EQ(cli_error("filter", "gaussian"), "ok");
+}
+
+// The choices and their order are an interface (the CLI help, `luxel
+// settings --json`, the proto translation and docs list them), so they are
+// written out here; each name reaches its enum and comes back.
+TEST(SettingsSchema, ChoicesKeepTheirNamesAndOrderAndRoundTrip) {
+  const std::map<std::string, std::vector<std::string>> expected = {
+      {"target_metric", {"estimate", "rmse", "relmse"}},
+      {"filter", {"box", "gaussian"}},
+      {"direct", {"auto", "analytic", "sampled"}},
+      {"intersector", {"auto", "embree", "opencl"}},
+      {"uv", {"auto", "generate", "existing"}},
+      {"sky.kind", {"none", "constant", "equirect"}},
+      {"solver", {"auto", "projection", "progressive", "progressive-nn"}},
+      {"denoise", {"off", "atrous"}},
+      {"snapshot_format", {"png", "exr", "none"}},
+  };
+  std::map<std::string, std::vector<std::string>> got;
+  for (const Setting& st : settings_schema()) {
+    if (st.type != SettingType::kChoice) continue;
+    got[st.name] = {st.choices.begin(), st.choices.end()};
+    for (const char* c : st.choices) {
+      BakeSettings s = default_settings();
+      ASSERT_TRUE(apply_setting(s, st, SettingValue::of_text(c)).is_ok()) << st.name << " " << c;
+      EXPECT_EQ(st.get(s).text, c) << st.name;
+    }
+  }
+  EXPECT_EQ(got, expected);
 }
 
 TEST(SettingsValidation, ChoiceLists) {
