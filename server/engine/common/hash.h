@@ -9,6 +9,18 @@
 
 namespace luxel {
 
+// 64-bit FNV-1a (Fowler, Noll, Vo): the standard offset basis and prime.
+inline constexpr uint64_t kFnv1aBasis = 0xcbf29ce484222325ull;
+inline constexpr uint64_t kFnv1aPrime = 0x100000001b3ull;
+
+// FNV-1a of `bytes` in one lane without Hasher's length prefix, from
+// `basis`: for short fingerprint fields whose text must not change.
+constexpr uint64_t fnv1a64(std::string_view bytes, uint64_t basis = kFnv1aBasis) {
+  uint64_t h = basis;
+  for (char c : bytes) h = (h ^ static_cast<unsigned char>(c)) * kFnv1aPrime;
+  return h;
+}
+
 class Hasher {
  public:
   Hasher& add(std::string_view bytes);
@@ -18,7 +30,7 @@ class Hasher {
   std::string hex() const;
 
  private:
-  uint64_t a_ = 0xcbf29ce484222325ull;
+  uint64_t a_ = kFnv1aBasis;
   uint64_t b_ = 0x84222325cbf29ce4ull;
 };
 

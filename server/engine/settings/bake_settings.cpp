@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/hash.h"
 #include "kernels/shared/shard.h"
 #include "settings/probe_spec.h"
 #include "settings/settings_schema.h"
@@ -13,91 +14,46 @@ uint32_t BakeSettings::shard_samples() const {
   return cl::lux_shard_samples(samples_per_texel, shard_index, shard_count);
 }
 
+namespace {
+
+// probe_positions_fnv1a has always been hashed from this offset basis, the
+// standard one (kFnv1aBasis = 14695981039346656037) a digit short; the
+// fingerprints of checkpointed probe bakes depend on it.
+constexpr uint64_t kDescribeFnv1aBasis = 1469598103934665603ull;
+
+// node[/element]:sx,sy,ox,oy@page, exact to the float (%.9g). Placements
+// are a list of records outside the schema (settings_schema.h).
+std::string describe_placements(const std::vector<NodePlacement>& placements) {
+  std::string list;
+  for (const NodePlacement& p : placements) {
+    if (!list.empty()) list += ' ';
+    list += std::to_string(p.node);
+    if (p.element >= 0) list += "/" + std::to_string(p.element);
+    list += strprintf(":%.9g,%.9g,%.9g,%.9g@%d", p.scale_offset[0], p.scale_offset[1],
+                      p.scale_offset[2], p.scale_offset[3], p.page);
+  }
+  return list;
+}
+
+}  // namespace
+
+// One entry per setting of the schema, as its describe fields say
+// (settings_schema.h), and the placements.
 std::map<std::string, std::string> BakeSettings::describe() const {
   std::map<std::string, std::string> m;
-  m["resolution"] = std::to_string(atlas.resolution);
-  m["texel_density"] = strprintf("%g", atlas.texel_density);
-  m["samples_per_texel"] = std::to_string(samples_per_texel);
-  // Not in a bake's fingerprint (service/settings_translate.cpp): every
-  // shard of one bake shares it.
-  if (sharded()) m["shard"] = strprintf("%u/%u", shard_index, shard_count);
-  m["time_budget_s"] = strprintf("%g", time_budget_s);
-  m["target_error"] = strprintf("%g", target_error);
-  if (target_metric != ErrorMetric::kEstimate) m["target_metric"] = choice_name(target_metric);
-  if (reference) m["reference"] = reference_name.empty() ? "given" : reference_name;
-  m["max_bounces"] = std::to_string(max_bounces);
-  m["rr_depth"] = std::to_string(rr_depth);
-  m["paths_per_iteration"] = paths_per_iteration ? std::to_string(paths_per_iteration) : "auto";
-  if (device_memory_budget_mib > 0)
-    m["device_memory_budget_mib"] = strprintf("%g", device_memory_budget_mib);
-  m["seed"] = std::to_string(seed);
-  m["filter"] = choice_name(filter);
-  // Only when not the default: bake fingerprints (checkpoint resume) and
-  // manifests of default bakes stay what they were before the setting.
-  if (direct != DirectLight::kAuto) m["direct"] = choice_name(direct);
-  if (!probes.empty()) {
-    m["probes"] = probes;
-    m["probe_sh_order"] = std::to_string(probe_sh_order);
-    m["probe_window"] = probe_window;
-    if (!probe_positions.empty()) {
-      // FNV-1a of the positions: fingerprints see a changed list.
-      uint64_t h = 1469598103934665603ull;
-      for (unsigned char c : probe_positions) h = (h ^ c) * 1099511628211ull;
-      m["probe_positions_fnv1a"] = strprintf("%016llx", static_cast<unsigned long long>(h));
-    }
+  for (const Setting& st : settings_schema()) {
+    if (st.described == Described::kNever || !st.is_active(*this)) continue;
+    if (st.describe_when && !st.describe_when(*this)) continue;
+    const SettingValue v = st.get(*this);
+    if (st.described == Described::kUnlessDefault && same_setting_value(st, v, st.default_value))
+      continue;
+    std::string text = st.describe_text ? st.describe_text(*this) : describe_setting_value(st, v);
+    if (st.describe_fnv1a)
+      text =
+          strprintf("%016llx", static_cast<unsigned long long>(fnv1a64(text, kDescribeFnv1aBasis)));
+    m[st.describe_key ? st.describe_key : st.name] = std::move(text);
   }
-  if (!lightmap) m["lightmap"] = "off";
-  m["intersector"] = choice_name(intersector);
-  m["uv"] = choice_name(uv);
-  if (!node_placements.empty()) {
-    // node[/element]:sx,sy,ox,oy@page, exact to the float (%.9g).
-    std::string list;
-    for (const NodePlacement& p : node_placements) {
-      if (!list.empty()) list += ' ';
-      list += std::to_string(p.node);
-      if (p.element >= 0) list += "/" + std::to_string(p.element);
-      list += strprintf(":%.9g,%.9g,%.9g,%.9g@%d", p.scale_offset[0], p.scale_offset[1],
-                        p.scale_offset[2], p.scale_offset[3], p.page);
-    }
-    m["placements"] = list;
-  }
-  m["clamp_luminance"] = strprintf("%g", clamp_luminance);
-  m["adaptive"] = adaptive ? strprintf("on,min=%u", adaptive_min_samples) : "off";
-  m["compaction"] = compaction ? "on" : "off";
-  m["sort_directions"] = sort_directions ? "on" : "off";
-  m["sequence"] = random_sequence ? "random" : "sobol";
-  m["dilation_texels"] = std::to_string(dilation_texels);
-  // Only when not the default (as direct): fingerprints of default bakes stay
-  // what they were; the filter never changes what the bake accumulates.
-  if (denoise != Denoise::kOff) m["denoise"] = choice_name(denoise);
-  m["seam_stitch"] = seam_stitch ? "on" : "off";
-  if (!encodings.names.empty()) {
-    std::string list = "irradiance";
-    for (const auto& n : encodings.names) list += "," + n;
-    m["encodings"] = list;
-    m["sg_sharpness"] = strprintf("%g", encodings.sg_sharpness);
-    m["solver"] = choice_name(encodings.solver);
-    m["acceleration"] = strprintf("%g", encodings.acceleration);
-  }
-  const auto& sky = lights.sky;
-  switch (sky.kind) {
-    case SkySettings::Kind::kNone:
-      m["sky"] = "none";
-      break;
-    case SkySettings::Kind::kConstant:
-      m["sky"] =
-          strprintf("constant %g,%g,%g x %g", sky.color.x, sky.color.y, sky.color.z, sky.intensity);
-      break;
-    case SkySettings::Kind::kEquirect:
-      m["sky"] = strprintf("equirect %s x %g rot %g", sky.equirect_path.c_str(), sky.intensity,
-                           sky.rotation_degrees);
-      break;
-  }
-  if (lights.sun.enabled) {
-    const auto& s = lights.sun;
-    m["sun"] = strprintf("dir %g,%g,%g E %g radius %g deg", s.direction.x, s.direction.y,
-                         s.direction.z, s.illuminance, s.angular_radius_degrees);
-  }
+  if (!node_placements.empty()) m["placements"] = describe_placements(node_placements);
   return m;
 }
 

@@ -53,6 +53,33 @@ bool has_equirect_sky(const BakeSettings& s) {
 bool has_sun(const BakeSettings& s) {
   return s.lights.sun.enabled;
 }
+bool has_encodings(const BakeSettings& s) {
+  return !s.encodings.names.empty();
+}
+bool has_probes(const BakeSettings& s) {
+  return !s.probes.empty();
+}
+
+std::string describe_sky(const BakeSettings& s) {
+  const SkySettings& sky = s.lights.sky;
+  switch (sky.kind) {
+    case SkyKind::kConstant:
+      return strprintf("constant %g,%g,%g x %g", sky.color.x, sky.color.y, sky.color.z,
+                       sky.intensity);
+    case SkyKind::kEquirect:
+      return strprintf("equirect %s x %g rot %g", sky.equirect_path.c_str(), sky.intensity,
+                       sky.rotation_degrees);
+    case SkyKind::kNone:
+      break;
+  }
+  return choice_name(sky.kind);
+}
+
+std::string describe_sun(const BakeSettings& s) {
+  const SunSettings& sun = s.lights.sun;
+  return strprintf("dir %g,%g,%g E %g radius %g deg", sun.direction.x, sun.direction.y,
+                   sun.direction.z, sun.illuminance, sun.angular_radius_degrees);
+}
 
 std::vector<Setting> make_schema() {
   std::vector<Setting> t;
@@ -100,7 +127,8 @@ std::vector<Setting> make_schema() {
                .metavar = "M",
                .default_value = SettingValue::of_text(choice_name(ErrorMetric::kEstimate)),
                .choices = choice_list<ErrorMetric>(),
-               LUXEL_CHOICE(target_metric)});
+               LUXEL_CHOICE(target_metric),
+               .described = Described::kUnlessDefault});
   t.push_back({.name = "reference",
                .type = Type::kText,
                .units = "",
@@ -110,7 +138,13 @@ std::vector<Setting> make_schema() {
                .metavar = "FILE.exr",
                .default_value = SettingValue::of_text(""),
                .scope = Scope::kLocalOnly,
-               LUXEL_TEXT(reference_name)});
+               LUXEL_TEXT(reference_name),
+               // A reference given in-process has no name.
+               .describe_when = [](const BakeSettings& s) { return s.reference != nullptr; },
+               .describe_text =
+                   [](const BakeSettings& s) {
+                     return s.reference_name.empty() ? std::string("given") : s.reference_name;
+                   }});
   t.push_back({.name = "reference_bake_id",
                .type = Type::kText,
                .units = "",
@@ -120,7 +154,9 @@ std::vector<Setting> make_schema() {
                .metavar = "ID",
                .default_value = SettingValue::of_text(""),
                .scope = Scope::kApiOnly,
-               LUXEL_TEXT(job.reference_bake_id)});
+               LUXEL_TEXT(job.reference_bake_id),
+               // the daemon resolves it into `reference`
+               .described = Described::kNever});
   // ------------------------------------------------------------ lightmap size
   // texel_density comes first: when both are given, resolution (applied last) wins.
   t.push_back({.name = "texel_density",
@@ -197,7 +233,11 @@ std::vector<Setting> make_schema() {
                        "error is highest (--no-adaptive: every texel alike)",
                .flag = "--no-adaptive",
                .default_value = SettingValue::of(1),
-               LUXEL_BOOL(adaptive)});
+               LUXEL_BOOL(adaptive),
+               .describe_text = [](const BakeSettings& s) {
+                 return s.adaptive ? strprintf("on,min=%u", s.adaptive_min_samples)
+                                   : std::string("off");
+               }});
   t.push_back({.name = "adaptive_min_samples",
                .type = Type::kInt,
                .units = "samples",
@@ -210,24 +250,33 @@ std::vector<Setting> make_schema() {
                .max = 65536,
                .api_note = "0 (unset) means 8",
                LUXEL_NUMBER(adaptive_min_samples),
-               .active = [](const BakeSettings& s) { return s.adaptive; }});
-  t.push_back({.name = "shard_count",
-               .type = Type::kInt,
-               .units = "shards",
-               .help = "distributed bake: the bake is split into this many shards by sample "
-                       "index, merged exactly afterwards (0 or 1: the whole bake; implies "
-                       "--no-adaptive)",
-               .flag = "--shard-count",
-               .metavar = "N",
-               .default_value = SettingValue::of(1),
-               .min = 0,
-               .max = 4096,
-               .api_note = "0 (unset) means 1",
-               .implies =
-                   [](BakeSettings& s) {
-                     if (s.shard_count > 1) s.adaptive = false;
-                   },
-               LUXEL_NUMBER(shard_count)});
+               .active = [](const BakeSettings& s) { return s.adaptive; },
+               // in adaptive's entry
+               .described = Described::kNever});
+  t.push_back(
+      {.name = "shard_count",
+       .type = Type::kInt,
+       .units = "shards",
+       .help = "distributed bake: the bake is split into this many shards by sample "
+               "index, merged exactly afterwards (0 or 1: the whole bake; implies "
+               "--no-adaptive)",
+       .flag = "--shard-count",
+       .metavar = "N",
+       .default_value = SettingValue::of(1),
+       .min = 0,
+       .max = 4096,
+       .api_note = "0 (unset) means 1",
+       .implies =
+           [](BakeSettings& s) {
+             if (s.shard_count > 1) s.adaptive = false;
+           },
+       LUXEL_NUMBER(shard_count),
+       // One entry for both shard settings, which bake_fingerprint leaves out:
+       // the shards of one bake share its fingerprint.
+       .describe_key = "shard",
+       .describe_when = [](const BakeSettings& s) { return s.sharded(); },
+       .describe_text =
+           [](const BakeSettings& s) { return strprintf("%u/%u", s.shard_index, s.shard_count); }});
   t.push_back({.name = "shard_index",
                .type = Type::kInt,
                .units = "",
@@ -239,7 +288,9 @@ std::vector<Setting> make_schema() {
                .min = 0,
                .max = 4095,
                .api_zero = ApiZero::kValue,
-               LUXEL_NUMBER(shard_index)});
+               LUXEL_NUMBER(shard_index),
+               // in shard_count's entry
+               .described = Described::kNever});
   t.push_back({.name = "device_memory_budget_mib",
                .type = Type::kFloat,
                .units = "MiB",
@@ -250,7 +301,8 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of(0),
                .min = 0,
                .max = 1u << 24,
-               LUXEL_NUMBER(device_memory_budget_mib)});
+               LUXEL_NUMBER(device_memory_budget_mib),
+               .described = Described::kUnlessDefault});
   t.push_back({.name = "seed",
                .type = Type::kInt,
                .units = "",
@@ -283,7 +335,8 @@ std::vector<Setting> make_schema() {
                .metavar = "D",
                .default_value = SettingValue::of_text(choice_name(DirectLight::kAuto)),
                .choices = choice_list<DirectLight>(),
-               LUXEL_CHOICE(direct)});
+               LUXEL_CHOICE(direct),
+               .described = Described::kUnlessDefault});
   t.push_back({.name = "intersector",
                .type = Type::kChoice,
                .units = "",
@@ -322,7 +375,10 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of_text(choice_name(SkyKind::kNone)),
                .choices = choice_list<SkyKind>(),
                .local_choices = {choice_name(SkyKind::kEquirect)},
-               LUXEL_CHOICE(lights.sky.kind)});
+               LUXEL_CHOICE(lights.sky.kind),
+               // One entry for the sky: "none", "constant R,G,B x I", "equirect FILE x I rot DEG".
+               .describe_key = "sky",
+               .describe_text = describe_sky});
   t.push_back({.name = "sky.color",
                .type = Type::kVec3,
                .units = "W/m^2/sr",
@@ -334,7 +390,9 @@ std::vector<Setting> make_schema() {
                .api_note = "empty: 1,1,1",
                .implies = [](BakeSettings& s) { s.lights.sky.kind = SkyKind::kConstant; },
                LUXEL_VEC3(lights.sky.color),
-               .active = has_sky});
+               .active = has_sky,
+               // in sky.kind's entry
+               .described = Described::kNever});
   t.push_back({.name = "sky.intensity",
                .type = Type::kFloat,
                .units = "",
@@ -345,7 +403,9 @@ std::vector<Setting> make_schema() {
                .min = 0,
                .api_note = "0 (unset) means 1",
                LUXEL_NUMBER(lights.sky.intensity),
-               .active = has_sky});
+               .active = has_sky,
+               // in sky.kind's entry
+               .described = Described::kNever});
   t.push_back({.name = "sky.image",
                .type = Type::kText,
                .units = "",
@@ -356,7 +416,9 @@ std::vector<Setting> make_schema() {
                .scope = Scope::kLocalOnly,
                .implies = [](BakeSettings& s) { s.lights.sky.kind = SkyKind::kEquirect; },
                LUXEL_TEXT(lights.sky.equirect_path),
-               .active = has_equirect_sky});
+               .active = has_equirect_sky,
+               // in sky.kind's entry
+               .described = Described::kNever});
   t.push_back({.name = "sky.rotation_degrees",
                .type = Type::kFloat,
                .units = "degrees",
@@ -366,7 +428,9 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of(0),
                .scope = Scope::kLocalOnly,
                LUXEL_NUMBER(lights.sky.rotation_degrees),
-               .active = has_equirect_sky});
+               .active = has_equirect_sky,
+               // in sky.kind's entry
+               .described = Described::kNever});
   t.push_back({.name = "sun.direction",
                .type = Type::kVec3,
                .units = "",
@@ -378,7 +442,10 @@ std::vector<Setting> make_schema() {
                .api_note = "empty: 0,-1,0",
                .implies = [](BakeSettings& s) { s.lights.sun.enabled = true; },
                LUXEL_VEC3(lights.sun.direction),
-               .active = has_sun});
+               .active = has_sun,
+               // One entry for the sun: "dir X,Y,Z E ILLUMINANCE radius DEG deg".
+               .describe_key = "sun",
+               .describe_text = describe_sun});
   t.push_back({.name = "sun.color",
                .type = Type::kVec3,
                .units = "",
@@ -389,7 +456,10 @@ std::vector<Setting> make_schema() {
                .min = 0,
                .api_note = "empty: 1,1,1",
                LUXEL_VEC3(lights.sun.color),
-               .active = has_sun});
+               .active = has_sun,
+               // Never in describe() (kept so): bakes differing only in the sun's colour
+               // share a fingerprint.
+               .described = Described::kNever});
   t.push_back({.name = "sun.illuminance",
                .type = Type::kFloat,
                .units = "W/m^2",
@@ -401,7 +471,9 @@ std::vector<Setting> make_schema() {
                .api_zero = ApiZero::kValue,
                .api_note = "0 (unset): no sun",
                LUXEL_NUMBER(lights.sun.illuminance),
-               .active = has_sun});
+               .active = has_sun,
+               // in sun.direction's entry
+               .described = Described::kNever});
   t.push_back({.name = "sun.angular_radius_degrees",
                .type = Type::kFloat,
                .units = "degrees",
@@ -415,7 +487,9 @@ std::vector<Setting> make_schema() {
                .api_zero = ApiZero::kValue,
                .api_note = "0 (unset): hard shadows",
                LUXEL_NUMBER(lights.sun.angular_radius_degrees),
-               .active = has_sun});
+               .active = has_sun,
+               // in sun.direction's entry
+               .described = Described::kNever});
   t.push_back({.name = "directional_angular_radius_degrees",
                .type = Type::kFloat,
                .units = "degrees",
@@ -427,7 +501,10 @@ std::vector<Setting> make_schema() {
                .max = kMaxAngularRadiusDegrees,
                .max_open = true,
                .scope = Scope::kLocalOnly,
-               LUXEL_NUMBER(lights.directional_angular_radius_degrees)});
+               LUXEL_NUMBER(lights.directional_angular_radius_degrees),
+               // Never in describe() (kept so): bakes differing only here share a
+               // fingerprint.
+               .described = Described::kNever});
   // ------------------------------------------------------------ directional encodings
   t.push_back(
       {.name = "encodings",
@@ -447,6 +524,13 @@ std::vector<Setting> make_schema() {
              s.encodings.names.clear();
              for (const auto& n : v.list)
                if (n != "irradiance") s.encodings.names.push_back(n);
+           },
+       .described = Described::kUnlessDefault,
+       .describe_text =
+           [](const BakeSettings& s) {
+             std::string list = "irradiance";  // always baked, implicit in the value
+             for (const auto& n : s.encodings.names) list += "," + n;
+             return list;
            }});
   t.push_back({.name = "sg_sharpness",
                .type = Type::kFloat,
@@ -458,7 +542,8 @@ std::vector<Setting> make_schema() {
                .min = 0.25,
                .max = 256,
                .api_note = "0 (unset) means 3.4",
-               LUXEL_NUMBER(encodings.sg_sharpness)});
+               LUXEL_NUMBER(encodings.sg_sharpness),
+               .describe_when = has_encodings});
   t.push_back({.name = "solver",
                .type = Type::kChoice,
                .units = "",
@@ -468,7 +553,8 @@ std::vector<Setting> make_schema() {
                .metavar = "S",
                .default_value = SettingValue::of_text(choice_name(EncodingSolver::kAuto)),
                .choices = choice_list<EncodingSolver>(),
-               LUXEL_CHOICE(encodings.solver)});
+               LUXEL_CHOICE(encodings.solver),
+               .describe_when = has_encodings});
   t.push_back({.name = "acceleration",
                .type = Type::kFloat,
                .units = "",
@@ -479,7 +565,8 @@ std::vector<Setting> make_schema() {
                .min = 0.5,
                .max = 8,
                .api_note = "0 (unset) means 3",
-               LUXEL_NUMBER(encodings.acceleration)});
+               LUXEL_NUMBER(encodings.acceleration),
+               .describe_when = has_encodings});
   // ------------------------------------------------------------ ablation switches (§5.1, §5.4,
   // §6.2)
   t.push_back({.name = "compaction",
@@ -505,7 +592,11 @@ std::vector<Setting> make_schema() {
                .flag = "--random-sequence",
                .default_value = SettingValue::of(0),
                .scope = Scope::kLocalOnly,
-               LUXEL_BOOL(random_sequence)});
+               LUXEL_BOOL(random_sequence),
+               .describe_key = "sequence",
+               .describe_text = [](const BakeSettings& s) {
+                 return std::string(s.random_sequence ? "random" : "sobol");
+               }});
   // ------------------------------------------------------------ reports and output
   t.push_back({.name = "progress_interval_s",
                .type = Type::kFloat,
@@ -518,7 +609,9 @@ std::vector<Setting> make_schema() {
                .min_open = true,
                .raise_to = 0.05,
                .api_note = "0 (unset) means 1",
-               LUXEL_NUMBER(progress_interval_s)});
+               LUXEL_NUMBER(progress_interval_s),
+               // shapes the reports, not the lightmap
+               .described = Described::kNever});
   t.push_back({.name = "dilation_texels",
                .type = Type::kInt,
                .units = "texels",
@@ -540,7 +633,8 @@ std::vector<Setting> make_schema() {
        .metavar = "D",
        .default_value = SettingValue::of_text(choice_name(Denoise::kOff)),
        .choices = choice_list<Denoise>(),
-       LUXEL_CHOICE(denoise)});
+       LUXEL_CHOICE(denoise),
+       .described = Described::kUnlessDefault});
   t.push_back({.name = "seam_stitch",
                .type = Type::kBool,
                .units = "",
@@ -563,7 +657,8 @@ std::vector<Setting> make_schema() {
                .flag = "--probes",
                .metavar = "SPEC",
                .default_value = SettingValue::of_text(""),
-               LUXEL_TEXT(probes)});
+               LUXEL_TEXT(probes),
+               .described = Described::kUnlessDefault});
   t.push_back({.name = "probe_sh_order",
                .type = Type::kInt,
                .units = "",
@@ -574,7 +669,8 @@ std::vector<Setting> make_schema() {
                .min = 1,
                .max = 2,
                .api_note = "0 (unset) means 2",
-               LUXEL_NUMBER(probe_sh_order)});
+               LUXEL_NUMBER(probe_sh_order),
+               .describe_when = has_probes});
   t.push_back({.name = "probe_window",
                .type = Type::kText,
                .units = "",
@@ -584,7 +680,8 @@ std::vector<Setting> make_schema() {
                .metavar = "W",
                .default_value = SettingValue::of_text("hanning"),
                .api_note = "empty (unset) means hanning",
-               LUXEL_TEXT(probe_window)});
+               LUXEL_TEXT(probe_window),
+               .describe_when = has_probes});
   t.push_back({.name = "lightmap",
                .type = Type::kBool,
                .units = "",
@@ -592,7 +689,8 @@ std::vector<Setting> make_schema() {
                .flag = "--no-lightmap",
                .default_value = SettingValue::of(1),
                .api_note = "unset means on",
-               LUXEL_BOOL(lightmap)});
+               LUXEL_BOOL(lightmap),
+               .described = Described::kUnlessDefault});
   t.push_back({.name = "probe_positions",
                .type = Type::kText,
                .units = "",
@@ -602,7 +700,11 @@ std::vector<Setting> make_schema() {
                .metavar = "JSON",
                .default_value = SettingValue::of_text(""),
                .scope = Scope::kApiOnly,
-               LUXEL_TEXT(probe_positions)});
+               LUXEL_TEXT(probe_positions),
+               .described = Described::kUnlessDefault,
+               .describe_key = "probe_positions_fnv1a",
+               .describe_when = has_probes,
+               .describe_fnv1a = true});
   // ------------------------------------------------------------ the daemon's job
   t.push_back({.name = "priority",
                .type = Type::kInt,
@@ -614,7 +716,8 @@ std::vector<Setting> make_schema() {
                .min = -kI32Max - 1,
                .max = kI32Max,
                .scope = Scope::kApiOnly,
-               LUXEL_NUMBER(job.priority)});
+               LUXEL_NUMBER(job.priority),
+               .described = Described::kNever});
   t.push_back({.name = "snapshot_interval_s",
                .type = Type::kFloat,
                .units = "s",
@@ -627,7 +730,8 @@ std::vector<Setting> make_schema() {
                .raise_to = 0.05,
                .scope = Scope::kApiOnly,
                .api_note = "0 (unset) means 5",
-               LUXEL_NUMBER(job.snapshot_interval_s)});
+               LUXEL_NUMBER(job.snapshot_interval_s),
+               .described = Described::kNever});
   t.push_back({.name = "snapshot_format",
                .type = Type::kChoice,
                .units = "",
@@ -638,7 +742,8 @@ std::vector<Setting> make_schema() {
                .default_value = SettingValue::of_text(choice_name(SnapshotFormat::kPng)),
                .choices = choice_list<SnapshotFormat>(),
                .scope = Scope::kApiOnly,
-               LUXEL_CHOICE(job.snapshot_format)});
+               LUXEL_CHOICE(job.snapshot_format),
+               .described = Described::kNever});
   t.push_back({.name = "denoise_snapshots",
                .type = Type::kBool,
                .units = "",
@@ -646,7 +751,8 @@ std::vector<Setting> make_schema() {
                .flag = "--denoise-snapshots",
                .default_value = SettingValue::of(0),
                .scope = Scope::kApiOnly,
-               LUXEL_BOOL(job.denoise_snapshots)});
+               LUXEL_BOOL(job.denoise_snapshots),
+               .described = Described::kNever});
   t.push_back({.name = "snapshot_max_side",
                .type = Type::kInt,
                .units = "pixels",
@@ -658,7 +764,8 @@ std::vector<Setting> make_schema() {
                .max = 8192,
                .scope = Scope::kApiOnly,
                .api_note = "0 (unset) means 512",
-               LUXEL_NUMBER(job.snapshot_max_side)});
+               LUXEL_NUMBER(job.snapshot_max_side),
+               .described = Described::kNever});
   // Coordinator mode (server/service/coordinator/): the daemon splits the bake
   // by sample index across worker daemons; the merged result is the one-machine
   // result, so neither setting shapes the result (nor the fingerprint).
@@ -679,14 +786,16 @@ std::vector<Setting> make_schema() {
                    [](BakeSettings& s) {
                      if (s.job.shards > 1) s.adaptive = false;
                    },
-               LUXEL_NUMBER(job.shards)});
+               LUXEL_NUMBER(job.shards),
+               .described = Described::kNever});
   t.push_back({.name = "shards_auto",
                .type = Type::kBool,
                .units = "",
                .help = "one shard per worker the coordinator resolves when the bake starts",
                .default_value = SettingValue::of(0),
                .scope = Scope::kApiOnly,
-               LUXEL_BOOL(job.shards_auto)});
+               LUXEL_BOOL(job.shards_auto),
+               .described = Described::kNever});
   return t;
 }
 
@@ -879,6 +988,40 @@ Result<SettingValue> parse_setting_value(const Setting& st, const std::string& t
     }
   }
   return bad("a value");
+}
+
+std::string describe_setting_value(const Setting& st, const SettingValue& v) {
+  switch (st.type) {
+    case Type::kInt:
+      if (st.zero_is_auto && v.number == 0) return "auto";
+      return strprintf("%lld", static_cast<long long>(v.number));
+    case Type::kFloat:
+      return strprintf("%g", v.number);
+    case Type::kBool:
+    case Type::kChoice:
+    case Type::kText:
+    case Type::kChoiceList:
+    case Type::kVec3:
+      break;
+  }
+  return format_setting_value(st, v);  // on/off, names, "a,b", "x,y,z" (%g)
+}
+
+bool same_setting_value(const Setting& st, const SettingValue& a, const SettingValue& b) {
+  switch (st.type) {
+    case Type::kInt:
+    case Type::kFloat:
+    case Type::kBool:
+      return a.number == b.number;
+    case Type::kChoice:
+    case Type::kText:
+      return a.text == b.text;
+    case Type::kChoiceList:
+      return a.list == b.list;
+    case Type::kVec3:
+      return a.vec.x == b.vec.x && a.vec.y == b.vec.y && a.vec.z == b.vec.z;
+  }
+  return false;
 }
 
 std::string describe_range(const Setting& st) {

@@ -9,8 +9,10 @@
 // the CLI builds its flags and help from it, the service translates
 // luxel.v1.BakeSettings with it (proto field = setting name), `luxel settings
 // --json` describes it for the Python client, and docs/api.md tabulates it.
-// Adding a setting is one entry here (plus the proto field when the API
-// carries it); a unit test fails when the schema and the proto disagree.
+// BakeSettings::describe(), the settings fingerprint, is built from it too
+// (the describe fields of Setting). Adding a setting is one entry here (plus
+// the proto field when the API carries it); a unit test fails when the
+// schema and the proto disagree.
 #pragma once
 
 #include <limits>
@@ -39,6 +41,21 @@ enum class SettingScope {
   kEverywhere,  // `luxel bake --local`, the daemon API (and so `luxel bake`)
   kLocalOnly,   // only in-process: the API has no field for it
   kApiOnly,     // only the daemon: how the job is run and delivered
+};
+
+// Whether a setting has an entry in BakeSettings::describe(), the settings
+// fingerprint: manifests list it, checkpoints and shard merges compare its
+// hash (settings/fingerprint.h), so an entry's key and text must not change
+// once bakes have been checkpointed with it.
+enum class Described {
+  kAlways,         // "key=value" whenever the setting is active
+  kUnlessDefault,  // only when the value is not the default: a setting added after
+                   // checkpoints existed leaves the fingerprints of bakes that do
+                   // not use it as they were
+  kNever,          // not part of the result (the daemon's job, reports), folded into
+                   // another setting's entry (describe_text), or never listed
+                   // (sun.color, directional_angular_radius_degrees: their
+                   // entries say so)
 };
 
 // What a proto3 field left at zero (or empty) means: scalars without
@@ -93,6 +110,22 @@ struct Setting {
   // sky): inactive settings are neither validated nor sent to the daemon.
   bool (*active)(const BakeSettings&) = nullptr;
 
+  // The setting's entry in BakeSettings::describe(). By default it is
+  // "name=value" while the setting is active: integers in decimal (0 of a
+  // zero_is_auto setting as "auto"), reals as %g, switches on/off, choices
+  // and text as they are, lists comma-separated, triples "x,y,z". The
+  // fields below record where an entry differs from that.
+  Described described = Described::kAlways;
+  const char* describe_key = nullptr;                    // the key, when not the name
+  bool (*describe_when)(const BakeSettings&) = nullptr;  // and only when this holds
+  // The entry's text, when it is not the value's own: settings folded into
+  // one entry ("adaptive=on,min=8"), or a value written in other words.
+  std::string (*describe_text)(const BakeSettings&) = nullptr;
+  // The text's 64-bit FNV-1a, 16 hex digits, instead of the text itself
+  // (a long value: the JSON list of probe positions; the offset basis is
+  // describe()'s own, bake_settings.cpp).
+  bool describe_fnv1a = false;
+
   bool is_active(const BakeSettings& s) const { return !active || active(s); }
   bool in_api() const { return scope != SettingScope::kLocalOnly; }
   bool in_local() const { return scope != SettingScope::kApiOnly; }
@@ -121,6 +154,12 @@ std::string format_setting_value(const Setting& setting, const SettingValue& v);
 Result<SettingValue> parse_setting_value(const Setting& setting, const std::string& text);
 // "[0, 64]", ">= 0", "(0, 90)", "box | gaussian", ... for docs and help.
 std::string describe_range(const Setting& setting);
+
+// The text of `v` in BakeSettings::describe() (the default rule above, no
+// describe_text or hash).
+std::string describe_setting_value(const Setting& setting, const SettingValue& v);
+// Whether `a` and `b` are the same value of `setting` (Described::kUnlessDefault).
+bool same_setting_value(const Setting& setting, const SettingValue& a, const SettingValue& b);
 
 // The schema as JSON (name, type, units, help, flag, default, range,
 // choices, scope, api_zero): `luxel settings --json`, read by the Python
