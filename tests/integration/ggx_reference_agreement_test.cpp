@@ -38,6 +38,7 @@
 #include "lightmap_agreement.h"
 #include "reference/cpu_lightmap_tracer.h"
 #include "scene/gltf_import.h"
+#include "support/device_context.h"
 
 namespace luxel {
 namespace {
@@ -158,14 +159,13 @@ Verdict judge(const Bakes& b, const reference::ReferenceLightmap& ref, const cha
   return v;
 }
 
-class GgxReferenceAgreement : public ::testing::Test {
+class GgxReferenceAgreement : public testing::DeviceTest<> {
  protected:
   static void SetUpTestSuite() {
     auto scene = scene::import_gltf_file(kScene);
     if (!scene) return fail("import: " + scene.status().to_string());
     if (std::string why = use_ggx_materials(&scene.value()); !why.empty()) return fail(why);
-    auto ctx = device::Context::create();
-    if (!ctx) return fail("OpenCL: " + ctx.status().to_string());
+    ASSERT_NO_FATAL_FAILURE(DeviceTest::SetUpTestSuite());
     auto bakes = std::make_unique<Bakes>();
     pipeline::BakeSettings settings;
     settings.atlas.resolution = kResolution;
@@ -177,7 +177,7 @@ class GgxReferenceAgreement : public ::testing::Test {
     settings.intersector = accel::IntersectorKind::kEmbree;
     for (int r = 0; r < kReplicas; ++r) {
       settings.seed = 2000u + static_cast<uint32_t>(r);
-      auto result = pipeline::bake(scene.value(), settings, *ctx.value());
+      auto result = pipeline::bake(scene.value(), settings, *ctx_);
       if (!result)
         return fail(strprintf("engine bake (seed %u): ", settings.seed) +
                     result.status().to_string());
@@ -231,6 +231,7 @@ class GgxReferenceAgreement : public ::testing::Test {
   static void TearDownTestSuite() {
     bakes_.reset();
     atlas_.reset();
+    DeviceTest::TearDownTestSuite();
   }
   static void fail(const std::string& why) { setup_error_ = why; }
 

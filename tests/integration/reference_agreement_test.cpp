@@ -23,6 +23,7 @@
 #include "lightmap_agreement.h"
 #include "reference/cpu_lightmap_tracer.h"
 #include "scene/gltf_import.h"
+#include "support/device_context.h"
 
 namespace luxel {
 namespace {
@@ -52,13 +53,12 @@ void print_summary(const char* title, const Bakes& b, const Summary& s) {
   test::print_summary(title, b.engine, b.ref, s);
 }
 
-class ReferenceAgreement : public ::testing::Test {
+class ReferenceAgreement : public testing::DeviceTest<> {
  protected:
   static void SetUpTestSuite() {
     auto scene = scene::import_gltf_file(kScene);
     if (!scene) return fail("import: " + scene.status().to_string());
-    auto ctx = device::Context::create();
-    if (!ctx) return fail("OpenCL: " + ctx.status().to_string());
+    ASSERT_NO_FATAL_FAILURE(DeviceTest::SetUpTestSuite());
     pipeline::BakeSettings settings;
     settings.atlas.resolution = kResolution;
     settings.samples_per_texel = kEngineSppPerReplica;
@@ -72,7 +72,7 @@ class ReferenceAgreement : public ::testing::Test {
       settings.intersector = kind;
       for (int r = 0; r < kReplicas; ++r) {
         settings.seed = 1000u + static_cast<uint32_t>(r);
-        auto result = pipeline::bake(scene.value(), settings, *ctx.value());
+        auto result = pipeline::bake(scene.value(), settings, *ctx_);
         if (!result)
           return fail(strprintf("engine bake (%s, seed %u): ", choice_name(kind), settings.seed) +
                       result.status().to_string());
@@ -103,6 +103,7 @@ class ReferenceAgreement : public ::testing::Test {
     embree_.reset();
     opencl_.reset();
     atlas_.reset();
+    DeviceTest::TearDownTestSuite();
   }
   static void fail(const std::string& why) { setup_error_ = why; }
 

@@ -17,6 +17,7 @@
 #include "accel/triangle_soup.h"
 #include "device/context.h"
 #include "kernels/shared/ray_offset.h"
+#include "support/device_context.h"
 
 namespace luxel::accel {
 namespace {
@@ -81,15 +82,8 @@ LuxRay ray(Vec3 o, Vec3 d, float tmin = 0, float tmax = INFINITY) {
 }
 
 // Every test runs for both OpenCL node layouts (BVH2 and BVH4).
-class AccelTest : public ::testing::TestWithParam<unsigned> {
+class AccelTest : public testing::DeviceTest<::testing::TestWithParam<unsigned>> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create("");
-    ASSERT_TRUE(ctx.is_ok()) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   // Builds soup, BVH and both tracers for the scene.
   void build(const scene::Scene& s, BvhBuildOptions opt = {}) {
     auto soup = build_triangle_soup(s);
@@ -119,13 +113,11 @@ class AccelTest : public ::testing::TestWithParam<unsigned> {
     return h;
   }
 
-  static device::Context* ctx_;
   TriangleSoup soup_;
   DeviceBvh bvh_;
   std::unique_ptr<ClTracer> cl_;
   std::unique_ptr<EmbreeTracer> embree_;
 };
-device::Context* AccelTest::ctx_ = nullptr;
 
 TEST_P(AccelTest, SingleTriangleDistanceAndBarycentrics) {
   SceneBuilder b;

@@ -12,6 +12,7 @@
 
 #include "bake/bake_kernels.h"
 #include "device/context.h"
+#include "support/device_context.h"
 
 namespace luxel {
 namespace {
@@ -48,15 +49,8 @@ std::vector<TexelState> crafted_state() {
   return s;
 }
 
-class AdaptiveAllocationTest : public ::testing::Test {
+class AdaptiveAllocationTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = ctx.value().release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   // Runs alloc_weights, alloc_scan, alloc_keys; returns the keys of the
   // batch and the device's weights.
   static void allocate(const std::vector<TexelState>& state, const cl::LuxBakeParams& params,
@@ -116,10 +110,7 @@ class AdaptiveAllocationTest : public ::testing::Test {
     ASSERT_TRUE(ctx.read(a.alloc.alloc_weights, weights).is_ok());
     ASSERT_TRUE(ctx.finish().is_ok());
   }
-
-  static device::Context* ctx_;
 };
-device::Context* AdaptiveAllocationTest::ctx_ = nullptr;
 
 // The allocation rule of kernels/bake/adaptive.h in double precision:
 // weight = min(e * scale, cap) + mix, e = se / max(y, floor) at most 1.

@@ -23,6 +23,7 @@
 #include "bake/bake.h"
 #include "device/context.h"
 #include "kernels/shared/sample_info.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
@@ -161,15 +162,8 @@ double engine_se(const pipeline::BakeResult& r, uint32_t t) {
   return r.rel_error[t] * luminance(r, t);
 }
 
-class AnalyticDirectTest : public ::testing::Test {
+class AnalyticDirectTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(uint32_t spp, pipeline::DirectLight direct,
                                          uint32_t seed = 7) {
     pipeline::BakeSettings s;
@@ -220,10 +214,7 @@ class AnalyticDirectTest : public ::testing::Test {
                      .ok())
         << "a 2 % error must be detected";
   }
-
-  static device::Context* ctx_;
 };
-device::Context* AnalyticDirectTest::ctx_ = nullptr;
 
 TEST_F(AnalyticDirectTest, RectangleEmitterMatchesLambertsFormula) {
   check_closed_form(false);

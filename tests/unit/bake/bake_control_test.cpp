@@ -15,19 +15,14 @@
 #include "device/context.h"
 #include "output/exr.h"
 #include "shards/checkpoint.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
 namespace {
 
-class BakeControlTest : public ::testing::Test {
+class BakeControlTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = ctx.value().release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
   static pipeline::BakeSettings settings() {
     pipeline::BakeSettings s;
     s.atlas.resolution = 16;
@@ -36,9 +31,7 @@ class BakeControlTest : public ::testing::Test {
     s.paths_per_iteration = 4096;  // several iterations
     return s;
   }
-  static device::Context* ctx_;
 };
-device::Context* BakeControlTest::ctx_ = nullptr;
 
 TEST_F(BakeControlTest, ResumeFromCheckpointIsBitIdentical) {
   const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);

@@ -12,6 +12,7 @@
 #include "bake/bake.h"
 #include "bake/iteration_stops.h"
 #include "device/context.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
@@ -23,17 +24,7 @@ double seconds(Clock::duration d) {
   return std::chrono::duration<double>(d).count();
 }
 
-class BakeInterruptTest : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = ctx.value().release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-  static device::Context* ctx_;
-};
-device::Context* BakeInterruptTest::ctx_ = nullptr;
+class BakeInterruptTest : public testing::DeviceTest<> {};
 
 // The 15 s regression: paths_per_iteration 2^24 on a small closed scene
 // (every path bounces to max_bounces or Russian roulette), cancelled while

@@ -23,6 +23,7 @@
 #include "device/context.h"
 #include "kernels/shared/sample_info.h"
 #include "output/exr.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
@@ -94,15 +95,8 @@ Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t
   return v;
 }
 
-class ClosedFormTest : public ::testing::Test {
+class ClosedFormTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   pipeline::BakeResult bake(const scene::Scene& s, const pipeline::BakeSettings& settings) {
     auto r = pipeline::bake(s, settings, *ctx_);
     EXPECT_TRUE(r) << r.status().to_string();
@@ -122,10 +116,7 @@ class ClosedFormTest : public ::testing::Test {
 
   // The point-light closed form; x_sign -1 for a mirrored plane.
   void check_point_light_over_plane(scene::Scene s, double x_sign);
-
-  static device::Context* ctx_;
 };
-device::Context* ClosedFormTest::ctx_ = nullptr;
 
 // The mean of f over a texel's valid Hammersley positions (the quantity the
 // engine estimates: each valid position is chosen with equal probability).

@@ -22,20 +22,14 @@
 #include "encode/basis.h"
 #include "encode/solvers.h"
 #include "kernels/shared/bases.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
 namespace {
 
-class EncodingBakeTest : public ::testing::Test {
+class EncodingBakeTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(int resolution, uint32_t spp, int bounces,
                                          std::vector<std::string> encodings) {
     pipeline::BakeSettings s;
@@ -52,9 +46,7 @@ class EncodingBakeTest : public ::testing::Test {
     EXPECT_TRUE(r) << r.status().to_string();
     return r ? std::move(r.value()) : pipeline::BakeResult{};
   }
-  static device::Context* ctx_;
 };
-device::Context* EncodingBakeTest::ctx_ = nullptr;
 
 const pipeline::EncodedLightmap& find(const pipeline::BakeResult& r, const std::string& name) {
   for (const auto& e : r.encodings)

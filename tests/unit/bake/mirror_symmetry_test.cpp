@@ -24,6 +24,7 @@
 #include "common/half.h"
 #include "device/context.h"
 #include "scene/gltf_import.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
@@ -146,15 +147,8 @@ scene::Scene open_room() {
   return s;
 }
 
-class MirrorSymmetryTest : public ::testing::Test {
+class MirrorSymmetryTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(uint32_t seed) {
     pipeline::BakeSettings s;
     s.atlas.resolution = 32;
@@ -174,10 +168,7 @@ class MirrorSymmetryTest : public ::testing::Test {
         << "the layout must be the file's TEXCOORD_1";
     return std::move(r.value());
   }
-
-  static device::Context* ctx_;
 };
-device::Context* MirrorSymmetryTest::ctx_ = nullptr;
 
 // The user's report: the Cornell box with its root node given scale
 // (-1, 1, 1) came out darker and differently lit than the original.

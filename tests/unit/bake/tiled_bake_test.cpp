@@ -13,19 +13,14 @@
 #include "bake/bake.h"
 #include "device/context.h"
 #include "shards/checkpoint.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
 namespace {
 
-class TiledBakeTest : public ::testing::Test {
+class TiledBakeTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = ctx.value().release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
   static pipeline::BakeSettings settings() {
     pipeline::BakeSettings s;
     s.atlas.resolution = 48;
@@ -43,9 +38,7 @@ class TiledBakeTest : public ::testing::Test {
     const double state = per_slot * static_cast<double>(untiled.covered_texels);
     return (static_cast<double>(untiled.peak_device_bytes) - 0.75 * state) / 1048576.0;
   }
-  static device::Context* ctx_;
 };
-device::Context* TiledBakeTest::ctx_ = nullptr;
 
 void expect_same_bits(const std::vector<float>& a, const std::vector<float>& b, const char* what) {
   ASSERT_EQ(a.size(), b.size()) << what;

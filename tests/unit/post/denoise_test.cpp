@@ -22,6 +22,7 @@
 #include "device/context.h"
 #include "kernels/shared/sample_info.h"
 #include "post/denoise_guides.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
@@ -60,15 +61,8 @@ void add_lit_quad(scene::Scene& s, LitQuad& q, int plane_material, int emitter_m
   q.emitter[3] = o + ev;
 }
 
-class DenoiseTest : public ::testing::Test {
+class DenoiseTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(int resolution, uint32_t spp) {
     pipeline::BakeSettings s;
     s.atlas.resolution = resolution;
@@ -79,10 +73,7 @@ class DenoiseTest : public ::testing::Test {
     s.denoise = pipeline::Denoise::kAtrous;
     return s;
   }
-
-  static device::Context* ctx_;
 };
-device::Context* DenoiseTest::ctx_ = nullptr;
 
 // Two emitter-lit plane quads side by side in the atlas, 200 units apart in
 // the world (neither emitter lights the other quad measurably); the

@@ -18,6 +18,7 @@
 #include "device/context.h"
 #include "post/bake_outputs.h"
 #include "scene/gltf_import.h"
+#include "support/device_context.h"
 
 namespace luxel {
 namespace {
@@ -69,15 +70,8 @@ json box_primitive(GltfBuilder& b, float size) {
   return prim;
 }
 
-class LightmappedGltfTest : public ::testing::Test {
+class LightmappedGltfTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(pipeline::UvMode mode) {
     pipeline::BakeSettings s;
     s.atlas.resolution = 64;
@@ -110,10 +104,7 @@ class LightmappedGltfTest : public ::testing::Test {
     b.doc["extensionsUsed"] = {"EXT_luxel_unknown"};
     return b.glb();
   }
-
-  static device::Context* ctx_;
 };
-device::Context* LightmappedGltfTest::ctx_ = nullptr;
 
 TEST_F(LightmappedGltfTest, RoundTripKeepsTheFileAndBakesTheSameBits) {
   test::TempDir dir;

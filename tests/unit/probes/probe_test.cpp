@@ -32,20 +32,14 @@
 #include "probes/gltf_nodes.h"
 #include "probes/probe_bake.h"
 #include "probes/probe_file.h"
+#include "support/device_context.h"
 #include "support/test_scenes.h"
 
 namespace luxel {
 namespace {
 
-class ProbeTest : public ::testing::Test {
+class ProbeTest : public testing::DeviceTest<> {
  protected:
-  static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = std::move(ctx.value()).release();
-  }
-  static void TearDownTestSuite() { delete ctx_; }
-
   static pipeline::BakeSettings settings(uint32_t spp, int bounces) {
     pipeline::BakeSettings s;
     s.samples_per_texel = spp;
@@ -60,9 +54,7 @@ class ProbeTest : public ::testing::Test {
     EXPECT_TRUE(r) << r.status().to_string();
     return r ? std::move(r.value()) : probes::ProbeBake{};
   }
-  static device::Context* ctx_;
 };
-device::Context* ProbeTest::ctx_ = nullptr;
 
 struct MeanTest {
   double mean_ratio = 0, z = 0, mean_d = 0, se = 0;

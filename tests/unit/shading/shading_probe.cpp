@@ -1,7 +1,12 @@
 #include "shading_probe.h"
 
+#include "support/device_context.h"
+
 namespace luxel::pipeline::test {
 namespace {
+
+// One context for the whole test binary (PoCL start-up is not free).
+using ::luxel::testing::shared_context;
 
 constexpr const char* kProbe = "testing/lights_probe.cl";
 
@@ -18,15 +23,6 @@ Status read_back(const device::Buffer& b, std::vector<T>* out, size_t n) {
 }
 
 }  // namespace
-
-device::Context& shared_context() {
-  static std::unique_ptr<device::Context> ctx = [] {
-    auto c = device::Context::create("");
-    LUXEL_CHECK_MSG(c.is_ok(), c.status().to_string().c_str());
-    return std::move(c.value());
-  }();
-  return *ctx;
-}
 
 device::FeatureSet all_light_features() {
   device::FeatureSet f;

@@ -13,9 +13,6 @@
 
 namespace luxel::pipeline::test {
 
-// One context for the whole test binary (PoCL start-up is not free).
-device::Context& shared_context();
-
 // Every light feature: one compiled program serves most tests (the sky kind
 // is also switched at run time).
 device::FeatureSet all_light_features();

@@ -25,6 +25,7 @@
 #include "scene/gltf_import.h"
 #include "settings/settings_schema.h"
 #include "shards/checkpoint.h"
+#include "support/device_context.h"
 
 namespace luxel {
 namespace {
@@ -149,12 +150,10 @@ TEST(ShardSettings, RefusedCombinationsNameTheField) {
             std::string::npos);
 }
 
-class ShardMergeTest : public ::testing::Test {
+class ShardMergeTest : public testing::DeviceTest<> {
  protected:
   static void SetUpTestSuite() {
-    auto ctx = device::Context::create();
-    ASSERT_TRUE(ctx) << ctx.status().to_string();
-    ctx_ = ctx.value().release();
+    ASSERT_NO_FATAL_FAILURE(DeviceTest::SetUpTestSuite());
     auto scene = scene::import_gltf_file(std::string(LUXEL_SCENES_DIR) + "/cornell_box.gltf");
     ASSERT_TRUE(scene) << scene.status().to_string();
     scene_ = new scene::Scene(std::move(scene.value()));
@@ -168,7 +167,7 @@ class ShardMergeTest : public ::testing::Test {
   static void TearDownTestSuite() {
     delete single_;
     delete scene_;
-    delete ctx_;
+    DeviceTest::TearDownTestSuite();
   }
   // The whole bake: uniform, SH2 by projection.
   static BakeSettings settings() {
@@ -210,11 +209,9 @@ class ShardMergeTest : public ::testing::Test {
                                         pipeline::Termination::kSamples, hooks());
   }
 
-  static device::Context* ctx_;
   static scene::Scene* scene_;
   static BakeResult* single_;
 };
-device::Context* ShardMergeTest::ctx_ = nullptr;
 scene::Scene* ShardMergeTest::scene_ = nullptr;
 BakeResult* ShardMergeTest::single_ = nullptr;
 

@@ -8,14 +8,14 @@
 
 #include "bake/primitives/radix_sort.h"
 #include "device/program_cache.h"
-#include "device_fixture.h"
+#include "device_buffers.h"
 
 namespace luxel::pipeline {
 namespace {
 
 using testing::read_back;
 using testing::read_count;
-using testing::test_context;
+using testing::shared_context;
 using testing::upload_count;
 using testing::upload_rw;
 
@@ -59,7 +59,7 @@ struct DeviceResult {
 // `count` are live; the capacity is sorted_texels.size().
 DeviceResult run_device(const std::vector<uint32_t>& sorted_texels, int count,
                         uint32_t texel_count) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   DeviceResult r;
   auto ob = OffsetBuffer::create(ctx, sorted_texels.size(), texel_count);
   EXPECT_TRUE(ob.is_ok()) << ob.status().to_string();
@@ -175,7 +175,7 @@ TEST(OffsetBuffer, EntriesPastTheLiveCountAreIgnored) {
 TEST(OffsetBuffer, AfterTheRadixSortOfRandomTexelKeys) {
   // The bake's order of operations: texel keys with invalid markers ->
   // RadixSort over bits_for(texel_count) -> offset buffer.
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   const uint32_t texel_count = 3000;
   const size_t n = 20000;
   std::mt19937_64 rng(43);
@@ -196,7 +196,7 @@ TEST(OffsetBuffer, AfterTheRadixSortOfRandomTexelKeys) {
 }
 
 TEST(OffsetBuffer, NamesItsLaunchesAndRejectsShortBuffers) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   ASSERT_OK(ctx.finish());
   ctx.timer().reset();
   check_offsets({1u, 2u}, 2, 4);

@@ -4,14 +4,14 @@
 #include <algorithm>
 #include <numeric>
 
-#include "device_fixture.h"
+#include "device_buffers.h"
 
 namespace luxel::pipeline {
 namespace {
 
 using testing::random_keys;
 using testing::read_back;
-using testing::test_context;
+using testing::shared_context;
 using testing::upload_count;
 using testing::upload_rw;
 
@@ -46,7 +46,7 @@ Sorted reference_sort(const std::vector<uint32_t>& keys, const std::vector<uint3
 // Sorts on the device; buffers hold all of keys (the capacity), `count` live.
 Sorted device_sort(RadixSort& sorter, const std::vector<uint32_t>& keys,
                    const std::vector<uint32_t>& values, int count, int begin_bit, int end_bit) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   device::Buffer key_buf = upload_rw(keys, "keys");
   device::Buffer value_buf = values.empty() ? device::Buffer() : upload_rw(values, "values");
   device::Buffer count_buf = upload_count(count);
@@ -81,7 +81,7 @@ std::vector<uint32_t> iota_values(size_t n) {
 }
 
 std::unique_ptr<RadixSort> make_sorter(size_t capacity, TileShape shape = {}) {
-  auto sorter = RadixSort::create(test_context(), capacity, shape);
+  auto sorter = RadixSort::create(shared_context(), capacity, shape);
   EXPECT_TRUE(sorter.is_ok()) << sorter.status().to_string();
   return sorter.is_ok() ? std::move(sorter.value()) : nullptr;
 }
@@ -245,7 +245,7 @@ TEST(RadixSort, TinyTilesWithTheOtherScatterAgree) {
   // many tiles, multi-entry chunks in the one-group scan; and the scatter
   // variant the device does not use by default (local reorder on CPUs,
   // direct writes on GPUs), so both are checked on every device.
-  TileShape shape{4, 3, !preferred_tile_shape(test_context().info()).local_reorder};
+  TileShape shape{4, 3, !preferred_tile_shape(shared_context().info()).local_reorder};
   SCOPED_TRACE(shape.describe());
   auto sorter = make_sorter(3333, shape);
   ASSERT_NE(sorter, nullptr);
@@ -257,7 +257,7 @@ TEST(RadixSort, TinyTilesWithTheOtherScatterAgree) {
 }
 
 TEST(RadixSort, RunsOnlyThePassesTheBitRangeNeedsUnderTheirNames) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   auto sorter = make_sorter(2048);
   ASSERT_NE(sorter, nullptr);
   const auto keys = random_keys(2048, 511, 11);

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <random>
 
-#include "device_fixture.h"
+#include "device_buffers.h"
 
 namespace luxel::pipeline {
 namespace {
@@ -12,7 +12,7 @@ namespace {
 using testing::random_keys;
 using testing::read_back;
 using testing::read_count;
-using testing::test_context;
+using testing::shared_context;
 using testing::upload_count;
 using testing::upload_rw;
 
@@ -37,7 +37,7 @@ struct Compacted {
 Compacted device_compact(StreamCompaction& c, const std::vector<uint32_t>& values,
                          const std::vector<uint32_t>& flags, int in_count,
                          bool alias_counts = false) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   const size_t capacity = flags.size();
   device::Buffer in = values.empty() ? device::Buffer() : upload_rw(values, "in values");
   device::Buffer flag_buf = upload_rw(flags, "flags");
@@ -74,7 +74,7 @@ void check_compact(StreamCompaction& c, const std::vector<uint32_t>& values,
 }
 
 std::unique_ptr<StreamCompaction> make_compaction(size_t capacity, TileShape shape = {}) {
-  auto c = StreamCompaction::create(test_context(), capacity, shape);
+  auto c = StreamCompaction::create(shared_context(), capacity, shape);
   EXPECT_TRUE(c.is_ok()) << c.status().to_string();
   return c.is_ok() ? std::move(c.value()) : nullptr;
 }
@@ -151,7 +151,7 @@ TEST(StreamCompaction, TinyTilesAgree) {
 }
 
 TEST(StreamCompaction, NamesItsLaunches) {
-  auto& ctx = test_context();
+  auto& ctx = shared_context();
   auto c = make_compaction(1000);
   ASSERT_NE(c, nullptr);
   ASSERT_OK(ctx.finish());

@@ -1,43 +1,29 @@
-#include "device_fixture.h"
-
-#include <cstdlib>
+#include "device_buffers.h"
 
 namespace luxel::pipeline::testing {
 
-device::Context& test_context() {
-  static std::unique_ptr<device::Context> ctx = [] {
-    auto created = device::Context::create();
-    if (!created) {
-      std::fprintf(stderr, "no OpenCL device: %s\n", created.status().to_string().c_str());
-      std::abort();
-    }
-    return std::move(created.value());
-  }();
-  return *ctx;
-}
-
 device::Buffer upload_rw(const std::vector<uint32_t>& data, const char* name) {
-  auto buf = test_context().upload(data, name, CL_MEM_READ_WRITE);
+  auto buf = shared_context().upload(data, name, CL_MEM_READ_WRITE);
   EXPECT_TRUE(buf.is_ok()) << buf.status().to_string();
   return buf.is_ok() ? std::move(buf.value()) : device::Buffer();
 }
 
 device::Buffer upload_count(int count, const char* name) {
-  auto buf = test_context().upload_bytes(&count, sizeof count, name, CL_MEM_READ_WRITE);
+  auto buf = shared_context().upload_bytes(&count, sizeof count, name, CL_MEM_READ_WRITE);
   EXPECT_TRUE(buf.is_ok()) << buf.status().to_string();
   return buf.is_ok() ? std::move(buf.value()) : device::Buffer();
 }
 
 std::vector<uint32_t> read_back(const device::Buffer& buffer, size_t elements) {
   std::vector<uint32_t> out(elements);
-  const Status st = test_context().read(buffer, out);
+  const Status st = shared_context().read(buffer, out);
   EXPECT_TRUE(st.is_ok()) << st.to_string();
   return out;
 }
 
 int read_count(const device::Buffer& buffer) {
   int n = -12345;
-  const Status st = test_context().read(buffer, &n, sizeof n);
+  const Status st = shared_context().read(buffer, &n, sizeof n);
   EXPECT_TRUE(st.is_ok()) << st.to_string();
   return n;
 }

@@ -1,5 +1,5 @@
-// One OpenCL context for the whole primitives_test executable (PoCL start-up
-// and program loads are paid once), plus buffer helpers.
+// Buffer helpers of primitives_test on the executable's one OpenCL context
+// (support/device_context.h).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -9,11 +9,11 @@
 #include <vector>
 
 #include "device/context.h"
+#include "support/device_context.h"
 
 namespace luxel::pipeline::testing {
 
-// The default device (device::Context::create()): PoCL on a CPU-only machine.
-device::Context& test_context();
+using ::luxel::testing::shared_context;
 
 // A read-write device buffer holding `data`.
 device::Buffer upload_rw(const std::vector<uint32_t>& data, const char* name);
