@@ -10,12 +10,12 @@ Hasher& Hasher::add(const void* data, size_t size) {
   uint64_t len = size;
   for (int i = 0; i < 8; ++i) {
     const unsigned char c = static_cast<unsigned char>(len >> (8 * i));
-    a_ = (a_ ^ c) * kFnv1aPrime;
-    b_ = (b_ ^ (c + 0x5bu)) * kFnv1aPrime;
+    a_ = fnv1a_step(a_, c);
+    b_ = fnv1a_step(b_, c + 0x5bu);
   }
   for (size_t i = 0; i < size; ++i) {
-    a_ = (a_ ^ p[i]) * kFnv1aPrime;
-    b_ = (b_ ^ static_cast<unsigned char>(p[i] + 0x5bu)) * kFnv1aPrime;
+    a_ = fnv1a_step(a_, p[i]);
+    b_ = fnv1a_step(b_, static_cast<unsigned char>(p[i] + 0x5bu));
   }
   return *this;
 }

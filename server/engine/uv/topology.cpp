@@ -7,6 +7,8 @@
 #include <numbers>
 #include <unordered_map>
 
+#include "common/hash.h"
+
 namespace luxel::uv {
 namespace {
 
@@ -18,10 +20,12 @@ double deg_to_rad(double d) {
   return d * std::numbers::pi / 180.0;
 }
 
+// FNV-1a a word at a time. The hash only places cells in buckets (the grid is
+// never iterated), so the welds do not depend on its values.
 struct CellHash {
   size_t operator()(const std::array<int64_t, 3>& c) const {
-    uint64_t h = 1469598103934665603ull;
-    for (int64_t v : c) h = (h ^ static_cast<uint64_t>(v)) * 1099511628211ull;
+    uint64_t h = kFnv1aBasis;
+    for (int64_t v : c) h = fnv1a_step(h, static_cast<uint64_t>(v));
     return static_cast<size_t>(h);
   }
 };
