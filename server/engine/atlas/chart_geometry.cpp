@@ -58,25 +58,11 @@ Result<MeshUvLayout> measure_mesh_uvs(const scene::Mesh& mesh) {
 }
 
 double instance_world_area(const scene::Mesh& mesh, const scene::Instance& instance) {
-  const Mat4& m = instance.object_to_world;
-  auto world = [&](uint32_t index, double out[3]) {
-    const Vec3 p = mesh.positions[index];
-    for (int r = 0; r < 3; ++r)
-      out[r] = m.at(r, 0) * p.x + m.at(r, 1) * p.y + m.at(r, 2) * p.z + m.at(r, 3);
-  };
   double area = 0;
-  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-    double a[3], b[3], c[3];
-    world(mesh.indices[t * 3], a);
-    world(mesh.indices[t * 3 + 1], b);
-    world(mesh.indices[t * 3 + 2], c);
-    const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double x = e1[1] * e2[2] - e1[2] * e2[1];
-    const double y = e1[2] * e2[0] - e1[0] * e2[2];
-    const double z = e1[0] * e2[1] - e1[1] * e2[0];
-    area += 0.5 * std::sqrt(x * x + y * y + z * z);
-  }
+  for (size_t t = 0; t < mesh.triangle_count(); ++t)
+    area += transformed_triangle_area(instance.object_to_world, mesh.positions[mesh.indices[t * 3]],
+                                      mesh.positions[mesh.indices[t * 3 + 1]],
+                                      mesh.positions[mesh.indices[t * 3 + 2]]);
   return area;
 }
 

@@ -20,6 +20,24 @@ Vec3 transform_point(const Mat4& m, Vec3 p) {
   return r;
 }
 
+double transformed_triangle_area(const Mat4& m, Vec3 a, Vec3 b, Vec3 c) {
+  auto p = [&](Vec3 v, int r) {
+    return m.at(r, 0) * static_cast<double>(v.x) + m.at(r, 1) * static_cast<double>(v.y) +
+           m.at(r, 2) * static_cast<double>(v.z) + m.at(r, 3);
+  };
+  double pa[3], pb[3], pc[3];
+  for (int r = 0; r < 3; ++r) {
+    pa[r] = p(a, r);
+    pb[r] = p(b, r);
+    pc[r] = p(c, r);
+  }
+  const double e1[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
+  const double e2[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
+  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
+               z = e1[0] * e2[1] - e1[1] * e2[0];
+  return 0.5 * std::sqrt(x * x + y * y + z * z);
+}
+
 Vec3 transform_vector(const Mat4& m, Vec3 v) {
   Vec3 r;
   for (int i = 0; i < 3; ++i)

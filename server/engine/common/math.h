@@ -86,6 +86,9 @@ Vec3 transform_point(const Mat4& m, Vec3 p);
 // under a mirroring transform too); returns a normalized vector.
 Vec3 transform_normal(const Mat4& m, Vec3 n);
 Vec3 transform_vector(const Mat4& m, Vec3 v);
+// The area of the object-space triangle a, b, c once m transforms it (an
+// instance's triangle in world space), computed in double throughout.
+double transformed_triangle_area(const Mat4& m, Vec3 a, Vec3 b, Vec3 c);
 Mat4 inverse(const Mat4& m);
 double determinant3x3(const Mat4& m);
 // The winding rule of instances (glTF 2.0 §3.7.4): the front face of a

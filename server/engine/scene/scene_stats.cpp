@@ -37,24 +37,6 @@ double emission(const Scene& scene, const Material& m) {
   return e;
 }
 
-double world_area(const Mat4& m, Vec3 a, Vec3 b, Vec3 c) {
-  auto p = [&](Vec3 v, int r) {
-    return m.at(r, 0) * static_cast<double>(v.x) + m.at(r, 1) * static_cast<double>(v.y) +
-           m.at(r, 2) * static_cast<double>(v.z) + m.at(r, 3);
-  };
-  double pa[3], pb[3], pc[3];
-  for (int r = 0; r < 3; ++r) {
-    pa[r] = p(a, r);
-    pb[r] = p(b, r);
-    pc[r] = p(c, r);
-  }
-  const double e1[3] = {pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]};
-  const double e2[3] = {pc[0] - pa[0], pc[1] - pa[1], pc[2] - pa[2]};
-  const double x = e1[1] * e2[2] - e1[2] * e2[1], y = e1[2] * e2[0] - e1[0] * e2[2],
-               z = e1[0] * e2[1] - e1[1] * e2[0];
-  return 0.5 * std::sqrt(x * x + y * y + z * z);
-}
-
 void add_mesh(const Mesh& m, UvRaster* raster) {
   for (size_t t = 0; t < m.triangle_count(); ++t)
     raster->add(m.uv1[m.indices[3 * t]], m.uv1[m.indices[3 * t + 1]], m.uv1[m.indices[3 * t + 2]]);
@@ -103,8 +85,9 @@ SceneStats compute_stats(const Scene& scene, int coverage_resolution) {
         ++s.emissive_triangles;
         s.emissive_power +=
             kPi * e *
-            world_area(inst.object_to_world, m.positions[m.indices[3 * t]],
-                       m.positions[m.indices[3 * t + 1]], m.positions[m.indices[3 * t + 2]]);
+            transformed_triangle_area(inst.object_to_world, m.positions[m.indices[3 * t]],
+                                      m.positions[m.indices[3 * t + 1]],
+                                      m.positions[m.indices[3 * t + 2]]);
       }
     }
   }
