@@ -41,7 +41,7 @@ void draw_progress(const pipeline::BakeProgress& p, bool tty) {
 }
 
 // The lightmap's figures, as soon as its bake ends (before the probes).
-void print_lightmap(const BakeArgs& a, const pipeline::BakeResult& r) {
+void print_lightmap(const BakeCommand& a, const pipeline::BakeResult& r) {
   std::printf("lightmap   %dx%d (%s atlas), %zu covered texels, sample-info buffer %.1f MiB\n",
               r.width, r.height, atlas::atlas_mode_name(r.atlas.mode), r.covered_texels,
               r.sample_info_bytes / 1048576.0);
@@ -91,7 +91,7 @@ void print_probes(const probes::ProbeBake& b) {
               b.negative_raw, probes::sh_window_name(b.window), b.negative_windowed);
 }
 
-void print_written(const BakeArgs& a, const job::JobResult& job) {
+void print_written(const BakeCommand& a, const job::JobResult& job) {
   const pipeline::OutputPaths& w = job.written;
   if (job.lightmap) {
     std::printf("\nwrote      %s\n           %s\n           %s\n", w.irradiance_exr.c_str(),
@@ -110,7 +110,7 @@ void print_written(const BakeArgs& a, const job::JobResult& job) {
 }  // namespace
 
 int run_bake(const std::vector<std::string>& args) {
-  BakeArgs a;
+  BakeCommand a;
   switch (parse_bake_args(args, a)) {
     case ParseOutcome::kHelpShown:
       return 0;

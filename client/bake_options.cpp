@@ -105,7 +105,7 @@ bool is_remote_only(const std::string& k) {
 
 }  // namespace
 
-ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& a) {
+ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeCommand& a) {
   a.settings = pipeline::default_settings();
   a.connection = remote::default_connection_options();
   for (size_t i = 0; i < args.size(); ++i) {
@@ -222,7 +222,7 @@ int run_settings(const std::vector<std::string>& args) {
   return 0;
 }
 
-bool read_probe_positions(BakeArgs& a) {
+bool read_probe_positions(BakeCommand& a) {
   if (a.settings.probes.rfind("file:", 0) != 0 || !a.settings.probe_positions.empty()) return true;
   const std::string file = a.settings.probes.substr(5);
   std::ifstream f(file, std::ios::binary);

@@ -12,7 +12,7 @@
 
 namespace luxel::cli {
 
-struct BakeArgs {
+struct BakeCommand {
   std::string scene;  // a .gltf/.glb file, or (remote) a scene id the daemon stores
   std::string out;    // output folder (required unless --detach)
   bool local = false;
@@ -40,14 +40,14 @@ struct BakeArgs {
 enum class ParseOutcome { kOk, kHelpShown, kUsageError };
 
 // Parses `luxel bake` arguments (errors printed to stderr).
-ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeArgs& out);
+ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeCommand& out);
 
 // `--probes file:PATH`: reads PATH into settings.probe_positions, which the
 // bake (local or on luxeld) places the probes from; the daemon gets the
 // positions, not the path. False (and a message) when it cannot be read.
-bool read_probe_positions(BakeArgs& a);
+bool read_probe_positions(BakeCommand& a);
 
 // `luxel bake` without --local: upload if needed, submit, watch, download.
-int run_bake_remote(BakeArgs& args);
+int run_bake_remote(BakeCommand& args);
 
 }  // namespace luxel::cli

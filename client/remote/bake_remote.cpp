@@ -23,7 +23,7 @@ namespace {
 using namespace remote;
 
 // Settings the API cannot carry are refused, never silently dropped.
-int check_remote_args(const BakeArgs& a) {
+int check_remote_args(const BakeCommand& a) {
   if (!a.local_only.empty()) {
     std::fprintf(stderr,
                  "luxel bake: %s is only available with --local (the luxeld API has no such "
@@ -51,7 +51,7 @@ bool looks_like_scene_id(const std::string& s) {
 
 // The scene the bake uses: a local file (uploaded when the daemon lacks it)
 // or the id of a scene the daemon stores.
-grpc::Status resolve_scene(Connection& conn, const BakeArgs& a, luxel::v1::SceneInfo& info,
+grpc::Status resolve_scene(Connection& conn, const BakeCommand& a, luxel::v1::SceneInfo& info,
                            bool& uploaded) {
   uploaded = false;
   if (!std::filesystem::exists(a.scene) && looks_like_scene_id(a.scene)) {
@@ -68,7 +68,7 @@ grpc::Status resolve_scene(Connection& conn, const BakeArgs& a, luxel::v1::Scene
 
 }  // namespace
 
-int run_bake_remote(BakeArgs& a) {
+int run_bake_remote(BakeCommand& a) {
   if (int rc = check_remote_args(a); rc != kExitOk) return rc;
   if (!read_probe_positions(a)) return kExitUsage;
   const bool json = a.connection.json;

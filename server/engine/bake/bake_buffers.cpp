@@ -55,7 +55,7 @@ class Allocator {
 // slots/words: what the tile buffers hold (covered texels, sample-info
 // words); load_tile fills them.
 Status upload_scene(Allocator& a, const scene::Scene& scene, const BakeSetup& s,
-                    const TileCapacity& cap, BakeArgs& args) {
+                    const TileCapacity& cap, BakeKernelArgs& args) {
   SceneArgs& g = args.scene;
   LUXEL_RETURN_IF_ERROR(a.upload(g.tris, s.data.surface, "surface triangles"));
   LUXEL_RETURN_IF_ERROR(a.upload(g.materials, s.data.materials, "materials"));

@@ -45,8 +45,8 @@ class BakeBuffers {
   Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end);
 
   // The kernels' arguments (args().params is the bake's LuxBakeParams).
-  BakeArgs& args() { return args_; }
-  const BakeArgs& args() const { return args_; }
+  BakeKernelArgs& args() { return args_; }
+  const BakeKernelArgs& args() const { return args_; }
 
   // Bounce-loop bookkeeping (not kernel groups of their own): the batch's
   // path count for the sort, the count of paths with a texel, and the two
@@ -67,7 +67,7 @@ class BakeBuffers {
  private:
   Status allocate(device::Context& ctx, const scene::Scene& scene, const BakeSetup& setup,
                   const BakeSettings& settings, const TileCapacity& cap, bool dry);
-  BakeArgs args_;
+  BakeKernelArgs args_;
   size_t device_bytes_ = 0;
 };
 

@@ -39,12 +39,12 @@ Status bind_value(device::Kernel& k, cl_uint index, const Given& v) {
 #define LUXEL_COUNT_GROUP(access, group) LUX_GROUP_##group(LUXEL_COUNT_ENTRY)
 
 // bind_<kernel>(k, args): params, then every group of the kernel's list.
-#define LUXEL_DEFINE_BINDER(kernel)                               \
-  Status bind_##kernel(device::Kernel& k, const BakeArgs& args) { \
-    cl_uint index = 0;                                            \
-    LUXEL_RETURN_IF_ERROR(k.set_arg(index++, args.params));       \
-    LUX_KERNEL_##kernel(LUXEL_BIND_GROUP) return Status::ok();    \
-  }                                                               \
+#define LUXEL_DEFINE_BINDER(kernel)                                     \
+  Status bind_##kernel(device::Kernel& k, const BakeKernelArgs& args) { \
+    cl_uint index = 0;                                                  \
+    LUXEL_RETURN_IF_ERROR(k.set_arg(index++, args.params));             \
+    LUX_KERNEL_##kernel(LUXEL_BIND_GROUP) return Status::ok();          \
+  }                                                                     \
   constexpr cl_uint kArgs_##kernel = 1 LUX_KERNEL_##kernel(LUXEL_COUNT_GROUP);
 LUX_BAKE_KERNELS(LUXEL_DEFINE_BINDER)
 #undef LUXEL_DEFINE_BINDER
@@ -73,7 +73,7 @@ Result<BakeKernels> BakeKernels::create(device::Context& ctx, const device::Feat
   return out;
 }
 
-Status BakeKernels::bind(BakeKernel k, const BakeArgs& args) {
+Status BakeKernels::bind(BakeKernel k, const BakeKernelArgs& args) {
   device::Kernel& kernel = (*this)[k];
   switch (k) {
 #define LUXEL_BIND_CASE(name) \

@@ -57,7 +57,7 @@ struct AllocArgs {
 
 // Everything a bake kernel can take. Member names are the group names of
 // bake_args.h, which the binders paste together.
-struct BakeArgs {
+struct BakeKernelArgs {
   cl::LuxBakeParams params{};
   SceneArgs scene;
   LightArgs lights;
@@ -81,7 +81,7 @@ class BakeKernels {
   static Result<BakeKernels> create(device::Context& ctx, const device::FeatureSet& features);
 
   // Binds kernel k's arguments from `args` (by the lists of bake_args.h).
-  Status bind(BakeKernel k, const BakeArgs& args);
+  Status bind(BakeKernel k, const BakeKernelArgs& args);
   device::Kernel& operator[](BakeKernel k) { return kernels_[static_cast<size_t>(k)]; }
 
  private:

@@ -46,7 +46,7 @@ Result<bool> Baker::stop_point() {
 // fixed order), never of timing: resumed and uninterrupted bakes allocate
 // alike.
 Result<bool> Baker::plan_allocation(uint32_t batch) {
-  BakeArgs& a = b_.args();
+  BakeKernelArgs& a = b_.args();
   const uint32_t covered = a.params.covered_count;
   if (paths_done_ < uint64_t{settings_.adaptive_min_samples} * covered) return false;
   std::vector<cl::LuxAccumStats> partials;
@@ -88,7 +88,7 @@ Status Baker::allocate_paths() {
 
 // One iteration of the wavefront pipeline (module comment of kernels/bake.cl).
 Result<bool> Baker::run_iteration(uint32_t batch) {
-  BakeArgs& a = b_.args();
+  BakeKernelArgs& a = b_.args();
   interruptible_ = iteration_interruptible(*hooks_, batch, ctx_.info().is_gpu);
   rerun_after_checkpoint_ = std::exchange(gave_up_for_checkpoint_, false);
   const size_t cap = s_.capacity;
@@ -170,7 +170,7 @@ Result<bool> Baker::run_iteration(uint32_t batch) {
 
 // 7. Progress statistics: the kernel's per-work-group partials, summed here.
 Status Baker::read_partials(std::vector<cl::LuxAccumStats>& partials) {
-  BakeArgs& a = b_.args();
+  BakeKernelArgs& a = b_.args();
   a.params.paths = 0;
   const uint32_t covered = a.params.covered_count;
   const size_t groups = (covered + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;

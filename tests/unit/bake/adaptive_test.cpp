@@ -60,7 +60,7 @@ class AdaptiveAllocationTest : public testing::DeviceTest<> {
     f.set(device::Feature::ADAPTIVE);
     auto kernels = pipeline::BakeKernels::create(ctx, f);
     ASSERT_TRUE(kernels) << kernels.status().to_string();
-    pipeline::BakeArgs a;
+    pipeline::BakeKernelArgs a;
     a.params = params;
     std::vector<cl::float4> mean(kTexels), m2(kTexels);
     std::vector<cl::float2> weight(kTexels);
