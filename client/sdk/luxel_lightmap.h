@@ -1,4 +1,5 @@
 /* luxel_lightmap.h: reconstruct lighting from Luxel directional lightmaps.
+ * Over 500 lines: a self-contained header by design: an engine copies one file.
  *
  * Self-contained single header: copy it into your
  * engine. Compiles as C99, C++ and OpenCL C; it uses only float arithmetic,

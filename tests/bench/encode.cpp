@@ -31,6 +31,9 @@
 // Exit status 1 when any solver fails, returns a non-finite value, or an NNLS
 // variant (full or progressive) returns a negative coefficient; the ctest
 // smoke entry (--quick) relies on that.
+// Over 500 lines: its three tables (thesis Figs. 7.5/7.8, §7.4, §7.3.1) share
+// one configuration and one report; the shared solvers' support is
+// encode_support.cpp.
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -69,6 +69,7 @@ k of every analysed bake lie within [--min-factor, --max-factor] (default
 0.2..5) and F at every budget within 4x that (F alone, within the bound
 itself, without python3-openimageio); 1 otherwise.
 """
+# Over 500 lines: one script runs the whole error-against-time benchmark (ladders, cached references, tables), so a figure in docs/performance.md is one command.
 
 import argparse
 import csv

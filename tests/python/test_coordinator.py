@@ -11,6 +11,7 @@ other settings put in a shard's place.
     PYTHONPATH=client/python:build/python:tests/python /usr/bin/python3 -m unittest -v \
     tests/python/test_coordinator.py
 """
+# Over 500 lines: the coordinator's workers and reference bake are started once for every test of the class.
 
 import json
 import os

@@ -2,6 +2,8 @@
 // buffer, a .glb), content addressing, submit, watch (current state first,
 // snapshots, final event), download and verify every artifact, idempotency,
 // server counters and structured logs.
+// Over 500 lines: one daemon serves the whole flow (upload, submit, watch,
+// download, idempotency, counters, logs), checked in order.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,3 +1,6 @@
+// The BitImage packer (bitimage_packer.h). Over 500 lines: the masks, padding,
+// first-fit search over 64-bit rows and resume are one algorithm (thesis §4.1)
+// over one row representation.
 #include "uv/bitimage_packer.h"
 
 #include <algorithm>

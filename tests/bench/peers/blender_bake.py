@@ -45,6 +45,7 @@ What it does (README.md next to this file explains the conversions):
      Blender's diffuse pass without colour is E / pi) and DIR/blender.json
      with the timings.
 """
+# Over 500 lines: it runs inside Blender as one script (scene import, the matched material graph, the bake, the EXR writer) for both Blender versions.
 import argparse
 import json
 import math

@@ -47,6 +47,7 @@ Conventions (README.md next to this file):
     borders included; Cycles: texels whose centre lies on a triangle):
     ratio ~ throughput x error per sample x (Cycles texels / Luxel texels).
 """
+# Over 500 lines: the calibration, the matched-settings ladder and the report against both Cycles versions share one set of readers and metrics.
 import csv
 import json
 import math

@@ -6,6 +6,8 @@
 // relative deviation over all texels. Each check must also FAIL when a
 // deliberate error is injected into the expected value, so it cannot pass
 // trivially.
+// Over 500 lines: each closed-form scene with its injected error sits beside
+// the z-test helpers they all use.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -17,6 +17,8 @@
 // Probe estimates are independent, so each statistic is a mean over probes
 // with the standard error of that mean (z-test); each check also fails
 // with a deliberate 2 % error in the expected value.
+// Over 500 lines: placement, the probe bake against closed forms and the
+// lightmap, the files and the SDK query share one set of scenes.
 #include <gtest/gtest.h>
 
 #include <chrono>

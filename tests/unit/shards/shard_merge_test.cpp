@@ -6,6 +6,8 @@
 // refused with an error naming them; and two deliberately wrong merges
 // (means averaged without weights, Chan's between-shard M2 term dropped)
 // fail the same comparison, so it can tell a right merge from a wrong one.
+// Over 500 lines: exactness, the fold, stops across shards and every refusal
+// share one set of shard fixtures.
 #include "shards/shard_merge.h"
 
 #include <gtest/gtest.h>
