@@ -5,6 +5,7 @@
 #include <functional>
 #include <optional>
 
+#include "common/clock.h"
 #include "job/bake_job.h"
 #include "output/reference_exr.h"
 #include "service/coordinator/coordinator.h"
@@ -280,7 +281,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   auto report_end = [&] {
     if (ended || !options_.metrics) return;
     ended = true;
-    const double wall = std::chrono::duration<double>(Clock::now() - device_start).count();
+    const double wall = seconds_since(device_start);
     options_.metrics->bake_ended(bake_id, outcome, traced_s >= 0 ? traced_s : wall);
   };
   struct OnExit {

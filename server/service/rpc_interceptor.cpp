@@ -9,6 +9,7 @@
 #include <random>
 
 #include "api/grpc_status_name.h"
+#include "common/clock.h"
 #include "common/status.h"
 #include "service/log.h"
 
@@ -119,7 +120,7 @@ class RpcInterceptor : public grpc::experimental::Interceptor {
     finished_ = true;
     // Before the status leaves: a client that has it finds the call counted.
     if (metrics_ && kind_) metrics_->stream_closed(kind_);
-    const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
+    const double seconds = seconds_since(start_);
     if (metrics_) metrics_->rpc_finished(method_, status_code_name(code), seconds);
     log_event(level_of(code), "rpc",
               {{"method", method_},

@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "common/clock.h"
 #include "common/machine_info.h"
 #include "encode/basis.h"
 #include "encode/gram.h"
@@ -595,8 +596,7 @@ int main(int argc, char** argv) {
   table_b(cfg, maps);
   table_c(cfg, maps);
 
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double seconds = seconds_since(t0);
   std::printf("checks: %ld solutions, %ld failures; %.1f s\n", g_checks.solutions,
               g_checks.failures, seconds);
   for (const std::string& m : g_checks.messages)

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "atlas/sample_info.h"
+#include "common/clock.h"
 #include "reference/pcg32.h"
 #include "reference/reference_bsdf.h"
 #include "reference/reference_scene.h"
@@ -239,7 +240,7 @@ Result<ReferenceLightmap> bake_reference(const scene::Scene& scene, const atlas:
   for (auto& t : pool) t.join();
 
   out.paths = uint64_t{settings.samples_per_texel} * covered.size();
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds = seconds_since(t0);
   return out;
 }
 

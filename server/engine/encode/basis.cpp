@@ -1,5 +1,6 @@
 #include "encode/basis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
@@ -98,6 +99,10 @@ Result<SphericalBasis> SphericalBasis::create(const BasisSpec& spec) {
 Result<SphericalBasis> SphericalBasis::from_name(std::string_view name, float sg_sharpness) {
   BasisSpec s;
   std::string n(name);
+  if (std::find(kEncodingNames.begin(), kEncodingNames.end(), name) == kEncodingNames.end())
+    return invalid_argument(
+        strprintf("unknown encoding '%s': expected sh1, sh2, sg6/9/12[-hemi] or ambient-dice9/12",
+                  n.c_str()));
   if (n == "sh1") {
     s.kind = BasisKind::kShL1;
   } else if (n == "sh2") {

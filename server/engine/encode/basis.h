@@ -5,6 +5,7 @@
 // kernels/shared/bases.h so host and device agree bit for bit in float.
 #pragma once
 
+#include <array>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -13,6 +14,13 @@
 #include "common/status.h"
 
 namespace luxel::encode {
+
+// Every directional encoding by name, declared once: SphericalBasis::from_name
+// parses these, and the settings schema offers them (with "irradiance") as
+// settings.encodings' choices, in this order.
+inline constexpr std::array<std::string_view, 10> kEncodingNames = {
+    "sh1",      "sh2",      "sg6",       "sg9",           "sg12",
+    "sg6-hemi", "sg9-hemi", "sg12-hemi", "ambient-dice9", "ambient-dice12"};
 
 enum class BasisKind {
   kShL1,               // 4 real SH coefficients (§8.1)

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "common/clock.h"
+
 namespace luxel::pipeline {
 
 void BakeSeamStitch::Totals::add(const output::SeamDiscontinuity& d) {
@@ -48,7 +50,7 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
     encodings_after_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
   }
   most_iterations_ = std::max(most_iterations_, it);
-  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  seconds_ += seconds_since(t0);
 }
 
 void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
@@ -62,7 +64,7 @@ void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
   most_iterations_ =
       std::max(most_iterations_, stitcher.stitch(denoised.pixels, 4, 0, 3, true));  // >= 0
   denoised_after_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
-  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  seconds_ += seconds_since(t0);
 }
 
 namespace {

@@ -8,6 +8,7 @@
 #include "accel/bvh_builder.h"
 #include "accel/embree_tracer.h"
 #include "accel/triangle_soup.h"
+#include "common/clock.h"
 
 namespace luxel::probes {
 
@@ -249,7 +250,7 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
           "settings.probes: adaptive placement kept no probe (no geometry "
           "within the keep distance of any grid point)");
   }
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds = seconds_since(t0);
   return out;
 }
 

@@ -1,9 +1,21 @@
 // The settings schema's table, second part: sky and sun, directional
 // encodings, ablation switches, reports and outputs, light probes, the
 // daemon's job.
+#include "encode/basis.h"
 #include "settings/schema_table.h"
 
 namespace luxel::pipeline::schema {
+namespace {
+
+// "irradiance" (always baked) and every directional encoding.
+// (kEncodingNames holds string literals: .data() is their C string.)
+std::vector<const char*> encoding_choices() {
+  std::vector<const char*> c = {"irradiance"};
+  for (std::string_view name : encode::kEncodingNames) c.push_back(name.data());
+  return c;
+}
+
+}  // namespace
 
 void add_scene_and_output_settings(std::vector<Setting>& t) {
   // ------------------------------------------------------------ sky and sun
@@ -156,8 +168,7 @@ void add_scene_and_output_settings(std::vector<Setting>& t) {
        .metavar = "LIST",
        .default_value = SettingValue::of_list({}),
        .max = 8,
-       .choices = {"irradiance", "sh1", "sh2", "sg6", "sg9", "sg12", "sg6-hemi", "sg9-hemi",
-                   "sg12-hemi", "ambient-dice9", "ambient-dice12"},
+       .choices = encoding_choices(),
        .get = [](const BakeSettings& s) { return SettingValue::of_list(s.encodings.names); },
        .set =
            [](BakeSettings& s, const SettingValue& v) {

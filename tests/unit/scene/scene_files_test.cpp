@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "common/clock.h"
 #include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
 
@@ -74,7 +75,7 @@ TEST(SharedScenes, CornellBox) {
 TEST(SharedScenes, Sponza) {
   const auto t0 = std::chrono::steady_clock::now();
   LOAD_SHARED(r, "sponza.glb", ImportOptions{});
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double secs = seconds_since(t0);
   std::printf("sponza: imported in %.2f s, %zu textures\n", secs, r->textures.size());
   expect_triangles(*r, 262087, "sponza");
   // 49 images: 24 base colour (sRGB), 14 metallic-roughness and 11 normal
