@@ -18,15 +18,6 @@ namespace luxel::service {
 
 namespace fs = std::filesystem;
 
-Result<std::string> read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return not_found(strprintf("%s: cannot open", path.c_str()));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) return internal_error(strprintf("%s: read failed", path.c_str()));
-  return ss.str();
-}
-
 Status rename_durable(const std::string& from, const std::string& to) {
   if (::rename(from.c_str(), to.c_str()) != 0)
     return internal_error(

@@ -11,8 +11,6 @@
 
 namespace luxel::service {
 
-Result<std::string> read_whole_file(const std::string& path);
-
 // rename(2) then fsync of the destination's directory.
 Status rename_durable(const std::string& from, const std::string& to);
 // Creates `dir` and its parents; INTERNAL naming the path on failure.

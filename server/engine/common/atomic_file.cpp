@@ -6,6 +6,8 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 namespace luxel {
 namespace {
@@ -90,6 +92,15 @@ Status write_file_atomic(const std::string& path, const void* data, size_t bytes
     return st;
   }
   return sync_directory_of(path);
+}
+
+Result<std::string> read_whole_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return not_found(strprintf("%s: cannot open", path.c_str()));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad()) return internal_error(strprintf("%s: read failed", path.c_str()));
+  return ss.str();
 }
 
 }  // namespace luxel

@@ -34,6 +34,10 @@ inline Status write_file_atomic(const std::string& path, std::string_view bytes)
 // Makes renames and creations inside `dir` durable (fsync of the directory).
 Status fsync_directory(const std::string& dir);
 
+// The whole file at `path`, its reading counterpart: NOT_FOUND when it
+// cannot be opened, INTERNAL when the read fails; both name the path.
+Result<std::string> read_whole_file(const std::string& path);
+
 // The temporary name write_file_atomic uses for `path` ("<path>.tmp").
 std::string atomic_temp_path(const std::string& path);
 

@@ -1,9 +1,8 @@
 #include "job/bake_job.h"
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
+#include "common/atomic_file.h"
 #include "probes/gltf_nodes.h"
 #include "probes/placement.h"
 #include "probes/probe_file.h"
@@ -16,14 +15,6 @@ namespace {
 using pipeline::BakeResult;
 using pipeline::Termination;
 
-Result<std::string> read_file(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream bytes;
-  bytes << f.rdbuf();
-  if (!f) return not_found("cannot read " + path);
-  return bytes.str();
-}
-
 // The probe bake's settings from the bake settings: placement, basis and
 // window, with the positions or nodes the placement reads.
 Result<probes::ProbeBakeSettings> probe_settings(const JobInput& in) {
@@ -34,7 +25,7 @@ Result<probes::ProbeBakeSettings> probe_settings(const JobInput& in) {
   ps.placement = spec.value();
   ps.placement.file_contents = s.probe_positions;
   if (ps.placement.mode == probes::PlacementMode::kNodes) {
-    auto file = read_file(in.scene_file);
+    auto file = read_whole_file(in.scene_file);
     if (!file) return file.status();
     auto nodes = probes::probe_nodes_json(file.value());
     if (!nodes) return nodes.status();
