@@ -26,6 +26,10 @@ while [ $# -gt 0 ]; do
   esac
 done
 ./deploy/install-deps.sh
+# Third-party readers of the files Luxel writes (Assimp, Blender's glTF
+# importer through bpy 5.0.1) and the editor the add-on is tested in.
+bpy_python="$(./tests/support/install-test-tools.sh | tail -n 1)"
+cmake_args+=(-DLUXEL_BPY_PYTHON="$bpy_python")
 ./deploy/build.sh "$build_dir" "${cmake_args[@]}"
 cd "$build_dir"
 ctest --output-on-failure --timeout 900 ${ctest_args[@]+"${ctest_args[@]}"} "$@"

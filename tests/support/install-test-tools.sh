@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs the third-party readers the test suite checks Luxel's written files
+# with, and the editor the Blender add-on is tested in. Called by ./test.sh
+# after deploy/install-deps.sh; NOT part of deploy/install-deps.sh, because
+# a deployment never needs them.
+#   - Assimp from Debian (assimp-utils: the `assimp` command; python3-pyassimp
+#     to read every UV set of every mesh).
+#   - Blender 5.0.1 as the `bpy` module from PyPI (the newest for Python
+#     3.11), in a venv kept outside the clone:
+#     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1. Its glTF importer and
+#     exporter (io_scene_gltf2, with the Draco encoder) ship inside the wheel.
+# Idempotent: apt runs only for what is missing, pip only when the venv lacks
+# bpy 5.0.1. Prints the venv's python as its last line.
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+
+PACKAGES=(
+  assimp-utils python3-pyassimp
+  # the venv for bpy: Debian's python3.11 with venv/ensurepip
+  python3 python3-venv
+  # shared libraries bpy 5.0.1's __init__.so links (ldd; X11 client
+  # libraries only, no display is opened in background mode)
+  libx11-6 libxrender1 libxfixes3 libxi6 libxkbcommon0 libxext6 libsm6 libice6 libgl1
+)
+# shellcheck source=deploy/apt-install.sh
+source "$here/../../deploy/apt-install.sh"
+apt_install_missing install-test-tools "${PACKAGES[@]}" >&2
+
+BPY_VERSION=5.0.1
+venv="${LUXEL_TOOLS_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/luxel}/bpy-$BPY_VERSION"
+if ! "$venv/bin/python" -c "import bpy, sys; sys.exit(bpy.app.version_string != '$BPY_VERSION')" \
+    >/dev/null 2>&1; then
+  echo "install-test-tools: installing bpy==$BPY_VERSION into $venv (about 370 MB)" >&2
+  rm -rf "$venv"
+  /usr/bin/python3.11 -m venv "$venv"
+  "$venv/bin/pip" install --quiet --disable-pip-version-check "bpy==$BPY_VERSION" >&2
+  "$venv/bin/python" -c "import bpy; print('install-test-tools: bpy', bpy.app.version_string)" >&2
+fi
+echo "$venv/bin/python"
