@@ -75,6 +75,7 @@ Json to_json(const Manifest& m) {
   j["encoding"] = m.encoding;
   j["units"] = m.units;
   j["uv_set"] = m.uv_set;
+  if (!m.uv_sets.empty()) j["uv_sets"] = m.uv_sets;
   j["atlas_mode"] = m.atlas_mode;
   j["dilation_texels"] = m.dilation_texels;
   j["instances"] = Json::array();
@@ -297,6 +298,15 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.string("encoding", m.encoding, true));
   LUXEL_RETURN_IF_ERROR(f.string("units", m.units, true));
   LUXEL_RETURN_IF_ERROR(f.string("uv_set", m.uv_set, true));
+  if (j.contains("uv_sets")) {
+    const Json* sets = nullptr;
+    LUXEL_RETURN_IF_ERROR(f.object("uv_sets", sets));
+    for (const auto& [name, count] : sets->items()) {
+      if (!count.is_number_unsigned())
+        return f.error("uv_sets." + name, "is not a primitive count");
+      m.uv_sets[name] = count.get<uint64_t>();
+    }
+  }
   LUXEL_RETURN_IF_ERROR(f.string("atlas_mode", m.atlas_mode));
   if (m.atlas_mode != "shared" && m.atlas_mode != "packed" && m.atlas_mode != "generated" &&
       m.atlas_mode != "placed")

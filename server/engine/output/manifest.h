@@ -37,7 +37,12 @@ struct Manifest {
   // What the values are, e.g. "irradiance E in W/m^2 (radiometric; glTF
   // emissive radiance and light intensities taken 1:1)"; not empty.
   std::string units;
-  std::string uv_set = "TEXCOORD_1";  // not empty
+  // The TEXCOORD set that holds the lightmap UVs: of the written
+  // <scene>_lightmapped.glb when Luxel generated them, else of the input.
+  // "TEXCOORD_<n>" when every primitive uses the same set, else "per
+  // primitive (extras.lightmapTexCoord)"; uv_sets counts primitives per set.
+  std::string uv_set = "TEXCOORD_1";        // not empty
+  std::map<std::string, uint64_t> uv_sets;  // "TEXCOORD_<n>" -> primitives; empty: not recorded
   // "shared": every instance uses its TEXCOORD_1 as atlas UV directly (scale
   // 1, offset 0); "packed": Luxel packed per-instance charts, see Instance;
   // "generated": Luxel generated the UVs (uv_layout_json, and the scene

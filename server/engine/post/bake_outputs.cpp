@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <system_error>
 
@@ -59,6 +60,14 @@ std::string series_csv(const BakeResult& r) {
   return s;
 }
 
+// The manifest's uv_set and uv_sets from primitives per TEXCOORD index.
+void set_uv_sets(const std::map<int, size_t>& sets, output::Manifest* m) {
+  m->uv_sets.clear();
+  for (const auto& [set, count] : sets) m->uv_sets["TEXCOORD_" + std::to_string(set)] = count;
+  if (m->uv_sets.size() == 1) m->uv_set = m->uv_sets.begin()->first;
+  if (m->uv_sets.size() > 1) m->uv_set = "per primitive (extras.lightmapTexCoord)";
+}
+
 }  // namespace
 
 output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,
@@ -75,7 +84,11 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.units =
       "irradiance E in W/m^2 on the front side of the surface (radiometric; glTF emissive "
       "radiance and light intensities taken 1:1); outgoing diffuse radiance = albedo * E / pi";
-  m.uv_set = "TEXCOORD_1";
+  std::map<int, size_t> sets;
+  for (const scene::Mesh& mesh : scene.meshes)
+    for (const scene::Mesh::PrimitiveSpan& span : mesh.primitive_spans)
+      ++sets[span.lightmap_texcoord];
+  set_uv_sets(sets, &m);
   m.atlas_mode = atlas::atlas_mode_name(result.atlas.mode);
   for (const auto& stacked : result.atlas.placements) {
     const atlas::InstancePlacement p = atlas::page_relative(result.atlas, stacked);
@@ -292,10 +305,12 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     auto written = write_lightmapped_glb(source_path, scene, result, at(glb.c_str()));
     if (!written) return written.status();
     for (const std::string& w : written.value().warnings) m.import_warnings.push_back(w);
+    set_uv_sets(written.value().texcoord_primitives, &m);
     paths.lightmapped_glb = at(glb.c_str());
     m.files.push_back({"lightmapped_gltf", glb, "glb",
-                       "the scene with the generated lightmap UVs in TEXCOORD_1 and each node's "
-                       "extras.lightmapScaleOffset (and lightmapIndex: its page)",
+                       "the scene with the generated lightmap UVs in " + m.uv_set +
+                           " (each primitive's extras.lightmapTexCoord names the set) and each "
+                           "node's extras.lightmapScaleOffset (and lightmapIndex: its page)",
                        -1});
     paths.files.push_back(glb);
   }

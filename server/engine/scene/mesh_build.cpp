@@ -122,6 +122,21 @@ Status append_tangents(const Material& material, const std::string& ctx,
   return Status::ok();
 }
 
+// The TEXCOORD index of the primitive's lightmap UVs: extras.lightmapTexCoord
+// when it names a set the primitive has, else 1 (Unity's, Godot's and
+// Unreal's default lightmap channel: the second UV set).
+int lightmap_texcoord(const tinygltf::Primitive& prim, const std::string& ctx, Scene* scene) {
+  if (!prim.extras.IsObject() || !prim.extras.Has("lightmapTexCoord")) return 1;
+  const tinygltf::Value& v = prim.extras.Get("lightmapTexCoord");
+  const int set = v.IsInt() ? v.GetNumberAsInt() : -1;
+  if (set >= 0 && prim.attributes.count("TEXCOORD_" + std::to_string(set))) return set;
+  scene->import_stats.warnings.push_back(
+      ctx +
+      ": extras.lightmapTexCoord names no TEXCOORD set of the primitive; TEXCOORD_1 is "
+      "read as its lightmap UVs");
+  return 1;
+}
+
 Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, int mode,
                         const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh) {
   const auto& prim =
@@ -135,7 +150,13 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
                             ": KHR_draco_mesh_compression is not supported; export the scene "
                             "without Draco compression");
   }
-  std::vector<float> pos, nrm, tan, uv0, uv1;
+  // The lightmap UVs: the set the primitive's extras.lightmapTexCoord names
+  // (Luxel's write-back records it there when TEXCOORD_1 was taken,
+  // post/lightmapped_gltf.h), else TEXCOORD_1.
+  const int lightmap_set = lightmap_texcoord(prim, ctx, scene);
+  const std::string lightmap_name =
+      lightmap_set == 1 ? std::string() : "TEXCOORD_" + std::to_string(lightmap_set);
+  std::vector<float> pos, nrm, tan, uv0, uv1, lm;
   // Component types of glTF 2.0 §3.7.2.1 widened by KHR_mesh_quantization
   // (its "Extending Mesh Attributes" table).
   constexpr unsigned kInts = kCompI8 | kCompU8 | kCompI16 | kCompU16;
@@ -146,6 +167,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
       {"TANGENT", TINYGLTF_TYPE_VEC4, kSigned, 0, &tan},
       {"TEXCOORD_0", TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &uv0},
       {"TEXCOORD_1", TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &uv1},
+      {lightmap_name.c_str(), TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &lm},
   };
   size_t vertex_count = 0;
   for (auto& a : attrs) {
@@ -165,13 +187,15 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     }
   }
   if (!attrs[0].present) return invalid_argument(ctx + ": has no POSITION attribute");
-  if (!attrs[4].present && options.require_lightmap_uvs) {
+  const bool has_lightmap = lightmap_set == 1 ? attrs[4].present : attrs[5].present;
+  const std::vector<float>& lightmap_uvs = lightmap_set == 1 ? uv1 : lm;
+  if (!has_lightmap && options.require_lightmap_uvs) {
     return invalid_argument(
         ctx +
         ": TEXCOORD_1 (lightmap UVs) is missing; every primitive needs lightmap UVs "
         "(ImportOptions::require_lightmap_uvs)");
   }
-  if (!attrs[4].present) mesh->has_lightmap_uvs = false;
+  if (!has_lightmap) mesh->has_lightmap_uvs = false;
   const size_t base = mesh->positions.size();
   if (base + vertex_count > std::numeric_limits<uint32_t>::max()) {
     return resource_exhausted(ctx + ": the mesh has more than 2^32 vertices");
@@ -239,11 +263,18 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     for (auto& n : normals) n = normalize(n);
   }
 
+  // Materials keep reading the file's TEXCOORD_1 (Mesh::file_uv1) once a
+  // primitive's lightmap set is another one; the primitives before it had
+  // their lightmap in TEXCOORD_1, so their copy is uv1 as read.
+  const bool keep_file_uv1 = lightmap_set != 1 || !mesh->file_uv1.empty();
+  if (keep_file_uv1 && mesh->file_uv1.empty()) mesh->file_uv1 = mesh->uv1;
   for (size_t i = 0; i < vertex_count; ++i) {
     mesh->positions.push_back(vec3_at(pos, i));
     mesh->normals.push_back(normals[i]);
     mesh->uv0.push_back(attrs[3].present ? Vec2{uv0[2 * i], uv0[2 * i + 1]} : Vec2{});
-    mesh->uv1.push_back(attrs[4].present ? Vec2{uv1[2 * i], uv1[2 * i + 1]} : Vec2{});
+    mesh->uv1.push_back(has_lightmap ? Vec2{lightmap_uvs[2 * i], lightmap_uvs[2 * i + 1]} : Vec2{});
+    if (keep_file_uv1)
+      mesh->file_uv1.push_back(attrs[4].present ? Vec2{uv1[2 * i], uv1[2 * i + 1]} : Vec2{});
   }
   LUXEL_RETURN_IF_ERROR(append_tangents(scene->materials[static_cast<size_t>(material)], ctx,
                                         attrs[2].present ? &tan : nullptr, pos, normals,
@@ -251,6 +282,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
                                         attrs[4].present ? &uv1 : nullptr, kept, scene, mesh));
   Mesh::PrimitiveSpan span;
   span.primitive = prim_index;
+  span.lightmap_texcoord = lightmap_set;
   span.first_vertex = static_cast<uint32_t>(base);
   span.vertex_count = static_cast<uint32_t>(vertex_count);
   span.first_triangle = static_cast<uint32_t>(mesh->triangle_count());

@@ -44,6 +44,8 @@ struct Mesh {
   // so positions may skip).
   struct PrimitiveSpan {
     int primitive = -1;  // index in the glTF mesh's primitives
+    // TEXCOORD index read as lightmap UVs (extras.lightmapTexCoord, else 1)
+    int lightmap_texcoord = 1;
     uint32_t first_vertex = 0, vertex_count = 0;
     uint32_t first_triangle = 0, triangle_count = 0;
   };
@@ -59,8 +61,10 @@ struct Mesh {
   size_t lightmap_uv_overlap_texels = 0;
 
   size_t triangle_count() const { return indices.size() / 3; }
-  // TEXCOORD_1 as in the file when generated lightmap UVs replaced uv1
-  // (uv/generate.h keeps it, seam copies included); empty otherwise.
+  // TEXCOORD_1 as in the file (zeros where a primitive lacks it) when uv1
+  // holds other UVs: generated lightmap UVs (uv/generate.h keeps it, seam
+  // copies included), or a primitive's lightmap set is not TEXCOORD_1
+  // (PrimitiveSpan::lightmap_texcoord); empty otherwise.
   std::vector<Vec2> file_uv1;
   // The UV set a material texture with texCoord `set` reads: TEXCOORD_0 or
   // TEXCOORD_1 exactly as in the file (never generated lightmap UVs).

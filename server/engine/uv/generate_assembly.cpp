@@ -18,7 +18,7 @@ uint32_t copy_vertex(const scene::Mesh& in, uint32_t v, Vec2 uv, scene::Mesh& me
   mesh.normals.push_back(in.normals[v]);
   mesh.uv0.push_back(in.uv0[v]);
   if (!in.tangents.empty()) mesh.tangents.push_back(in.tangents[v]);
-  if (!mesh.file_uv1.empty()) mesh.file_uv1.push_back(in.uv1[v]);
+  mesh.file_uv1.push_back(in.material_uvs(1)[v]);
   mesh.uv1.push_back(uv);
   return copy;
 }
@@ -34,8 +34,9 @@ void assemble_mesh(const scene::Scene& scene, const MeshCharts& mc, uint32_t m, 
   origin.resize(in.positions.size());
   for (uint32_t v = 0; v < origin.size(); ++v) origin[v] = v;
   std::vector<bool> assigned(in.positions.size(), false);
-  // Material textures on texCoord 1 keep reading the file's TEXCOORD_1.
-  if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
+  // Material textures on texCoord 1 keep reading the file's TEXCOORD_1
+  // (zeros where the file has none, as before generation).
+  mesh.file_uv1 = in.material_uvs(1);
   mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
   mesh.has_lightmap_uvs = true;
   std::vector<bool> placed(in.triangle_count(), false);
@@ -146,7 +147,7 @@ void assemble_atlas(const scene::Scene& scene, const std::vector<MeshCharts>& me
       // charts own; material textures keep reading it.
       const scene::Mesh& in = scene.meshes[m];
       scene::Mesh& mesh = out.scene.meshes[m];
-      if (in.has_lightmap_uvs) mesh.file_uv1 = in.uv1;
+      mesh.file_uv1 = in.material_uvs(1);
       mesh.uv1.assign(in.positions.size(), Vec2{0, 0});
       mesh.has_lightmap_uvs = true;
       std::vector<uint32_t>& origin = out.vertex_origin[m];
