@@ -350,10 +350,20 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
   scene.source_name = name;
   // glTF 2.0 §3.12: a file that requires an extension the loader does not
   // implement must not be loaded.
-  for (const std::string& ext : model.extensionsRequired)
+  for (const std::string& ext : model.extensionsRequired) {
+    // KHR_texture_basisu is read only for its fallback: a texture's core
+    // source, which a file that requires the extension does not have to
+    // carry (the extension's "Using Without a Fallback").
+    if (ext == "KHR_texture_basisu")
+      return invalid_argument(
+          "extension KHR_texture_basisu is required by the file (extensionsRequired): its "
+          "KTX2 / Basis Universal images are not decoded, and a file that requires the "
+          "extension need not carry PNG/JPEG fallback sources; export the textures as PNG or "
+          "JPEG, or list the extension in extensionsUsed only, with fallback sources");
     if (!supported_extension(ext))
       return invalid_argument("extension " + ext +
                               " is required by the file (extensionsRequired) and not supported");
+  }
   // Extensions the file uses that the importer does not read, by name
   // (materials and textures name where each one appears).
   for (const std::string& ext : model.extensionsUsed)

@@ -2,10 +2,12 @@
 // stages feed them to the path tracer unchecked.
 #include "scene/materials.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <utility>
 
+#include "scene/spec_gloss.h"
 #include "scene/textures.h"
 
 namespace luxel::scene::detail {
@@ -31,7 +33,69 @@ class TextureTable {
   Result<TextureRef> resolve(int texture_index, int texcoord, const tinygltf::ExtensionMap& ext,
                              ColorSpace space, const std::string& what) {
     TextureRef ref;
-    if (texture_index < 0) return ref;
+    auto image = prepare(texture_index, texcoord, ext, what, &ref);
+    if (!image) return image.status();
+    if (*image < 0) return ref;
+    const auto key = std::make_pair(*image, space);
+    auto it = decoded_.find(key);
+    if (it == decoded_.end()) {
+      auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_);
+      if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
+      it = decoded_.emplace(key, add(std::move(*tex))).first;
+    }
+    ref.texture = it->second;
+    return ref;
+  }
+
+  // A textureInfo's mapping and its decoded image, kept out of the scene:
+  // for inputs that are combined into new textures at import. The texture is
+  // empty (no size) when the textureInfo names no image.
+  Result<std::pair<TextureRef, Texture>> decode_detached(int texture_index, int texcoord,
+                                                         const tinygltf::ExtensionMap& ext,
+                                                         ColorSpace space,
+                                                         const std::string& what) {
+    std::pair<TextureRef, Texture> out;
+    auto image = prepare(texture_index, texcoord, ext, what, &out.first);
+    if (!image) return image.status();
+    if (*image < 0) return out;
+    auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_);
+    if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
+    out.second = std::move(*tex);
+    return out;
+  }
+
+  // Adds a texture made at import (counted against the pixel budget, like a
+  // decoded one) and returns its index in scene->textures.
+  Result<int> add_made(Texture tex, const std::string& what) {
+    const uint64_t pixels = tex.texel_count();
+    if (pixels > pixel_budget_)
+      return resource_exhausted(
+          strprintf("%s: %d x %d converted pixels exceed the import's "
+                    "texture budget",
+                    what.c_str(), tex.width, tex.height));
+    pixel_budget_ -= pixels;
+    return add(std::move(tex));
+  }
+
+ private:
+  int add(Texture tex) {
+    scene_->textures.push_back(std::move(tex));
+    return static_cast<int>(scene_->textures.size() - 1);
+  }
+
+  // "texture 2 'bricks'" / "texture 2" for messages.
+  std::string texture_label(int texture_index) const {
+    const std::string& n = model_.textures[static_cast<size_t>(texture_index)].name;
+    return n.empty() ? strprintf("texture %d", texture_index)
+                     : strprintf("texture %d '%s'", texture_index, n.c_str());
+  }
+
+  // Checks textureInfo (texture, texCoord, sampler, KHR_texture_transform),
+  // fills ref's mapping and returns the glTF image to decode, or -1 when the
+  // material is to use its factors alone.
+  Result<int> prepare(int texture_index, int texcoord, const tinygltf::ExtensionMap& ext,
+                      const std::string& what, TextureRef* ref) {
+    if (texture_index < 0) return -1;
     if (static_cast<size_t>(texture_index) >= model_.textures.size()) {
       return invalid_argument(strprintf("%s: texture %d does not exist (%zu textures)",
                                         what.c_str(), texture_index, model_.textures.size()));
@@ -40,40 +104,42 @@ class TextureTable {
       return invalid_argument(
           strprintf("%s: texCoord %d is not supported (0 or 1)", what.c_str(), texcoord));
     }
-    const int image = model_.textures[static_cast<size_t>(texture_index)].source;
+    const tinygltf::Texture& texture = model_.textures[static_cast<size_t>(texture_index)];
+    const int image = texture.source;
     if (image < 0) {
+      // KHR_texture_basisu ("glTF Schema Updates"): a texture's core
+      // source is the PNG/JPEG fallback for clients without the extension
+      // ("Using Without a Fallback" omits it). Without one only the KTX2 image is left, which is
+      // not decoded here, and leaving out e.g. a base colour map would bake the wrong albedo
+      // without anyone noticing.
+      if (texture.extensions.count("KHR_texture_basisu"))
+        return invalid_argument(
+            strprintf("%s: %s has only a KHR_texture_basisu image (KTX2 / Basis Universal "
+                      "images are not decoded) and its fallback source (a PNG or JPEG image "
+                      "in the texture's 'source') is missing",
+                      what.c_str(), texture_label(texture_index).c_str()));
       // glTF 2.0 §5.29: source is optional (an extension may supply the
       // image); without one the material uses its factors alone.
       warnings().push_back(
           strprintf("%s: texture %d has no source image; the texture is left "
                     "out (factors only)",
                     what.c_str(), texture_index));
-      return ref;
+      return -1;
     }
     if (static_cast<size_t>(image) >= model_.images.size()) {
       return invalid_argument(
           strprintf("%s: texture %d: source image %d does not exist (%zu images)", what.c_str(),
                     texture_index, image, model_.images.size()));
     }
-    ref.texcoord = texcoord;
-    LUXEL_RETURN_IF_ERROR(read_sampler(texture_index, what, &ref));
-    LUXEL_RETURN_IF_ERROR(read_transform(ext, what, &ref));
+    ref->texcoord = texcoord;
+    LUXEL_RETURN_IF_ERROR(read_sampler(texture_index, what, ref));
+    LUXEL_RETURN_IF_ERROR(read_transform(ext, what, ref));
     for (const auto& [name, value] : ext)
       if (name != "KHR_texture_transform")
         warnings().push_back(what + ": texture extension " + name + " is not supported (ignored)");
-    const auto key = std::make_pair(image, space);
-    auto it = decoded_.find(key);
-    if (it == decoded_.end()) {
-      auto tex = decode_texture(model_, image, space, options_, &pixel_budget_);
-      if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
-      scene_->textures.push_back(std::move(*tex));
-      it = decoded_.emplace(key, static_cast<int>(scene_->textures.size() - 1)).first;
-    }
-    ref.texture = it->second;
-    return ref;
+    return image;
   }
 
- private:
   // glTF 2.0 §5.26: wrapS / wrapT are 33071 (CLAMP_TO_EDGE), 33648
   // (MIRRORED_REPEAT) or 10497 (REPEAT, the default). Filters are not read:
   // the bake filters bilinearly (magnification LINEAR) without mipmaps.
@@ -169,6 +235,176 @@ Status check_factor(const std::string& label, const char* field, double v, doubl
         strprintf("%s: %s %g is outside [%g, %g]", label.c_str(), field, v, lo, hi));
   }
   return Status::ok();
+}
+
+// A textureInfo inside an extension object (tinygltf parses only the core
+// ones): index, texCoord and its own extensions (KHR_texture_transform).
+struct ExtTextureInfo {
+  int index = -1;
+  int texcoord = 0;
+  tinygltf::ExtensionMap extensions;
+};
+
+Result<ExtTextureInfo> ext_texture_info(const tinygltf::Value& v, const char* key,
+                                        const std::string& what) {
+  ExtTextureInfo info;
+  if (!v.Has(key)) return info;
+  const tinygltf::Value& t = v.Get(key);
+  if (!t.IsObject() || !t.Has("index") || !t.Get("index").IsInt() || t.Get("index").Get<int>() < 0)
+    return invalid_argument(what + " is not a textureInfo with a texture index");
+  info.index = t.Get("index").Get<int>();
+  if (t.Has("texCoord")) {
+    if (!t.Get("texCoord").IsInt()) return invalid_argument(what + ": texCoord is not an integer");
+    info.texcoord = t.Get("texCoord").Get<int>();
+  }
+  if (t.Has("extensions") && t.Get("extensions").IsObject()) {
+    const tinygltf::Value& e = t.Get("extensions");
+    for (const std::string& name : e.Keys()) info.extensions[name] = e.Get(name);
+  }
+  return info;
+}
+
+// `n` numbers in [0, 1] at v[key] into out; out is left as it is when absent.
+Status ext_factors(const tinygltf::Value& v, const char* key, size_t n, const std::string& label,
+                   float* out) {
+  if (!v.Has(key)) return Status::ok();
+  const tinygltf::Value& a = v.Get(key);
+  if (n == 1) {
+    if (!a.IsNumber())
+      return invalid_argument(strprintf("%s: %s is not a number", label.c_str(), key));
+    LUXEL_RETURN_IF_ERROR(check_factor(label, key, a.GetNumberAsDouble(), 0, 1));
+    out[0] = static_cast<float>(a.GetNumberAsDouble());
+    return Status::ok();
+  }
+  if (!a.IsArray() || a.ArrayLen() != n)
+    return invalid_argument(strprintf("%s: %s must be %zu numbers", label.c_str(), key, n));
+  for (size_t i = 0; i < n; ++i) {
+    if (!a.Get(static_cast<int>(i)).IsNumber())
+      return invalid_argument(strprintf("%s: %s must be %zu numbers", label.c_str(), key, n));
+    const double x = a.Get(static_cast<int>(i)).GetNumberAsDouble();
+    LUXEL_RETURN_IF_ERROR(check_factor(label, key, x, 0, 1));
+    out[i] = static_cast<float>(x);
+  }
+  return Status::ok();
+}
+
+bool same_mapping(const TextureRef& a, const TextureRef& b) {
+  return a.texcoord == b.texcoord && a.wrap_s == b.wrap_s && a.wrap_t == b.wrap_t &&
+         a.has_transform == b.has_transform && a.offset.x == b.offset.x &&
+         a.offset.y == b.offset.y && a.rotation == b.rotation && a.scale.x == b.scale.x &&
+         a.scale.y == b.scale.y;
+}
+
+// KHR_materials_pbrSpecularGlossiness (spec_gloss.h): replaces the core
+// metallic-roughness inputs, which are the file's fallback for viewers
+// without the extension and are not read. The extension's textures are
+// converted per texel into a new base colour and metallic-roughness texture
+// pair when they share one UV mapping; otherwise (different UV sets,
+// samplers or transforms, which no single texture can hold) the factors are
+// converted and diffuseTexture becomes the base colour texture, with a
+// warning that names what was approximated.
+Status convert_spec_gloss(const tinygltf::Value& v, const std::string& label, TextureTable* table,
+                          Material* m) {
+  const std::string what = label + " KHR_materials_pbrSpecularGlossiness";
+  if (!v.IsObject()) return invalid_argument(what + " is not an object");
+  SpecGlossInputs in;
+  float diffuse[4] = {1, 1, 1, 1}, specular[3] = {1, 1, 1}, gloss = 1;
+  LUXEL_RETURN_IF_ERROR(ext_factors(v, "diffuseFactor", 4, what, diffuse));
+  LUXEL_RETURN_IF_ERROR(ext_factors(v, "specularFactor", 3, what, specular));
+  LUXEL_RETURN_IF_ERROR(ext_factors(v, "glossinessFactor", 1, what, &gloss));
+  in.factors.diffuse = {diffuse[0], diffuse[1], diffuse[2], diffuse[3]};
+  in.factors.specular = {specular[0], specular[1], specular[2]};
+  in.factors.glossiness = gloss;
+  // Factors alone: exact, and the textureless case.
+  const MetalRough f = spec_gloss_to_metal_rough(in.factors);
+  m->base_color_factor = f.base_color;
+  m->metallic_factor = f.metallic;
+  m->roughness_factor = f.roughness;
+
+  auto dinfo = ext_texture_info(v, "diffuseTexture", what + " diffuseTexture");
+  if (!dinfo) return dinfo.status();
+  auto sinfo =
+      ext_texture_info(v, "specularGlossinessTexture", what + " specularGlossinessTexture");
+  if (!sinfo) return sinfo.status();
+  // Both textures are sRGB-encoded colour (the extension's diffuseTexture
+  // and specularGlossinessTexture sections); the glossiness in the
+  // specular texture's alpha is linear, as every decoded alpha is.
+  auto d = table->decode_detached(dinfo->index, dinfo->texcoord, dinfo->extensions,
+                                  ColorSpace::kSRGB, what + " diffuseTexture");
+  if (!d) return d.status();
+  auto sg = table->decode_detached(sinfo->index, sinfo->texcoord, sinfo->extensions,
+                                   ColorSpace::kSRGB, what + " specularGlossinessTexture");
+  if (!sg) return sg.status();
+  const bool has_d = d->second.texel_count() > 0, has_sg = sg->second.texel_count() > 0;
+  if (!has_d && !has_sg) return Status::ok();
+  if (has_d && has_sg && !same_mapping(d->first, sg->first)) {
+    table->warnings().push_back(
+        what +
+        ": diffuseTexture and specularGlossinessTexture map UVs differently (texCoord, sampler "
+        "or KHR_texture_transform), so they cannot be converted per texel: metallic and "
+        "roughness come from the factors alone (specularGlossinessTexture is left out) and "
+        "diffuseTexture times the converted factor is the base colour");
+    auto base = table->resolve(dinfo->index, dinfo->texcoord, dinfo->extensions, ColorSpace::kSRGB,
+                               what + " diffuseTexture");
+    if (!base) return base.status();
+    m->base_color_texture = *base;
+    return Status::ok();
+  }
+  in.diffuse = has_d ? &d->second : nullptr;
+  in.specular_glossiness = has_sg ? &sg->second : nullptr;
+  const TextureRef mapping = has_d ? d->first : sg->first;
+  ConvertedTextures out;
+  if (d->second.has_pixels() || sg->second.has_pixels()) {
+    out = convert_spec_gloss_textures(in);
+  } else {  // ImportOptions::decode_textures false: sizes only
+    for (Texture* t : {&out.base_color, &out.metallic_roughness}) {
+      t->width = std::max(d->second.width, sg->second.width);
+      t->height = std::max(d->second.height, sg->second.height);
+      t->format = TexelFormat::kRGBA16F;
+    }
+  }
+  const std::string inputs = has_d && has_sg ? d->second.name + " + " + sg->second.name
+                             : has_d         ? d->second.name
+                                             : sg->second.name;
+  out.base_color.name = inputs + " (specular-glossiness -> base colour)";
+  out.metallic_roughness.name = inputs + " (specular-glossiness -> metallic-roughness)";
+  auto base = table->add_made(std::move(out.base_color), what);
+  if (!base) return base.status();
+  auto mr = table->add_made(std::move(out.metallic_roughness), what);
+  if (!mr) return mr.status();
+  m->base_color_texture = mapping;
+  m->base_color_texture.texture = *base;
+  m->metallic_roughness_texture = mapping;
+  m->metallic_roughness_texture.texture = *mr;
+  // The factors are folded into the texels.
+  m->base_color_factor = {1, 1, 1, 1};
+  m->metallic_factor = 1;
+  m->roughness_factor = 1;
+  return Status::ok();
+}
+
+// See the KHR_materials_unlit comment in convert().
+Result<Material> convert_unlit(const tinygltf::Material& gm, const std::string& label, Material m,
+                               TextureTable* table) {
+  m.metallic_factor = 0.0f;
+  m.roughness_factor = 1.0f;
+  m.ior = 1.5f;
+  m.specular_factor = 0.0f;
+  m.specular_color_factor = {1, 1, 1};
+  m.emissive_factor = {0, 0, 0};
+  m.emissive_strength = 1.0f;
+  auto base = table->resolve(gm.pbrMetallicRoughness.baseColorTexture, ColorSpace::kSRGB,
+                             label + " baseColorTexture");
+  if (!base) return base.status();
+  m.base_color_texture = *base;
+  // The extension's implementation note leaves a second shading model on
+  // the same material undefined; unlit wins and the others are named.
+  for (const auto& [name, value] : gm.extensions)
+    if (name != "KHR_materials_unlit")
+      table->warnings().push_back(label + ": material extension " + name +
+                                  " is ignored (the material is KHR_materials_unlit: base colour "
+                                  "and alpha only)");
+  return m;
 }
 
 Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* table) {
@@ -271,13 +507,39 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
   LUXEL_RETURN_IF_ERROR(check_factor(label, "alphaCutoff", gm.alphaCutoff, 0, 3.0e38));
   m.alpha_cutoff = static_cast<float>(gm.alphaCutoff);
 
-  auto base = table->resolve(pbr.baseColorTexture, ColorSpace::kSRGB, label + " baseColorTexture");
-  if (!base) return base.status();
-  m.base_color_texture = *base;
-  auto mr = table->resolve(pbr.metallicRoughnessTexture, ColorSpace::kLinear,
-                           label + " metallicRoughnessTexture");
-  if (!mr) return mr.status();
-  m.metallic_roughness_texture = *mr;
+  // KHR_materials_unlit ("Extending Materials"): base colour and alpha
+  // only; every other input of the core model is a fallback for viewers
+  // without the extension. An unlit surface still occludes and still gets
+  // its lightmap; for the light that bounces off it the bake reads it as
+  // what its base colour says it reflects: a Lambertian diffuse surface of
+  // albedo base colour, metallic 0, no specular layer (F0 = F90 = 0 through
+  // KHR_materials_specular's specularFactor 0) and no emission.
+  if (gm.extensions.count("KHR_materials_unlit"))
+    return convert_unlit(gm, label, std::move(m), table);
+
+  auto sg_ext = gm.extensions.find("KHR_materials_pbrSpecularGlossiness");
+  if (sg_ext != gm.extensions.end()) {
+    // The conversion assumes the core's dielectric F0 of 0.04 (spec_gloss.h);
+    // the specular colour already says what ior / specular would change.
+    for (const char* other : {"KHR_materials_ior", "KHR_materials_specular"})
+      if (gm.extensions.count(other))
+        table->warnings().push_back(label + ": material extension " + other +
+                                    " is ignored beside KHR_materials_pbrSpecularGlossiness "
+                                    "(its specular colour is the F0)");
+    m.ior = 1.5f;
+    m.specular_factor = 1.0f;
+    m.specular_color_factor = {1, 1, 1};
+    LUXEL_RETURN_IF_ERROR(convert_spec_gloss(sg_ext->second, label, table, &m));
+  } else {
+    auto base =
+        table->resolve(pbr.baseColorTexture, ColorSpace::kSRGB, label + " baseColorTexture");
+    if (!base) return base.status();
+    m.base_color_texture = *base;
+    auto mr = table->resolve(pbr.metallicRoughnessTexture, ColorSpace::kLinear,
+                             label + " metallicRoughnessTexture");
+    if (!mr) return mr.status();
+    m.metallic_roughness_texture = *mr;
+  }
   auto em = table->resolve(gm.emissiveTexture, ColorSpace::kSRGB, label + " emissiveTexture");
   if (!em) return em.status();
   m.emissive_texture = *em;
@@ -310,7 +572,8 @@ Result<Material> convert(const tinygltf::Model& model, int index, TextureTable* 
 bool is_supported_extension(const std::string& name) {
   return name == "KHR_lights_punctual" || name == "KHR_materials_emissive_strength" ||
          name == "KHR_materials_ior" || name == "KHR_texture_transform" ||
-         name == "KHR_materials_specular";
+         name == "KHR_materials_specular" || name == "KHR_materials_unlit" ||
+         name == "KHR_materials_pbrSpecularGlossiness" || name == "KHR_texture_basisu";
 }
 
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {

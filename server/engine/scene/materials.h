@@ -17,9 +17,12 @@ Status convert_materials(const tinygltf::Model& model, const ImportOptions& opti
 
 // Whether the importer reads glTF extension `name` (KHR_lights_punctual,
 // KHR_materials_emissive_strength, KHR_materials_ior, KHR_texture_transform,
-// KHR_materials_specular);
-// the others are named
-// in the import warnings.
+// KHR_materials_specular, KHR_materials_unlit (baked as a Lambertian surface
+// of albedo base colour, see materials.cpp), KHR_materials_pbrSpecularGlossiness
+// (converted to metallic-roughness, spec_gloss.h), KHR_texture_basisu (its
+// PNG/JPEG fallback source is used; a texture without one is an error, and
+// gltf_import.cpp refuses the extension in extensionsRequired)); the others
+// are named in the import warnings.
 bool is_supported_extension(const std::string& name);
 
 }  // namespace luxel::scene::detail
