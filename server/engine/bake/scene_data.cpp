@@ -21,7 +21,14 @@ float int_bits(int32_t i) {
 // irradiance (DESIGN.md: leave out what the scene does not need). Only at the
 // default ior: the coating this leaves out (docs/accuracy.md) is 4 % there,
 // and grows with the ior, so another ior keeps its GGX layer.
+// A dielectric with specularFactor 0 (KHR_materials_specular; how the importer
+// bakes KHR_materials_unlit) has F0 = F90 = 0: no specular layer at any
+// roughness or ior, and its diffuse weight 1 - F is exactly 1, so leaving the
+// layer out changes nothing.
 bool is_rough_dielectric(const scene::Material& m) {
+  if (m.metallic_factor <= 0.0f && m.metallic_roughness_texture.texture < 0 &&
+      m.specular_factor == 0.0f)
+    return true;
   return m.metallic_factor <= 0.0f && m.roughness_factor >= 1.0f &&
          m.metallic_roughness_texture.texture < 0 && m.ior == 1.5f && m.specular_factor == 1.0f &&
          m.specular_color_factor.x == 1.0f && m.specular_color_factor.y == 1.0f &&
