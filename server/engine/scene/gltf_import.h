@@ -3,6 +3,21 @@
 // Validates everything a later stage relies on and fails with an error that
 // names the node / mesh / primitive / accessor at fault. A malformed file never
 // crashes the process (fuzzed by tests/fuzz/import_fuzz.cpp).
+//
+// Materials are glTF 2.0 metallic-roughness; other material models are
+// turned into it here, so the bake has one BRDF (docs/accuracy.md):
+// - KHR_materials_unlit: an unlit surface has no BRDF, but in a lightmap bake
+//   it still occludes and still gets its own texels baked; light that
+//   reaches it bounces as its base colour says. It becomes a Lambertian
+//   diffuse surface of albedo base colour (factor times texture, alpha and
+//   doubleSided as in the file), metallic 0, no specular layer
+//   (specular_factor 0) and no emission; the core's other inputs are the
+//   file's fallback and are not read.
+// - KHR_materials_pbrSpecularGlossiness: converted to metallic-roughness
+//   (scene/spec_gloss.h), textures per texel into new textures.
+// - KHR_texture_basisu: KTX2 images are not decoded; a texture's PNG/JPEG
+//   fallback `source` is used, a texture without one is an error naming it,
+//   and the extension in extensionsRequired is refused.
 #pragma once
 
 #include <cstdint>
