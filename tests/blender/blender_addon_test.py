@@ -1,0 +1,341 @@
+"""The Blender add-on (client/blender/luxel_blender) against a real luxeld on
+loopback, in Blender 5.0.1's bpy module (headless; no mocks).
+
+  <bpy venv>/bin/python tests/blender/blender_addon_test.py \\
+      --luxel build/client/luxel --luxeld build/server/service/luxeld \\
+      --work build/tests/blender/work [--screenshot lit_room.png]
+
+The add-on is installed the way a user installs it (a link in a user
+scripts folder's addons/) and enabled with addon_utils. Blender runs no
+event loop here, so the tests advance a bake the way the add-on's timer
+does: Session.step() every 0.1 s."""
+
+import argparse
+import math
+import os
+import pathlib
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+HERE = pathlib.Path(__file__).resolve().parent
+ADDON_SRC = HERE.parents[1] / "client" / "blender" / "luxel_blender"
+ARGS = None
+
+# The user scripts folder must be set before bpy starts.
+_SCRIPTS = tempfile.mkdtemp(prefix="luxel_bpy_scripts_")
+os.makedirs(os.path.join(_SCRIPTS, "addons"))
+os.symlink(ADDON_SRC, os.path.join(_SCRIPTS, "addons", "luxel_blender"))
+os.environ["BLENDER_USER_SCRIPTS"] = _SCRIPTS
+
+import bpy  # noqa: E402  (after BLENDER_USER_SCRIPTS)
+import addon_utils  # noqa: E402  (importable once bpy has set up its paths)
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(HERE))
+import room_scene  # noqa: E402
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class Daemon:
+    """luxeld on 127.0.0.1:<free port>, ready once `luxel health` says SERVING."""
+
+    def __init__(self, work):
+        self.address = f"127.0.0.1:{free_port()}"
+        self.data = work / "luxeld-data"
+        shutil.rmtree(self.data, ignore_errors=True)
+        self.log_path = work / "luxeld.log"
+        self._log = open(self.log_path, "wb")
+        self.proc = subprocess.Popen([ARGS.luxeld, "--listen", self.address, "--data-dir", str(self.data)],
+                                     stdout=self._log, stderr=subprocess.STDOUT)
+        deadline = time.monotonic() + 60
+        while subprocess.run([ARGS.luxel, "health", "--server", self.address, "--timeout", "1"],
+                             capture_output=True).returncode != 0:
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError("luxeld did not start:\n" + self.log_path.read_text(errors="replace"))
+            time.sleep(0.2)
+
+    def status(self, bake_id):
+        out = subprocess.run([ARGS.luxel, "status", bake_id, "--server", self.address, "--json"],
+                             capture_output=True, text=True, check=True).stdout
+        import json
+        return json.loads(out.splitlines()[0])
+
+    def stop(self):
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGTERM)
+            try:
+                self.proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        self._log.close()
+
+
+def pixels(image):
+    """(height, width, 4) float array, Blender's row order (bottom row first)."""
+    w, h = image.size
+    buf = np.empty(w * h * 4, dtype=np.float32)
+    image.pixels.foreach_get(buf)
+    return buf.reshape(h, w, 4)
+
+
+class BlenderAddonTest(unittest.TestCase):
+    daemon = None
+
+    @classmethod
+    def setUpClass(cls):
+        cls.work = pathlib.Path(ARGS.work).resolve()
+        cls.work.mkdir(parents=True, exist_ok=True)
+        mod = addon_utils.enable("luxel_blender", default_set=True, handle_error=None)
+        assert mod is not None, "the add-on did not enable"
+        import luxel_blender
+        cls.addon = luxel_blender
+        cls.daemon = Daemon(cls.work)
+        prefs = bpy.context.preferences.addons["luxel_blender"].preferences
+        prefs.luxel_path = str(pathlib.Path(ARGS.luxel).resolve())
+        prefs.mode = "SERVER"
+        prefs.server = cls.daemon.address
+        prefs.work_dir = str(cls.work / "bakes")
+
+    @classmethod
+    def tearDownClass(cls):
+        if cls.daemon:
+            cls.daemon.stop()
+
+    def setUp(self):
+        room_scene.build_room()
+        s = bpy.context.scene.luxel
+        s.resolution, s.bounces = 64, 2
+        s.snapshot_interval_s = 0.25
+        # The room is closed: no sky reaches it, and a black one keeps the
+        # bake independent of that claim. Snapshots come between iterations:
+        # small batches make a bake of seconds send several.
+        s.extra_args = "--sky 0,0,0 --paths-per-iteration 16384"
+
+    def run_session(self, on_step=None, timeout=90.0):
+        from luxel_blender import operators, session as sessions
+        session = sessions.Session(operators.config_from_context(bpy.context))
+        session.start(bpy.context)
+        deadline = time.monotonic() + timeout
+        while session.step():  # what the add-on's timer does
+            if on_step:
+                on_step(session)
+            self.assertLess(time.monotonic(), deadline, f"bake still {session.phase}: {session.message}")
+            time.sleep(0.1)
+        return session
+
+    # -------------------------------------------------------------- tests
+
+    def test_1_bake_snapshots_apply_and_compare(self):
+        from luxel_blender import apply as applier
+        bpy.context.scene.luxel.samples = 256
+        seen = []  # image checksums, one per snapshot loaded
+
+        def watch(session):
+            if session.snapshots > len(seen):
+                image = bpy.data.images[applier.LIGHTMAP_IMAGE]
+                seen.append(float(np.nansum(pixels(image)[..., :3])))
+
+        t0 = time.monotonic()
+        session = self.run_session(watch)
+        print(f"bake {session.bake_id}: {session.phase} in {time.monotonic() - t0:.1f} s, "
+              f"{session.snapshots} snapshots loaded, sums {seen}", flush=True)
+        self.assertEqual(session.phase, "DONE", session.error)
+        self.assertGreaterEqual(len(seen), 2, "fewer than two snapshots reached the image")
+        self.assertGreater(len(set(seen)), 1, "the snapshots did not change the image")
+        self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
+
+        image = bpy.data.images[applier.LIGHTMAP_IMAGE]
+        self.assertTrue(image.filepath.endswith("irradiance.exr"))
+        px = pixels(image)[..., :3]
+        self.assertTrue(np.isfinite(px).all())
+        self.assertGreaterEqual(px.min(), 0.0)
+        self.assertGreater(px.max(), 0.0)
+        for name in room_scene.ALBEDO:
+            obj = bpy.data.objects[name]
+            self.assertIn(applier.LIGHTMAP_UV, obj.data.uv_layers, name)
+            self.assertIn("UVMap", obj.data.uv_layers, name)  # the user's own set survives
+            tree = obj.active_material.node_tree
+            uv = tree.nodes["Luxel UV"]
+            self.assertEqual(uv.uv_map, applier.LIGHTMAP_UV)
+            tex = tree.nodes["Luxel Lightmap"]
+            self.assertIs(tex.image, image)
+            self.assertTrue(tex.inputs["Vector"].links[0].from_node == uv)
+            out = next(n for n in tree.nodes if n.type == "OUTPUT_MATERIAL" and n.is_active_output)
+            self.assertEqual(out.inputs["Surface"].links[0].from_node.name, "Luxel Mix")
+        self.compare_emission_bake(session)
+        self.render_screenshot()
+        self.rebake_in_place(px)
+
+    def rebake_in_place(self, first):
+        """A second bake of the lightmapped scene: its LuxelLightmap layer goes
+        out as TEXCOORD_1 and Luxel bakes that layout (no write-back), so the
+        snapshots land in the image the materials already show, in place."""
+        from luxel_blender import apply as applier
+        bpy.context.scene.luxel.samples = 64
+        session = self.run_session()
+        self.assertEqual(session.phase, "DONE", session.error)
+        self.assertFalse(any(f.endswith("_lightmapped.glb") for f in os.listdir(session.results_dir)),
+                         "Luxel generated new UVs instead of baking the applied ones")
+        self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
+        second = pixels(bpy.data.images[applier.LIGHTMAP_IMAGE])[..., :3]
+        # Same layout, same light, fewer samples: the means over the atlas
+        # agree to the noise of a 64-sample bake averaged over ~2700 texels.
+        ratio = second.mean() / first.mean()
+        print(f"re-bake in place: {session.snapshots} snapshots, mean ratio {ratio:.4f}", flush=True)
+        self.assertLess(abs(ratio - 1.0), 0.05)
+
+    def compare_emission_bake(self, session):
+        """Cycles bakes each object's emission (the lightmap x base colour /
+        pi the add-on wired) into an image in lightmap UV space, which must
+        equal Luxel's irradiance x albedo / pi texel for texel. This is what
+        breaks when the UV layer, the atlas scale/offset, the v flip, the
+        image's colour space or the node wiring is wrong.
+
+        Tolerance: 1e-4 relative (float32 rounding; measured at most 5e-6).
+        For that the lightmap is read with Closest interpolation during this
+        bake: Cycles samples each texel at its centre up to the rounding of
+        the interpolated UVs (about 1e-3 texel), which with Linear filtering
+        leaks a neighbour's value, and next to the box's contact shadow that
+        moves a texel by up to 30 %. Closest returns the texel itself for any
+        point inside it. The add-on's materials keep Linear."""
+        from luxel_blender import apply as applier
+        scene = bpy.context.scene
+        scene.render.engine = "CYCLES"
+        scene.cycles.device = "CPU"
+        scene.cycles.samples = 1
+        lightmap = bpy.data.images[applier.LIGHTMAP_IMAGE]
+        irradiance = pixels(lightmap)
+        size = lightmap.size[0]
+        worst = []
+        for name, albedo in room_scene.ALBEDO.items():
+            if name == "Panel":
+                continue  # emissive: its own emission is added, not the lightmap's alone
+            obj = bpy.data.objects[name]
+            target = bpy.data.images.new(f"emit_{name}", size, size, alpha=True, float_buffer=True)
+            target.generated_color = (0, 0, 0, 0)
+            tree = obj.active_material.node_tree
+            tree.nodes["Luxel Lightmap"].interpolation = "Closest"
+            node = tree.nodes.new("ShaderNodeTexImage")
+            node.image = target
+            tree.nodes.active = node
+            bpy.ops.object.select_all(action="DESELECT")
+            obj.select_set(True)
+            bpy.context.view_layer.objects.active = obj
+            bpy.ops.object.bake(type="EMIT", margin=0, use_clear=True, uv_layer=applier.LIGHTMAP_UV)
+            got = pixels(target)
+            tree.nodes.remove(node)
+            tree.nodes["Luxel Lightmap"].interpolation = "Linear"
+            # Texels this object's triangles cover in Blender's bake (the
+            # bake clears to black; the room has no unlit texel) and that
+            # Luxel covered fully (its alpha is coverage): partly covered
+            # texels on chart borders are rasterized differently by the two.
+            mask = (got[..., :3].sum(axis=2) > 0) & (irradiance[..., 3] > 0.999)
+            expected = irradiance[..., :3] * np.float32(albedo) / np.float32(math.pi)
+            diff = np.abs(got[..., :3] - expected)[mask]
+            rel = diff / np.maximum(expected[mask], 1e-3)
+            self.assertGreater(mask.sum(), 20, f"{name}: no texels in common")
+            worst.append((name, int(mask.sum()), float(rel.max())))
+            self.assertLess(rel.max(), 1e-4, f"{name}: emission bake != lightmap x albedo / pi")
+        print("emission bake vs irradiance x albedo / pi (object, texels, max relative difference):",
+              worst, flush=True)
+
+    def render_screenshot(self):
+        """A Cycles render of the room lit only by its lightmap."""
+        scene = bpy.context.scene
+        scene.render.engine = "CYCLES"
+        scene.cycles.samples = 16
+        scene.cycles.use_denoising = False
+        scene.render.resolution_x, scene.render.resolution_y = 480, 360
+        scene.render.resolution_percentage = 100
+        scene.render.image_settings.file_format = "PNG"
+        path = pathlib.Path(ARGS.screenshot or (self.work / "lit_room.png")).resolve()
+        scene.render.filepath = str(path)
+        bpy.ops.render.render(write_still=True)
+        self.assertTrue(path.is_file())
+        shot = bpy.data.images.load(str(path))
+        px = pixels(shot)[..., :3]
+        print(f"screenshot {path}: mean {px.mean():.3f}", flush=True)
+        self.assertGreater(px.mean(), 0.05, "the render is black")
+
+    def test_2_cancel(self):
+        from luxel_blender import session as sessions
+        bpy.context.scene.luxel.samples = 1 << 20  # hours at 64^2 on two cores
+        state = {}
+
+        def cancel_once_running(session):
+            if session.progress.state == "RUNNING" and "t" not in state:
+                state["t"] = time.monotonic()
+                self.assertEqual(bpy.ops.luxel.cancel(), {"FINISHED"})
+
+        session = self.run_session(cancel_once_running, timeout=60)
+        self.assertIn("t", state, "the bake never ran")
+        print(f"cancelled bake {session.bake_id} ended {time.monotonic() - state['t']:.2f} s "
+              f"after the cancel: {session.message}", flush=True)
+        self.assertEqual(session.phase, sessions.CANCELLED, session.message)
+        self.assertEqual(session.final_state, "CANCELLED")
+        info = self.daemon.status(session.bake_id)
+        self.assertEqual(info["state"], "BAKE_STATE_CANCELLED")
+
+    def test_4_local_bake(self):
+        """`luxel bake --local`: progress parsed from its text output, the
+        result applied the same way (no snapshots: the CLI writes none)."""
+        prefs = bpy.context.preferences.addons["luxel_blender"].preferences
+        bpy.context.scene.luxel.samples = 64
+        fractions = []
+        prefs.mode = "LOCAL"
+        try:
+            session = self.run_session(lambda s: fractions.append(s.progress.fraction))
+        finally:
+            prefs.mode = "SERVER"
+        print(f"local bake: {session.phase}, progress seen {sorted(set(fractions))[-3:]}", flush=True)
+        self.assertEqual(session.phase, "DONE", session.error)
+        self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
+        self.assertIn("Luxel Mix", bpy.data.objects["Floor"].active_material.node_tree.nodes)
+
+    def test_3_unreachable_daemon(self):
+        prefs = bpy.context.preferences.addons["luxel_blender"].preferences
+        dead = f"127.0.0.1:{free_port()}"  # nothing listens there
+        saved, prefs.server = prefs.server, dead
+        try:
+            t0 = time.monotonic()
+            with self.assertRaises(RuntimeError) as caught:
+                bpy.ops.luxel.bake(wait=True)
+            elapsed = time.monotonic() - t0
+        finally:
+            prefs.server = saved
+        message = str(caught.exception)
+        print(f"unreachable daemon, after {elapsed:.2f} s: {message.strip()}", flush=True)
+        self.assertIn(dead, message)
+        self.assertIn("cannot reach luxeld", message)
+        self.assertLess(elapsed, 20)
+
+
+def main():
+    global ARGS
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--luxel", required=True)
+    parser.add_argument("--luxeld", required=True)
+    parser.add_argument("--work", required=True)
+    parser.add_argument("--screenshot", default="")
+    ARGS, rest = parser.parse_known_args()
+    try:
+        result = unittest.main(argv=[sys.argv[0], "-v", *rest], exit=False).result
+    finally:
+        shutil.rmtree(_SCRIPTS, ignore_errors=True)
+    sys.exit(0 if result.wasSuccessful() else 1)
+
+
+if __name__ == "__main__":
+    main()
