@@ -176,6 +176,8 @@ class BlenderAddonTest(unittest.TestCase):
             self.assertEqual(out.inputs["Surface"].links[0].from_node.name, "Luxel Mix")
         self.compare_emission_bake(session)
         self.render_screenshot()
+        # Kept for test_5 (the re-bake below replaces the results).
+        shutil.copytree(session.results_dir, self.work / "first_results", dirs_exist_ok=True)
         self.rebake_in_place(px)
 
     def rebake_in_place(self, first):
@@ -303,6 +305,47 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertEqual(session.phase, "DONE", session.error)
         self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
         self.assertIn("Luxel Mix", bpy.data.objects["Floor"].active_material.node_tree.nodes)
+
+    def test_5_lightmap_texcoord_extra(self):
+        """A write-back that keeps the user's sets and puts the lightmap in
+        TEXCOORD_2, named by each primitive's extras.lightmapTexCoord, gives
+        the same LuxelLightmap layer as the same UVs in TEXCOORD_1. Made from
+        test_1's write-back by moving its sets; no daemon."""
+        import json
+        import struct
+        from luxel_blender import apply as applier
+        results = self.work / "first_results"
+        glb = next(results.glob("*_lightmapped.glb"), None)
+        if glb is None:
+            self.skipTest("test_1 left no write-back")
+
+        def layers():
+            return {name: np.array([tuple(d.uv) for d in bpy.data.objects[name].data.uv_layers[
+                applier.LIGHTMAP_UV].data]) for name in room_scene.ALBEDO}
+
+        applier.apply_uvs(str(results), str(glb))
+        expected = layers()
+        data = glb.read_bytes()
+        length = struct.unpack_from("<I", data, 12)[0]
+        doc = json.loads(data[20:20 + length])
+        for mesh in doc["meshes"]:
+            for prim in mesh["primitives"]:
+                attrs = prim["attributes"]
+                attrs["TEXCOORD_2"], attrs["TEXCOORD_1"] = attrs["TEXCOORD_1"], attrs["TEXCOORD_0"]
+                prim.setdefault("extras", {})["lightmapTexCoord"] = 2
+        text = json.dumps(doc).encode()
+        text += b" " * (-len(text) % 4)
+        rest = data[20 + length:]
+        moved = self.work / "moved_lightmapped.glb"
+        moved.write_bytes(struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + len(rest))
+                          + struct.pack("<II", len(text), 0x4E4F534A) + text + rest)
+        objects, _ = applier.apply_uvs(str(results), str(moved))
+        self.assertEqual(len(objects), len(room_scene.ALBEDO))
+        floor = bpy.data.objects["Floor"].data
+        self.assertEqual([l.name for l in floor.uv_layers], ["UVMap", "UVMap.001", applier.LIGHTMAP_UV])
+        got = layers()
+        for name in room_scene.ALBEDO:
+            np.testing.assert_array_equal(got[name], expected[name], err_msg=name)
 
     def test_3_unreachable_daemon(self):
         prefs = bpy.context.preferences.addons["luxel_blender"].preferences
