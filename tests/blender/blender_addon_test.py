@@ -50,14 +50,14 @@ def free_port():
 class Daemon:
     """luxeld on 127.0.0.1:<free port>, ready once `luxel health` says SERVING."""
 
-    def __init__(self, work):
+    def __init__(self, work, name="luxeld", extra=()):
         self.address = f"127.0.0.1:{free_port()}"
-        self.data = work / "luxeld-data"
+        self.data = work / f"{name}-data"
         shutil.rmtree(self.data, ignore_errors=True)
-        self.log_path = work / "luxeld.log"
+        self.log_path = work / f"{name}.log"
         self._log = open(self.log_path, "wb")
-        self.proc = subprocess.Popen([ARGS.luxeld, "--listen", self.address, "--data-dir", str(self.data)],
-                                     stdout=self._log, stderr=subprocess.STDOUT)
+        self.proc = subprocess.Popen([ARGS.luxeld, "--listen", self.address, "--data-dir", str(self.data),
+                                      *extra], stdout=self._log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 60
         while subprocess.run([ARGS.luxel, "health", "--server", self.address, "--timeout", "1"],
                              capture_output=True).returncode != 0:
@@ -112,11 +112,14 @@ class BlenderAddonTest(unittest.TestCase):
     def tearDownClass(cls):
         if cls.daemon:
             cls.daemon.stop()
+        addon_utils.disable("luxel_blender", default_set=True, handle_error=None)
+        assert not hasattr(bpy.types.Scene, "luxel"), "unregister left scene.luxel behind"
 
     def setUp(self):
         room_scene.build_room()
         s = bpy.context.scene.luxel
-        s.resolution, s.bounces = 64, 2
+        s.resolution, s.bounces, s.time_s = 64, 2, 0.0
+        s.selection_only, s.baked_only = False, True
         s.snapshot_interval_s = 0.25
         # The room is closed: no sky reaches it, and a black one keeps the
         # bake independent of that claim. Snapshots come between iterations:
@@ -293,18 +296,90 @@ class BlenderAddonTest(unittest.TestCase):
     def test_4_local_bake(self):
         """`luxel bake --local`: progress parsed from its text output, the
         result applied the same way (no snapshots: the CLI writes none)."""
+        from luxel_blender import session as sessions
         prefs = bpy.context.preferences.addons["luxel_blender"].preferences
         bpy.context.scene.luxel.samples = 64
         fractions = []
         prefs.mode = "LOCAL"
         try:
             session = self.run_session(lambda s: fractions.append(s.progress.fraction))
+            print(f"local bake: {session.phase}, progress seen {sorted(set(fractions))[-3:]}", flush=True)
+            self.assertEqual(session.phase, "DONE", session.error)
+            self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
+            self.assertIn("Luxel Mix", bpy.data.objects["Floor"].active_material.node_tree.nodes)
+
+            # Cancel: stopping the process is the cancel of an in-process bake.
+            bpy.context.scene.luxel.samples = 1 << 20
+            state = {}
+
+            def cancel_once_running(session):
+                if session.progress.state == "RUNNING" and "t" not in state:
+                    state["t"] = time.monotonic()
+                    session.cancel()
+
+            session = self.run_session(cancel_once_running, timeout=60)
         finally:
             prefs.mode = "SERVER"
-        print(f"local bake: {session.phase}, progress seen {sorted(set(fractions))[-3:]}", flush=True)
+        self.assertIn("t", state, "the local bake never reported progress")
+        self.assertEqual(session.phase, sessions.CANCELLED, session.message)
+
+    def test_6_selection_and_shared_material(self):
+        """Selected objects only: the others keep their meshes and materials;
+        a material shared with an object outside the bake is copied for the
+        baked one. Restore gives the original mesh back."""
+        from luxel_blender import apply as applier
+        box, panel, front = (bpy.data.objects[n] for n in ("Box", "Panel", "WallFront"))
+        front.data.materials[0] = box.active_material  # shared with an object left out
+        bpy.ops.object.select_all(action="DESELECT")
+        box.select_set(True)
+        panel.select_set(True)
+        s = bpy.context.scene.luxel
+        s.selection_only, s.samples = True, 32
+        bpy.ops.object.select_all(action="DESELECT")
+        with self.assertRaisesRegex(RuntimeError, "no mesh object is selected"):
+            bpy.ops.luxel.bake(wait=True)
+        box.select_set(True)
+        panel.select_set(True)
+        session = self.run_session()
         self.assertEqual(session.phase, "DONE", session.error)
-        self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
-        self.assertIn("Luxel Mix", bpy.data.objects["Floor"].active_material.node_tree.nodes)
+        self.assertEqual(sorted(session.applied), ["Box", "Panel"])
+        self.assertEqual(box.active_material.name, "Box (Luxel)")
+        self.assertIn("Luxel Mix", box.active_material.node_tree.nodes)
+        self.assertEqual(front.active_material.name, "Box")
+        self.assertNotIn("Luxel Mix", front.active_material.node_tree.nodes)
+        self.assertNotIn(applier.LIGHTMAP_UV, bpy.data.objects["Floor"].data.uv_layers)
+        bpy.ops.object.select_all(action="DESELECT")
+        box.select_set(True)
+        self.assertEqual(bpy.ops.luxel.restore_meshes(), {"FINISHED"})
+        self.assertEqual(box.data.name, "Box")
+        self.assertNotIn(applier.ORIGINAL_MESH_PROP, box)
+        self.assertNotIn(applier.LIGHTMAP_UV, box.data.uv_layers)
+
+    def test_7_token_file(self):
+        """A daemon with a bearer token: the token file in the preferences
+        reaches luxel (in its environment); a wrong one fails naming the
+        daemon and UNAUTHENTICATED."""
+        token = self.work / "token"
+        token.write_text("s3cret-blender-token\n")
+        daemon = Daemon(self.work, "luxeld-token", ["--token-file", str(token)])
+        prefs = bpy.context.preferences.addons["luxel_blender"].preferences
+        saved = prefs.server, prefs.token_file
+        bpy.context.scene.luxel.samples = 16
+        try:
+            prefs.server, prefs.token_file = daemon.address, str(token)
+            session = self.run_session()
+            self.assertEqual(session.phase, "DONE", f"{session.message} / {session.error}")
+            wrong = self.work / "wrong_token"
+            wrong.write_text("not-the-token\n")
+            prefs.token_file = str(wrong)
+            session = self.run_session()
+            print(f"wrong token: {session.error}", flush=True)
+            self.assertEqual(session.phase, "FAILED")
+            self.assertIn(daemon.address, session.error)
+            self.assertIn("UNAUTHENTICATED", session.error)
+        finally:
+            prefs.server, prefs.token_file = saved
+            daemon.stop()
 
     def test_5_lightmap_texcoord_extra(self):
         """A write-back that keeps the user's sets and puts the lightmap in

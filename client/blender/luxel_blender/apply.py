@@ -358,6 +358,7 @@ def apply_results(results_dir, lightmapped_glb, exported_glb, baked_only=True):
         objects, warnings = apply_uvs(results_dir, lightmapped_glb)
     else:
         objects, warnings = use_existing_uvs(results_dir, exported_glb)
+    _own_materials(objects)
     done = set()
     for obj in objects:
         for slot in obj.material_slots:
@@ -366,3 +367,37 @@ def apply_results(results_dir, lightmapped_glb, exported_glb, baked_only=True):
                 wire_material(mat, image, baked_only)
                 done.add(mat.name)
     return objects, warnings
+
+
+def _own_materials(objects):
+    """Baked objects get their own copy ("<name> (Luxel)") of any material
+    that objects outside the bake also use: those have no LuxelLightmap
+    layer, and the wired material would show them black."""
+    baked = {o.name for o in objects}
+    outside = {slot.material.name for o in bpy.data.objects if o.name not in baked
+               for slot in getattr(o, "material_slots", []) if slot.material is not None}
+    copies = {}
+    for obj in objects:
+        for i, mat in enumerate(obj.data.materials):
+            if mat is None or mat.name not in outside:
+                continue
+            if mat.name not in copies:
+                name = mat.name + " (Luxel)"
+                copies[mat.name] = bpy.data.materials.get(name) or mat.copy()
+                copies[mat.name].name = name
+            obj.data.materials[i] = copies[mat.name]
+
+
+def restore_original(obj):
+    """Gives an object back the mesh it had before its first bake."""
+    original = bpy.data.meshes.get(obj.get(ORIGINAL_MESH_PROP, ""))
+    if original is None:
+        return False
+    baked = obj.data
+    obj.data = original
+    del obj[ORIGINAL_MESH_PROP]
+    if not any(o.get(ORIGINAL_MESH_PROP) == original.name for o in bpy.data.objects):
+        original.use_fake_user = False
+    if baked.users == 0:
+        bpy.data.meshes.remove(baked)
+    return True

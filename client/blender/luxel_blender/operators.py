@@ -184,4 +184,16 @@ class LUXEL_OT_apply(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
 
-classes = (LUXEL_OT_bake, LUXEL_OT_cancel, LUXEL_OT_apply)
+class LUXEL_OT_restore(bpy.types.Operator):
+    """Give the selected objects back the meshes they had before their first
+    Luxel bake (the materials keep their Luxel nodes; set "Luxel Mix" to 0)"""
+    bl_idname = "luxel.restore_meshes"
+    bl_label = "Restore Original Meshes"
+
+    def execute(self, context):
+        n = sum(applier.restore_original(o) for o in context.selected_objects)
+        self.report({"INFO"}, f"Luxel: {n} objects restored")
+        return {"FINISHED"}
+
+
+classes = (LUXEL_OT_bake, LUXEL_OT_cancel, LUXEL_OT_apply, LUXEL_OT_restore)

@@ -117,6 +117,8 @@ class Session:
         if not luxel or not os.path.isfile(luxel) or not os.access(luxel, os.X_OK):
             raise RuntimeError(f"the luxel binary '{self.config.luxel_path}' is not an executable "
                                "file (set it in the add-on's preferences)")
+        if self.config.selection_only and not any(o.type == "MESH" for o in context.selected_objects):
+            raise RuntimeError("\"Selected objects only\" is on and no mesh object is selected")
         self._luxel = luxel
         self._env = cli.token_env(self.config.token_file) if self.config.use_server else None
         for d in (self.results_dir, self.snapshots_dir):

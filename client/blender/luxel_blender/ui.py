@@ -29,7 +29,9 @@ class LUXEL_PT_bake(bpy.types.Panel):
         else:
             layout.label(text=running.status_text())
             layout.operator("luxel.cancel", icon="CANCEL")
-        layout.operator("luxel.apply_results", icon="IMPORT")
+        row = layout.row()
+        row.operator("luxel.apply_results", icon="IMPORT")
+        row.operator("luxel.restore_meshes", icon="LOOP_BACK")
 
 
 def draw_status(self, context):
