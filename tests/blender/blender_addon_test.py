@@ -422,6 +422,33 @@ class BlenderAddonTest(unittest.TestCase):
         for name in room_scene.ALBEDO:
             np.testing.assert_array_equal(got[name], expected[name], err_msg=name)
 
+    def test_8_installs_as_extension(self):
+        """The zipped folder installs from disk as a Blender extension (its
+        blender_manifest.toml) and registers, with preferences under the
+        extension's module name. A fresh Blender: user resources in a
+        temporary folder, so nothing of the user's is touched."""
+        import zipfile
+        archive = self.work / "luxel_blender.zip"
+        with zipfile.ZipFile(archive, "w") as z:
+            for f in sorted(ADDON_SRC.rglob("*")):
+                if f.is_file() and "__pycache__" not in f.parts:
+                    z.write(f, pathlib.Path("luxel_blender") / f.relative_to(ADDON_SRC))
+        script = (
+            "import bpy\n"
+            f"r = bpy.ops.extensions.package_install_files(filepath={str(archive)!r}, "
+            "repo='user_default', enable_on_install=True)\n"
+            "mods = [a.module for a in bpy.context.preferences.addons if a.module.endswith('luxel_blender')]\n"
+            "prefs = bpy.context.preferences.addons[mods[0]].preferences\n"
+            "print('EXT', r, mods, prefs.server, hasattr(bpy.types.Scene, 'luxel'))\n")
+        with tempfile.TemporaryDirectory() as home:
+            env = dict(os.environ, BLENDER_USER_RESOURCES=home)
+            env.pop("BLENDER_USER_SCRIPTS", None)
+            out = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                                 text=True, timeout=120)
+        line = next((l for l in out.stdout.splitlines() if l.startswith("EXT")), out.stdout + out.stderr)
+        print(line, flush=True)
+        self.assertIn("{'FINISHED'} ['bl_ext.user_default.luxel_blender'] 127.0.0.1:50051 True", line)
+
     def test_3_unreachable_daemon(self):
         prefs = bpy.context.preferences.addons["luxel_blender"].preferences
         dead = f"127.0.0.1:{free_port()}"  # nothing listens there

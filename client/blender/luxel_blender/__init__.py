@@ -16,7 +16,7 @@ bl_info = {
 import bpy
 from bpy.props import PointerProperty
 
-from . import operators, preferences, properties, ui
+from . import operators, preferences, properties, session, ui
 
 _classes = (preferences.LuxelPreferences, properties.LuxelSceneSettings,
             *operators.classes, *ui.classes)
@@ -30,6 +30,9 @@ def register():
 
 
 def unregister():
+    running = session.active()
+    if running is not None:
+        running.cancel()  # nobody would apply it once the add-on is gone
     bpy.types.STATUSBAR_HT_header.remove(ui.draw_status)
     del bpy.types.Scene.luxel
     for cls in reversed(_classes):

@@ -3,6 +3,7 @@ apply. A state machine advanced by step(), which a modal operator or a
 bpy.app.timers callback calls a few times a second on the main thread; the
 `luxel` process does the waiting, so Blender never blocks on the network."""
 
+import atexit
 import dataclasses
 import os
 import re
@@ -27,6 +28,17 @@ _active = None  # the running session (one at a time), for the cancel operator a
 
 def active():
     return _active if _active is not None and _active.phase not in FINAL else None
+
+
+@atexit.register
+def _stop_processes():
+    """Blender quitting mid-bake: no `luxel` outlives it. An in-process bake
+    stops; a bake on luxeld goes on there (only its watcher stops) and can
+    be fetched with `luxel fetch`."""
+    if _active is not None:
+        for proc in (_active._process, _active._cancel_process):
+            if proc is not None:
+                proc.terminate()
 
 
 @dataclasses.dataclass
