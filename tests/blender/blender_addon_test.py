@@ -158,6 +158,7 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertGreaterEqual(len(seen), 2, "fewer than two snapshots reached the image")
         self.assertGreater(len(set(seen)), 1, "the snapshots did not change the image")
         self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
+        self.assertEqual(os.listdir(session.snapshots_dir), [], "snapshot files left behind")
 
         image = bpy.data.images[applier.LIGHTMAP_IMAGE]
         self.assertTrue(image.filepath.endswith("irradiance.exr"))

@@ -83,6 +83,14 @@ def format_eta(seconds):
 _LOCAL_PROGRESS = re.compile(r"\]\s*([\d.]+)%\s+spp ([\d.]+).*?error ([\d.eE+-]+).*?ETA (\S+)")
 
 
+def _remove(path):
+    if path:
+        try:
+            os.remove(path)
+        except OSError:
+            pass
+
+
 def _parse_duration(text):
     if text == "--":
         return -1.0
@@ -111,6 +119,7 @@ class Session:
         self._uploaded = False
         self._started = time.monotonic()
         self._pending_snapshot = None
+        self._shown_snapshot = None
         root = bpy.path.abspath(config.work_dir) if config.work_dir else ""
         self.dir = os.path.join(root, bpy.path.clean_name(config.scene_name))
         self.scene_file = os.path.join(self.dir, bpy.path.clean_name(config.scene_name) + ".glb")
@@ -218,7 +227,8 @@ class Session:
             self._take_line(line)
         if self._pending_snapshot:
             applier.lightmap_image(self._pending_snapshot)
-            self._pending_snapshot = None
+            _remove(self._shown_snapshot)
+            self._shown_snapshot, self._pending_snapshot = self._pending_snapshot, None
             self.snapshots += 1
         if self._cancel_process is None and self._cancel_requested and self.bake_id:
             self._send_cancel()
@@ -254,6 +264,10 @@ class Session:
             info = line.get("info") or line.get("bake") or {}
             self._take_info(info)
             if line.get("snapshot_file"):
+                # Only the newest is shown; the others are deleted, as every
+                # shown one is once the next replaces it: a bake of an hour
+                # at one float snapshot a second would fill gigabytes.
+                _remove(self._pending_snapshot)
                 self._pending_snapshot = line["snapshot_file"]
         elif kind == "artifact":
             self.message = f"downloaded {line.get('name')}"
@@ -288,6 +302,7 @@ class Session:
         objects, self.warnings = applier.apply_results(self.results_dir, glb, self.scene_file,
                                                        self.config.baked_only)
         self.applied = [o.name for o in objects]
+        _remove(self._shown_snapshot)  # the image now reads irradiance.exr
         self._finish(DONE, f"lightmap applied to {len(objects)} objects")
 
     # ------------------------------------------------------------ cancel
