@@ -144,8 +144,11 @@ class BlenderAddonTest(unittest.TestCase):
         from luxel_blender import apply as applier
         bpy.context.scene.luxel.samples = 256
         seen = []  # image checksums, one per snapshot loaded
+        status = []  # the status bar's text while the bake runs
 
         def watch(session):
+            if session.progress.state == "RUNNING":
+                status.append(session.status_text())
             if session.snapshots > len(seen):
                 image = bpy.data.images[applier.LIGHTMAP_IMAGE]
                 seen.append(float(np.nansum(pixels(image)[..., :3])))
@@ -157,6 +160,9 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertEqual(session.phase, "DONE", session.error)
         self.assertGreaterEqual(len(seen), 2, "fewer than two snapshots reached the image")
         self.assertGreater(len(set(seen)), 1, "the snapshots did not change the image")
+        self.assertTrue(status, "no progress while the bake ran")
+        print(f"status bar: {status[-1]!r}", flush=True)
+        self.assertRegex(status[-1], r"Luxel: +[\d.]+%  spp [\d.]+  error [\d.]+  ETA \S+")
         self.assertEqual(sorted(session.applied), sorted(room_scene.ALBEDO))
         self.assertEqual(os.listdir(session.snapshots_dir), [], "snapshot files left behind")
 
