@@ -473,6 +473,25 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertIn("cannot reach luxeld", message)
         self.assertLess(elapsed, 20)
 
+        # A port that accepts connections and never answers (a hung host, a
+        # wrong service): the health check's deadline ends it, no hang.
+        with socket.socket() as silent:
+            silent.bind(("127.0.0.1", 0))
+            silent.listen(8)
+            address = f"127.0.0.1:{silent.getsockname()[1]}"
+            prefs.server = address
+            try:
+                t0 = time.monotonic()
+                with self.assertRaises(RuntimeError) as caught:
+                    bpy.ops.luxel.bake(wait=True)
+                elapsed = time.monotonic() - t0
+            finally:
+                prefs.server = saved
+        message = str(caught.exception)
+        print(f"silent daemon, after {elapsed:.2f} s: {message.strip()}", flush=True)
+        self.assertIn(address, message)
+        self.assertLess(elapsed, 20)
+
 
 def main():
     global ARGS
