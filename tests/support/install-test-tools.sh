@@ -3,8 +3,10 @@
 # with, and the editor the Blender add-on is tested in. Called by ./test.sh
 # after deploy/install-deps.sh; NOT part of deploy/install-deps.sh, because
 # a deployment never needs them.
-#   - Assimp from Debian (assimp-utils: the `assimp` command; python3-pyassimp
-#     to read every UV set of every mesh).
+#   - Assimp from Debian (assimp-utils: the `assimp` command; libassimp-dev
+#     for tests/roundtrip/assimp_dump.cpp, which reads every UV set of every
+#     mesh: pyassimp 5.2 crashes on load, and `assimp export -fassjson`
+#     asserts on glTF extras).
 #   - Blender 5.0.1 as the `bpy` module from PyPI (the newest for Python
 #     3.11), in a venv kept outside the clone:
 #     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1. Its glTF importer and
@@ -15,7 +17,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 
 PACKAGES=(
-  assimp-utils python3-pyassimp
+  assimp-utils libassimp-dev
   # the venv for bpy: Debian's python3.11 with venv/ensurepip
   python3 python3-venv
   # shared libraries bpy 5.0.1's __init__.so links (ldd; X11 client
