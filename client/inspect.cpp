@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -148,6 +149,26 @@ int report_uvs(const scene::Scene& scene, pipeline::BakeSettings settings) {
   return u.overlapping_texels == 0 ? 0 : 1;
 }
 
+// Which TEXCOORD set holds each primitive's lightmap UVs (TEXCOORD_1, or
+// the one extras.lightmapTexCoord names, as Luxel's write-back records it).
+std::string describe_lightmap_sets(const scene::Scene& scene) {
+  std::map<int, size_t> sets;
+  size_t missing = 0;
+  for (const scene::Mesh& mesh : scene.meshes)
+    for (const scene::Mesh::PrimitiveSpan& span : mesh.primitive_spans)
+      span.has_lightmap_uvs ? ++sets[span.lightmap_texcoord] : ++missing;
+  std::string out;
+  for (const auto& [set, count] : sets)
+    out += strprintf("%sTEXCOORD_%d on %zu primitive%s", out.empty() ? "" : ", ", set, count,
+                     count == 1 ? "" : "s");
+  if (sets.size() > 1 || (sets.size() == 1 && sets.begin()->first != 1))
+    out += " (extras.lightmapTexCoord)";
+  if (missing > 0)
+    out += strprintf("%s%zu primitive%s without lightmap UVs (--uv auto generates them)",
+                     out.empty() ? "" : "; ", missing, missing == 1 ? "" : "s");
+  return out;
+}
+
 }  // namespace
 
 int run_devices(const std::vector<std::string>&) {
@@ -173,6 +194,7 @@ int run_inspect(const std::vector<std::string>& argv) {
   std::printf("scene      %s (imported in %.0f ms)\n", args.scene.c_str(), import_ms);
   std::printf("%s", scene::format_stats(stats).c_str());
   for (const auto& w : scene->import_stats.warnings) std::printf("warning    %s\n", w.c_str());
+  std::printf("lightmap set %s\n", describe_lightmap_sets(scene.value()).c_str());
   if (stats.world_triangles == 0) {
     // Nothing to bake (no meshes, or only points and lines); tracing an empty
     // scene would measure nothing either.

@@ -161,6 +161,19 @@ class RoundTrip(unittest.TestCase):
                 if index is not None:
                     lightmap_by_mesh.setdefault(mesh.get("name", ""), set()).add(index)
 
+        # `luxel inspect` and the manifest say which set holds the lightmap.
+        counts = collections.Counter(i for i in lightmap_by_prim if i is not None)
+        inspect = subprocess.run([ARGS.luxel, "inspect", written, "--no-trace"],
+                                 capture_output=True, text=True)
+        line = next((l for l in inspect.stdout.splitlines() if l.startswith("lightmap set ")), "")
+        for index, count in counts.items():
+            if f"TEXCOORD_{index} on {count} primitive" not in line:
+                problems.append(f"luxel inspect: '{line}' does not say TEXCOORD_{index} on {count}")
+        with open(os.path.join(out, "manifest.json")) as f:
+            manifest_sets = json.load(f).get("uv_sets", {})
+        if manifest_sets != {f"TEXCOORD_{i}": c for i, c in counts.items()}:
+            problems.append(f"manifest uv_sets {manifest_sets}, file {dict(counts)}")
+
         # Blender.
         src_meshes, src_mats = blender_import(source)
         out_meshes, out_mats = blender_import(written)

@@ -283,6 +283,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   Mesh::PrimitiveSpan span;
   span.primitive = prim_index;
   span.lightmap_texcoord = lightmap_set;
+  span.has_lightmap_uvs = has_lightmap;
   span.first_vertex = static_cast<uint32_t>(base);
   span.vertex_count = static_cast<uint32_t>(vertex_count);
   span.first_triangle = static_cast<uint32_t>(mesh->triangle_count());

@@ -46,6 +46,7 @@ struct Mesh {
     int primitive = -1;  // index in the glTF mesh's primitives
     // TEXCOORD index read as lightmap UVs (extras.lightmapTexCoord, else 1)
     int lightmap_texcoord = 1;
+    bool has_lightmap_uvs = true;  // the primitive has that set
     uint32_t first_vertex = 0, vertex_count = 0;
     uint32_t first_triangle = 0, triangle_count = 0;
   };
