@@ -16,10 +16,30 @@ constexpr int kOverlapCheckResolution = 1024;
 // How far outside [0,1] a shared-mode UV may lie (float noise of exporters).
 constexpr double kUvRangeTolerance = 1e-5;
 
+// The largest page a texel density may give.
+int page_limit(const AtlasSettings& s) {
+  return std::min(s.max_resolution, s.resolution_limit);
+}
+
+// The file's TEXCOORD_1 lies on one page (a shared atlas cannot be cut, and
+// the shelf packer fills one square), so a density that needs more is
+// lowered to fit the page, as Unity scales down charts past its largest
+// lightmap, and said.
+std::string density_lowered(double asked, double achieved, int side) {
+  return strprintf(
+      "texel density lowered from %g to %.3g texels per unit to fit the file's TEXCOORD_1 on one "
+      "%dx%d lightmap (--max-resolution); raise --max-resolution, or bake with --uv generate "
+      "for several pages",
+      asked, achieved, side, side);
+}
+
 Status check_settings(const AtlasSettings& s) {
   if (s.max_resolution < 1)
     return invalid_argument(
         strprintf("AtlasSettings.max_resolution is %d; it must be >= 1", s.max_resolution));
+  if (s.resolution_limit < 1)
+    return invalid_argument(
+        strprintf("AtlasSettings.resolution_limit is %d; it must be >= 1", s.resolution_limit));
   if (s.padding_texels < 0)
     return invalid_argument(
         strprintf("AtlasSettings.padding_texels is %d; it must be >= 0", s.padding_texels));
@@ -27,9 +47,9 @@ Status check_settings(const AtlasSettings& s) {
     return invalid_argument(strprintf(
         "AtlasSettings.resolution is %d; it must be >= 1 (or 0 to derive it from texel_density)",
         s.resolution));
-  if (s.resolution > s.max_resolution)
-    return resource_exhausted(strprintf("AtlasSettings.resolution %d exceeds max_resolution %d",
-                                        s.resolution, s.max_resolution));
+  if (s.resolution > s.resolution_limit)
+    return resource_exhausted(strprintf("resolution %d exceeds the largest lightmap side, %d",
+                                        s.resolution, s.resolution_limit));
   if (s.resolution == 0 && !(std::isfinite(s.texel_density) && s.texel_density > 0))
     return invalid_argument(
         strprintf("AtlasSettings.texel_density is %g with resolution 0; set a resolution >= 1 or a "
@@ -69,17 +89,17 @@ Result<Atlas> build_shared(const scene::Scene& scene, const std::vector<Instance
   Atlas atlas;
   atlas.mode = AtlasMode::kShared;
   int side = settings.resolution;
+  bool lowered = false;
   if (side == 0) {
     const double d = settings.texel_density;
     const double needed = std::ceil(std::sqrt(world_area * d * d / uv_area));
-    if (!(needed <= settings.max_resolution))
-      return resource_exhausted(
-          strprintf("texel_density %g needs a %.0fx%.0f lightmap atlas; max_resolution is %d", d,
-                    needed, needed, settings.max_resolution));
-    side = std::max(1, static_cast<int>(needed));
+    lowered = !(needed <= page_limit(settings));
+    side = lowered ? page_limit(settings) : std::max(1, static_cast<int>(needed));
   }
   atlas.width = atlas.height = side;
   atlas.texels_per_unit = world_area > 0 ? std::sqrt(uv_area / world_area) * side : 0;
+  if (lowered)
+    atlas.warnings.push_back(density_lowered(settings.texel_density, atlas.texels_per_unit, side));
   for (size_t i = 0; i < charts.size(); ++i) {
     InstancePlacement p;
     p.instance = static_cast<uint32_t>(i);
@@ -102,10 +122,18 @@ Result<Atlas> build_packed(const std::vector<InstanceChart>& charts,
   auto packed = settings.resolution > 0
                     ? pack_at_resolution(extents, settings.resolution, settings.padding_texels)
                     : pack_at_density(extents, settings.texel_density, settings.padding_texels,
-                                      settings.max_resolution);
+                                      page_limit(settings));
+  Atlas atlas;
+  if (!packed && packed.status().code() == StatusCode::kResourceExhausted &&
+      settings.resolution == 0) {
+    // Past the page: the largest density that fits it.
+    packed = pack_at_resolution(extents, page_limit(settings), settings.padding_texels);
+    if (packed)
+      atlas.warnings.push_back(
+          density_lowered(settings.texel_density, packed.value().density, packed.value().side));
+  }
   if (!packed) return packed.status();
   const PackedLayout& layout = packed.value();
-  Atlas atlas;
   atlas.mode = AtlasMode::kPacked;
   atlas.width = atlas.height = layout.side;
   atlas.texels_per_unit = layout.density;
@@ -189,18 +217,18 @@ Result<Atlas> build_placed(const scene::Scene& scene, const std::vector<Instance
   int side = settings.resolution;
   // Several pages: each is the resolution given, or max_resolution (the page
   // size of generated layouts).
-  if (side == 0 && atlas.pages > 1) side = settings.max_resolution;
+  if (side == 0 && atlas.pages > 1) side = page_limit(settings);
+  bool lowered = false;
   if (side == 0) {
     const double d = settings.texel_density;
     const double needed = std::ceil(std::sqrt(world_area * d * d / atlas_uv_area));
-    if (!(needed <= settings.max_resolution))
-      return resource_exhausted(
-          strprintf("texel_density %g needs a %.0fx%.0f lightmap atlas; max_resolution is %d", d,
-                    needed, needed, settings.max_resolution));
-    side = std::max(1, static_cast<int>(needed));
+    lowered = !(needed <= page_limit(settings));
+    side = lowered ? page_limit(settings) : std::max(1, static_cast<int>(needed));
   }
   atlas.width = atlas.height = side;
   atlas.texels_per_unit = world_area > 0 ? std::sqrt(atlas_uv_area / world_area) * side : 0;
+  if (lowered)
+    atlas.warnings.push_back(density_lowered(settings.texel_density, atlas.texels_per_unit, side));
   atlas.height = side * atlas.pages;  // pages stacked from the top
   for (size_t i = 0; i < charts.size(); ++i) {
     const float* so = scene.instances[i].lightmap_scale_offset;
@@ -261,7 +289,9 @@ const char* atlas_mode_name(AtlasMode mode) {
 Result<Atlas> build_atlas(const scene::Scene& scene, const AtlasSettings& settings) {
   LUXEL_RETURN_IF_ERROR(check_settings(settings));
   if (scene.instances.empty())
-    return invalid_argument("scene has no geometry: it has no mesh instances to bake");
+    return invalid_argument(
+        "scene has no geometry: no mesh instance with triangles to bake (only triangles "
+        "are lightmapped, not points or lines)");
   std::vector<int> uses(scene.meshes.size(), 0);
   for (const auto& inst : scene.instances) {
     if (inst.mesh < 0 || static_cast<size_t>(inst.mesh) >= scene.meshes.size())

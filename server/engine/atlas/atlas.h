@@ -33,6 +33,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "common/math.h"
@@ -41,11 +42,30 @@
 
 namespace luxel::atlas {
 
+// The lightmap size a bake gets when it names none (settings schema:
+// texel_density and max_resolution). 40 texels per world unit (metre, in
+// glTF) is Unity's default lightmap resolution (LightingSettings.
+// lightmapResolution) and 1024 its default largest lightmap
+// (LightingSettings.lightmapMaxSize): a 1 m wall gets 40x40 texels, about
+// 2.5 cm each, fine enough for contact shadows at room scale, while a large
+// scene is held to 1024^2 texels a page (4x the fixed 512^2 of earlier
+// releases) and its bake time stays bounded unless asked otherwise.
+inline constexpr float kDefaultTexelDensity = 40;
+inline constexpr int kDefaultMaxResolution = 1024;
+// The largest side the engine lays out (luxeld lowers it: --max-resolution).
+inline constexpr int kResolutionLimit = 8192;
+
 struct AtlasSettings {
-  int resolution = 0;         // square side in texels; 0: derive from texel_density
-  float texel_density = 0;    // texels per world unit, used when resolution == 0
-  int padding_texels = 2;     // packed mode: between rectangles and from the border
-  int max_resolution = 8192;  // larger atlases are RESOURCE_EXHAUSTED
+  int resolution = 0;       // square side in texels (per page); 0: derive from texel_density
+  float texel_density = 0;  // texels per world unit, used when resolution == 0
+  int padding_texels = 2;   // packed mode: between rectangles and from the border
+  // Largest page side a texel density may give: past it generated UVs go on
+  // more pages and the file's TEXCOORD_1 gets a lower density (with a
+  // warning, Atlas::warnings). An explicit resolution is not bound by it.
+  int max_resolution = kResolutionLimit;
+  // Largest side of any page, explicit resolutions too: larger is
+  // RESOURCE_EXHAUSTED (the engine's limit, or the daemon's --max-resolution).
+  int resolution_limit = kResolutionLimit;
 };
 
 enum class AtlasMode { kShared, kPacked, kGenerated, kPlaced };
@@ -70,6 +90,10 @@ struct Atlas {
   // one image and the outputs cut it into pages (post/bake_outputs.h).
   int pages = 1;
   int page_height() const { return height / pages; }
+  // What the layout changed from what was asked, for the CLI, the daemon's
+  // status and the manifest ("texel density lowered from 40 to 12.5 texels
+  // per unit to fit the 1024x1024 page (--max-resolution)").
+  std::vector<std::string> warnings;
 
   Vec2 to_atlas(uint32_t instance, Vec2 uv1) const {
     const InstancePlacement& p = placements[instance];
@@ -93,11 +117,13 @@ inline InstancePlacement page_relative(const Atlas& atlas, InstancePlacement p) 
 // (texel_density is ignored); packed mode then uses the largest density that
 // fits. With resolution == 0 the side follows from texel_density: in shared
 // mode ceil(sqrt(world area * density^2 / UV area)), in packed mode the
-// smallest multiple of 4 that holds the charts.
+// smallest multiple of 4 that holds the charts; past max_resolution the
+// side is max_resolution and the density lower (the file's UVs are one
+// atlas, so they cannot be paged), with a warning.
 // Errors: INVALID_ARGUMENT naming the setting or the mesh (missing, non-finite
 // or all zero-area TEXCOORD_1; UVs outside [0,1] in shared mode), "scene has
-// no geometry" without instances; RESOURCE_EXHAUSTED naming max_resolution
-// and the size needed.
+// no geometry" without instances; RESOURCE_EXHAUSTED naming the limit
+// (resolution_limit) and the size asked.
 Result<Atlas> build_atlas(const scene::Scene& scene, const AtlasSettings& settings);
 
 }  // namespace luxel::atlas

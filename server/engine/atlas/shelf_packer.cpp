@@ -89,7 +89,7 @@ Result<PackedLayout> pack_at_resolution(const std::vector<ChartExtent>& charts, 
   if (!fits(charts, 0.0, side, padding))
     return resource_exhausted(strprintf(
         "%zu lightmap charts (one per instance) do not fit in a %dx%d atlas with %d texels of "
-        "padding even at one texel each; raise the resolution or lower padding_texels",
+        "padding even at one texel each; raise --resolution, or bake with --uv generate",
         charts.size(), side, side, padding));
   // Upper bound: at hi the rectangles' total area alone exceeds side^2.
   double area_per_density2 = 0;

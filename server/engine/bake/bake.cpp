@@ -277,7 +277,9 @@ Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
   auto layout = lay_out_lightmap(scene, settings);
   if (!layout) return layout.status();
   const double layout_s = seconds_since(t0);
-  if (hooks.on_layout) hooks.on_layout(describe_lightmap_layout(layout.value()));
+  if (hooks.on_layout)
+    hooks.on_layout(describe_lightmap_layout(layout.value()) +
+                    describe_layout_warnings(layout.value().atlas));
   Baker baker(layout.value(), settings, ctx);
   auto result = baker.run(hooks);
   if (!result) return result;

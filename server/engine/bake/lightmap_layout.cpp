@@ -94,8 +94,9 @@ Result<std::unique_ptr<scene::Scene>> apply_placements(const scene::Scene& scene
 
 std::string describe_lightmap_layout(const LightmapLayout& layout) {
   const atlas::Atlas& at = layout.atlas;
-  const std::string size = strprintf("%dx%d%s", at.width, at.page_height(),
-                                     at.pages > 1 ? strprintf(", %d pages", at.pages).c_str() : "");
+  const std::string size =
+      strprintf("%dx%d%s, %.3g texels per unit", at.width, at.page_height(),
+                at.pages > 1 ? strprintf(", %d pages", at.pages).c_str() : "", at.texels_per_unit);
   if (!layout.generated)
     return strprintf("TEXCOORD_1 of the file, %s atlas, %s", atlas::atlas_mode_name(at.mode),
                      size.c_str());
@@ -106,6 +107,12 @@ std::string describe_lightmap_layout(const LightmapLayout& layout) {
       layout.generated->reason.c_str(), u.charts, u.meshes, u.total_seconds, u.chart_seconds,
       u.pack_seconds, size.c_str(), 100 * u.efficiency, u.stretch_l2, u.stretch_linf,
       u.overlapping_texels);
+}
+
+std::string describe_layout_warnings(const atlas::Atlas& atlas) {
+  std::string text;
+  for (const std::string& w : atlas.warnings) text += "; warning: " + w;
+  return text;
 }
 
 Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings) {

@@ -43,12 +43,17 @@ struct LightmapLayout {
 
 Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings);
 
-// One line saying where the UVs came from and, when generated, how long that
-// took and the layout's quality ("generated (mesh 'x' has no TEXCOORD_1):
-// 12 charts on 3 meshes in 0.41 s (charts 0.20 s, packing 0.18 s),
-// 2048x2048, 2 pages, packing 78.1 %, stretch L2 1.002 Linf 1.10, 0
+// One line saying where the UVs came from, the size and the texel density
+// the layout reached and, when generated, how long that took and the
+// layout's quality ("generated (mesh 'x' has no TEXCOORD_1): 12 charts on 3
+// meshes in 0.41 s (charts 0.20 s, packing 0.18 s), 1024x1024, 2 pages, 40
+// texels per unit, packing 78.1 %, stretch L2 1.002 Linf 1.10, 0
 // overlapping texels"); shown by the CLI and the daemon before the first
-// path.
+// path, followed by describe_layout_warnings().
 std::string describe_lightmap_layout(const LightmapLayout& layout);
+
+// "; warning: W" for each of the layout's warnings (atlas::Atlas::warnings),
+// "" without any.
+std::string describe_layout_warnings(const atlas::Atlas& atlas);
 
 }  // namespace luxel::pipeline

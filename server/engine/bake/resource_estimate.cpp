@@ -126,7 +126,7 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
   // area scaled to d), so area x d^2 is a lower bound in every UV mode.
   const auto& as = settings.atlas;
   const int pages = pages_allowed(scene, settings);
-  const double side = std::max(1, as.max_resolution);
+  const double side = std::max(1, std::min(as.max_resolution, as.resolution_limit));
   e.max_texels = static_cast<uint64_t>(side * side * pages);
   if (as.resolution > 0) {
     e.min_texels = uint64_t(as.resolution) * uint64_t(as.resolution);
@@ -136,15 +136,10 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
     if (!(std::isfinite(d) && d > 0))
       return invalid_argument(
           strprintf("settings.texel_density: %g; give a finite density > 0 or a resolution", d));
-    const double needed = e.surface_area * d * d;
-    if (needed > static_cast<double>(e.max_texels))
-      return resource_exhausted(strprintf(
-          "settings.texel_density: %g texels per unit over the scene's %.4g square units of "
-          "surface needs at least %.4g texels; max_resolution %d allows %llu (%d page(s) of "
-          "%dx%d); lower the density",
-          d, e.surface_area, needed, as.max_resolution,
-          static_cast<unsigned long long>(e.max_texels), pages, as.max_resolution,
-          as.max_resolution));
+    // Past what --max-resolution (and pages) allow, the layout lowers the
+    // density to fit (atlas.h, uv/generate.h), so the lightmap is at most
+    // that large.
+    const double needed = std::min(e.surface_area * d * d, static_cast<double>(e.max_texels));
     e.min_texels = static_cast<uint64_t>(needed);
     // Covered texels: the charts' texels, less what rasterisation at chart
     // edges may leave out (half, to stay a lower bound).

@@ -95,8 +95,9 @@ struct ResourceEstimate {
 };
 
 // The estimate; RESOURCE_EXHAUSTED (naming the setting and the figure) when
-// the lightmap cannot be as large as texel_density asks, or the batch does
-// not fit the device; INVALID_ARGUMENT for settings that are invalid.
+// the batch does not fit the device; INVALID_ARGUMENT for settings that are
+// invalid. A texel_density past what --max-resolution allows is no error:
+// the layout lowers it (atlas.h), so the estimate counts at most max_texels.
 Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
                                                  const BakeSettings& settings,
                                                  const DeviceLimits& device);

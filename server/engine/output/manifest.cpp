@@ -80,6 +80,7 @@ Json to_json(const Manifest& m) {
   j["dilation_texels"] = m.dilation_texels;
   j["instances"] = Json::array();
   if (m.pages > 1) j["pages"] = m.pages;
+  if (m.texels_per_unit > 0) j["texels_per_unit"] = m.texels_per_unit;
   for (const auto& in : m.instances) j["instances"].push_back(instance_to_json(in, m.pages));
   j["files"] = Json::array();
   for (const auto& f : m.files) {
@@ -295,6 +296,9 @@ Status read_manifest_json(const Json& j, const std::string& what, Manifest& m) {
   LUXEL_RETURN_IF_ERROR(f.integer("height", m.height, 1));
   m.pages = 1;
   if (j.contains("pages")) LUXEL_RETURN_IF_ERROR(f.integer("pages", m.pages, 1));
+  m.texels_per_unit = 0;
+  if (j.contains("texels_per_unit"))
+    LUXEL_RETURN_IF_ERROR(f.real("texels_per_unit", m.texels_per_unit));
   LUXEL_RETURN_IF_ERROR(f.string("encoding", m.encoding, true));
   LUXEL_RETURN_IF_ERROR(f.string("units", m.units, true));
   LUXEL_RETURN_IF_ERROR(f.string("uv_set", m.uv_set, true));

@@ -78,12 +78,18 @@ struct Manifest {
   // its own images, "<name>_<page>.<ext>" (files[].page says which); 1 (absent
   // in JSON): one lightmap with plain names.
   int pages = 1;
+  // Mean texels per world unit the layout reached (the texel_density asked,
+  // or lower where the layout had to fit --max-resolution or --resolution);
+  // 0 (absent in JSON): not recorded.
+  double texels_per_unit = 0;
 
   std::map<std::string, std::string> settings;  // bake settings as given
   std::string features;                         // compiled feature list
   std::string device;                           // device description
   // What the importer dropped or could not apply (scene::ImportStats), by
-  // name: unsupported extensions, normal maps, samplers. Empty: none.
+  // name: unsupported extensions, normal maps, samplers; then what the
+  // lightmap layout changed from the settings ("lightmap layout: texel
+  // density lowered ..."). Empty: none.
   std::vector<std::string> import_warnings;
   std::string intersector;  // backend of the ray queries ("embree", "opencl"; empty: not recorded)
   // Directional encodings: one JSON object each (basis, directions,

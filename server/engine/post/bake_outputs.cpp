@@ -78,6 +78,7 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.scene_name = scene.source_name;
   m.scene_sha256 = scene_sha256;
   m.pages = result.atlas.pages;
+  m.texels_per_unit = result.atlas.texels_per_unit;
   m.width = result.width;
   m.height = result.height / std::max(1, result.atlas.pages);
   m.encoding = "irradiance";
@@ -110,6 +111,8 @@ output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& se
   m.device = result.device;
   m.intersector = result.intersector;
   m.import_warnings = scene.import_stats.warnings;
+  for (const std::string& w : result.atlas.warnings)
+    m.import_warnings.push_back("lightmap layout: " + w);
   m.stats.seconds = result.seconds;
   m.stats.paths = result.paths;
   m.stats.mean_spp = result.mean_spp;

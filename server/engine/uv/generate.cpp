@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <string>
 
 #include "atlas/chart_geometry.h"
 #include "common/clock.h"
@@ -36,6 +37,13 @@ double world_area(const scene::Mesh& mesh, const Mat4& m, const std::vector<uint
     area += 0.5 * std::sqrt(x * x + y * y + z * z);
   }
   return area;
+}
+
+// Points and lines have no area to hold texels (glTF modes 0-3).
+Status no_triangles() {
+  return invalid_argument(
+      "the scene has no triangle that can be laid out: only triangles are lightmapped, not "
+      "points or lines");
 }
 
 PackShape chart_shape(const Chart& chart, double scale, bool allow_rotation) {
@@ -97,7 +105,7 @@ Status build_shapes(const std::vector<MeshCharts>& meshes, double density, const
       a.sources.push_back({m, 0, static_cast<int32_t>(mc.instances[k])});
     }
   }
-  if (shapes.empty()) return invalid_argument("scene has no triangle that can be laid out");
+  if (shapes.empty()) return no_triangles();
   return Status::ok();
 }
 
@@ -220,10 +228,10 @@ Result<PackAttempt> pack_pages(const std::vector<MeshCharts>& meshes, double den
   fixed.width = fixed.height = side;
   for (size_t p = 0; p < pages.size(); ++p) {
     if (static_cast<int>(p) >= max_pages)
-      return resource_exhausted(strprintf(
-          "the lightmap needs more than %d pages of %dx%d at texel_density %g; lower the density "
-          "or raise max_resolution",
-          max_pages, side, side, density));
+      return resource_exhausted(
+          strprintf("the lightmap needs more than %d pages of %dx%d at %g texels per unit; lower "
+                    "--texel-density or raise --max-resolution",
+                    max_pages, side, side, density));
     while (true) {
       std::vector<PackShape> page_shapes;
       std::vector<size_t> index;
@@ -244,8 +252,8 @@ Result<PackAttempt> pack_pages(const std::vector<MeshCharts>& meshes, double den
       if (packed.status().code() != StatusCode::kResourceExhausted) return packed.status();
       if (pages[p].size() == 1)
         return resource_exhausted(strprintf(
-            "instance %u alone does not fit one %dx%d lightmap page at texel_density %g; lower "
-            "the density or raise max_resolution",
+            "instance %u alone does not fit one %dx%d lightmap page at %g texels per unit; lower "
+            "--texel-density or raise --max-resolution (or --resolution)",
             pages[p][0], side, side, density));
       // The smallest instance of the page moves on to the next page.
       if (p + 1 == pages.size()) pages.emplace_back();
@@ -302,12 +310,13 @@ double longest_shape_extent(const std::vector<MeshCharts>& meshes) {
   return longest;
 }
 
-// The largest density whose packing fits `side` (within about 3 %).
+// The largest density whose packing fits `side` (within about 3 %); when
+// none does, several pages of side x side.
 Result<std::pair<double, PackAttempt>> fit_resolution(const std::vector<MeshCharts>& meshes,
                                                       int side, const PackOptions& base,
-                                                      int* attempts) {
+                                                      int max_pages, int* attempts) {
   const double area = total_world_area(meshes);
-  if (!(area > 0)) return invalid_argument("scene has no triangle that can be laid out");
+  if (!(area > 0)) return no_triangles();
   // First guess: the packer's automatic square at a density that fills the
   // side at 70 % efficiency, then scaled by how far off it came out.
   // No shape may be longer than the side: long slivers bound the density
@@ -338,10 +347,50 @@ Result<std::pair<double, PackAttempt>> fit_resolution(const std::vector<MeshChar
     if (a.status().code() != StatusCode::kResourceExhausted) return a.status();
     density *= 0.97;
   }
+  // Every chart keeps at least one texel and its padding, so on a small
+  // side many charts fit at no density: they go on several pages of the
+  // side asked (whole instances per page, as past max_resolution), at the
+  // density reached, halved while an instance alone is too large.
+  PackOptions paged = base;
+  paged.max_resolution = side;
+  Result<PackAttempt> pages = resource_exhausted("no pages");
+  for (int i = 0; i < 6 && max_pages > 1; ++i) {
+    ++*attempts;
+    pages = pack_pages(meshes, density, paged, max_pages);
+    if (pages) return std::make_pair(density, std::move(pages.value()));
+    if (pages.status().code() != StatusCode::kResourceExhausted) return pages.status();
+    density *= 0.5;
+  }
   return resource_exhausted(
-      strprintf("the charts do not fit a %dx%d lightmap at any density tried (down to %g texels "
-                "per unit); raise the resolution or lower padding",
-                side, side, density));
+      strprintf("the charts do not fit %d page(s) of %dx%d at any density tried (down to %g "
+                "texels per unit); raise --resolution",
+                std::max(1, max_pages), side, side, density));
+}
+
+// Past the most pages, the density that fits them: first scaled by the
+// texels asked over the pages' capacity at the packer's usual 70 %
+// efficiency, then lowered in steps. The warning says by how much.
+Result<PackAttempt> pack_pages_lowering(const std::vector<MeshCharts>& meshes, double& density,
+                                        const PackOptions& pack, int max_pages, int* attempts,
+                                        std::vector<std::string>& warnings) {
+  const double asked = density;
+  const double side = pack.max_resolution;
+  const double capacity = 0.7 * side * side * max_pages;
+  const double needed = total_world_area(meshes) * density * density;
+  if (needed > capacity) density *= std::sqrt(capacity / needed);
+  Result<PackAttempt> a = resource_exhausted("no pages");
+  for (int i = 0; i < 8; ++i) {
+    ++*attempts;
+    a = pack_pages(meshes, density, pack, max_pages);
+    if (a || a.status().code() != StatusCode::kResourceExhausted) break;
+    density *= 0.85;
+  }
+  if (a && density < asked)
+    warnings.push_back(strprintf(
+        "texel density lowered from %g to %.3g texels per unit to fit the most pages, %d, of "
+        "%dx%d (--max-resolution); raise --max-resolution for more texels",
+        asked, density, max_pages, pack.max_resolution, pack.max_resolution));
+  return a;
 }
 
 // 1. Charts of every instanced mesh, and their world scales.
@@ -404,25 +453,35 @@ Result<std::vector<MeshCharts>> chart_meshes(const scene::Scene& scene,
 // resolution, or the requested density (on several pages when one
 // max_resolution square is too small).
 Result<PackAttempt> pack_meshes(const std::vector<MeshCharts>& meshes,
-                                const GenerateOptions& options, double& density, UvReport& report) {
+                                const GenerateOptions& options, double& density, UvReport& report,
+                                std::vector<std::string>& warnings) {
   const atlas::AtlasSettings& as = options.atlas;
   PackOptions pack;
   pack.padding_texels = as.padding_texels;
-  pack.max_resolution = as.max_resolution;
+  // A density's pages are at most max_resolution; a resolution asked is the
+  // page itself, and the instanced meshes' own layouts may grow to the limit.
+  pack.max_resolution = as.resolution > 0 ? std::max(as.resolution_limit, as.resolution)
+                                          : std::min(as.max_resolution, as.resolution_limit);
   density = as.texel_density;
   PackAttempt attempt;
   if (as.resolution > 0) {
-    auto fitted = fit_resolution(meshes, as.resolution, pack, &report.pack_attempts);
+    auto fitted =
+        fit_resolution(meshes, as.resolution, pack, options.max_pages, &report.pack_attempts);
     if (!fitted) return fitted.status();
     density = fitted.value().first;
     attempt = std::move(fitted.value().second);
+    if (attempt.pages > 1)
+      warnings.push_back(strprintf(
+          "the charts do not fit one %dx%d lightmap at any density: baked on %d pages of %dx%d "
+          "at %.3g texels per unit; raise --resolution for fewer pages",
+          as.resolution, as.resolution, attempt.pages, as.resolution, as.resolution, density));
   } else {
     ++report.pack_attempts;
     auto a = pack_at(meshes, density, pack);
     if (!a && a.status().code() == StatusCode::kResourceExhausted && options.max_pages > 1) {
       // Too large for one max_resolution square: several pages.
-      ++report.pack_attempts;
-      a = pack_pages(meshes, density, pack, options.max_pages);
+      a = pack_pages_lowering(meshes, density, pack, options.max_pages, &report.pack_attempts,
+                              warnings);
     }
     if (!a) return a.status();
     attempt = std::move(a.value());
@@ -454,7 +513,9 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
   const SteadyClock::time_point t0 = SteadyClock::now();
   const atlas::AtlasSettings& as = options.atlas;
   if (scene.instances.empty())
-    return invalid_argument("scene has no geometry: it has no mesh instances to bake");
+    return invalid_argument(
+        "scene has no geometry: no mesh instance with triangles to bake (only triangles "
+        "are lightmapped, not points or lines)");
   if (as.resolution == 0 && !(std::isfinite(as.texel_density) && as.texel_density > 0))
     return invalid_argument(strprintf(
         "texel_density is %g with resolution 0; set a resolution >= 1 or a finite texel_density "
@@ -468,13 +529,15 @@ Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
   report.chart_seconds = seconds_since(t_charts);
   const SteadyClock::time_point t_pack = SteadyClock::now();
   double density = 0;
-  auto attempt = pack_meshes(meshes.value(), options, density, report);
+  std::vector<std::string> warnings;
+  auto attempt = pack_meshes(meshes.value(), options, density, report, warnings);
   if (!attempt) return attempt.status();
   report.pack_seconds = seconds_since(t_pack);
   // 3. Assembly: new vertices on seams, TEXCOORD_1, placements
   // (generate_assembly.cpp).
   assemble_atlas(scene, meshes.value(), attempt.value(), density, out);
-  if (report.meshes == 0) return invalid_argument("scene has no triangle that can be laid out");
+  if (report.meshes == 0) return no_triangles();
+  out.atlas.warnings = std::move(warnings);
   measure_stretch(scene, meshes.value(), report);
   measure_layout(out.scene, out.atlas, &report);
   report.total_seconds = seconds_since(t0);

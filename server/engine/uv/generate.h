@@ -13,9 +13,12 @@
 //     placed per instance, scaled to the instance's world size, by scale and
 //     offset (atlas_uv = uv1 * scale + offset, as AtlasMode::kPacked).
 //   - With AtlasSettings::resolution the density is the largest (within 3 %)
-//     whose packing fits; with texel_density the atlas is the smallest square
-//     that holds the charts, or, past max_resolution, several pages of
-//     max_resolution squared, each holding whole instances (lightmap arrays).
+//     whose packing fits; when none does (every chart keeps a texel and its
+//     padding), several pages of that size. With texel_density the atlas is
+//     the smallest square that holds the charts, or, past max_resolution,
+//     several pages of max_resolution squared, each holding whole instances
+//     (lightmap arrays); past max_pages, at a lower density. Either fallback
+//     leaves a warning in GeneratedUvs::atlas.warnings.
 // Deterministic: the same scene and settings give the same bits.
 #pragma once
 
@@ -32,9 +35,10 @@ namespace luxel::uv {
 struct GenerateOptions {
   atlas::AtlasSettings atlas;  // resolution or texel_density, padding, max_resolution
   ChartOptions charts;
-  // With texel_density, a layout larger than max_resolution squared goes on
-  // up to this many pages of max_resolution x max_resolution (lightmap
-  // arrays); 1: RESOURCE_EXHAUSTED instead.
+  // A layout larger than one page goes on up to this many pages (lightmap
+  // arrays) of max_resolution squared (texel_density) or of the resolution
+  // asked (when the charts fit it at no density); 1: RESOURCE_EXHAUSTED
+  // instead.
   int max_pages = 64;
 };
 
@@ -72,8 +76,9 @@ struct GeneratedUvs {
 };
 
 // Errors: INVALID_ARGUMENT for bad settings or a scene without instances or
-// without any triangle that can be laid out; RESOURCE_EXHAUSTED naming
-// max_resolution when the density needs a larger atlas.
+// without any triangle that can be laid out (points and lines only);
+// RESOURCE_EXHAUSTED naming the option to change when an instance does not
+// fit one page at any density tried.
 Result<GeneratedUvs> generate_lightmap_uvs(const scene::Scene& scene,
                                            const GenerateOptions& options);
 

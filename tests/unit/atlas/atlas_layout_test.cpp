@@ -192,7 +192,7 @@ TEST(AtlasErrors, SettingsAreNamed) {
   expect_error(build_atlas(b.scene, at_resolution(64, -1)), StatusCode::kInvalidArgument,
                "padding_texels");
   AtlasSettings big = at_resolution(10000);
-  expect_error(build_atlas(b.scene, big), StatusCode::kResourceExhausted, "max_resolution");
+  expect_error(build_atlas(b.scene, big), StatusCode::kResourceExhausted, "largest lightmap side");
 }
 
 TEST(AtlasErrors, SceneWithoutInstances) {
@@ -228,15 +228,50 @@ TEST(AtlasErrors, UvsOutsideTheUnitSquareInSharedMode) {
   EXPECT_EQ(expect_atlas(b.scene, at_resolution(64)).mode, AtlasMode::kPacked);
 }
 
-TEST(AtlasErrors, DensityAboveTheLimitNamesBothSizes) {
+// A density past the page is lowered to fit it, as Unity scales charts down
+// past its largest lightmap, with a warning naming both densities and the
+// option to raise.
+TEST(AtlasLayout, DensityAboveThePageIsLoweredWithAWarning) {
   SceneBuilder b;
   b.instance(add_quad(b, 0, 0, 1, 1), scale_translate(100, 100, 1));
-  // 100 x 100 world units at 200 texels per unit need a 20000^2 atlas.
-  expect_error(build_atlas(b.scene, at_density(200)), StatusCode::kResourceExhausted, "20000");
-  expect_error(build_atlas(b.scene, at_density(200)), StatusCode::kResourceExhausted, "8192");
+  // 100 x 100 world units at 200 texels per unit would need a 20000^2 atlas.
+  const Atlas shared = expect_atlas(b.scene, at_density(200));
+  EXPECT_EQ(shared.width, 8192);
+  EXPECT_NEAR(shared.texels_per_unit, 81.92, 1e-3);
+  ASSERT_EQ(shared.warnings.size(), 1u);
+  EXPECT_NE(shared.warnings[0].find("lowered from 200 to 81.9"), std::string::npos)
+      << shared.warnings[0];
+  EXPECT_NE(shared.warnings[0].find("--max-resolution"), std::string::npos);
   SceneBuilder p = instanced_quads();
-  expect_error(build_atlas(p.scene, at_density(5000, 4096)), StatusCode::kResourceExhausted,
-               "4096");
+  const Atlas packed = expect_atlas(p.scene, at_density(5000, 4096));
+  EXPECT_EQ(packed.mode, AtlasMode::kPacked);
+  EXPECT_EQ(packed.width, 4096);
+  EXPECT_LT(packed.texels_per_unit, 5000);
+  expect_uniform_density(p.scene, packed);
+  ASSERT_EQ(packed.warnings.size(), 1u);
+  EXPECT_NE(packed.warnings[0].find("lowered from 5000"), std::string::npos);
+  // Within the page: the density asked, no warning.
+  EXPECT_TRUE(expect_atlas(p.scene, at_density(5, 4096)).warnings.empty());
+}
+
+// The default size: kDefaultTexelDensity texels per unit, so a 1 m and a
+// 10 m square differ by 10 in side, held to the default page past it.
+TEST(AtlasLayout, DefaultDensityScalesTheSideWithTheScene) {
+  auto side_of = [](double metres) {
+    SceneBuilder b;
+    // A unit quad filling the UV square: side = ceil(metres * d).
+    b.instance(add_quad(b, 0, 0, 1, 1), scale_translate(metres, metres, 1));
+    return expect_atlas(b.scene, at_density(kDefaultTexelDensity, kDefaultMaxResolution));
+  };
+  const Atlas one = side_of(1), ten = side_of(10), hundred = side_of(100);
+  EXPECT_NEAR(one.width, 40, 1);
+  EXPECT_NEAR(ten.width, 400, 1);
+  EXPECT_NEAR(one.texels_per_unit, 40, 1e-3);
+  EXPECT_NEAR(ten.texels_per_unit, 40, 1e-3);
+  EXPECT_TRUE(one.warnings.empty() && ten.warnings.empty());
+  EXPECT_EQ(hundred.width, kDefaultMaxResolution);
+  EXPECT_NEAR(hundred.texels_per_unit, 1024 / 100.0, 1e-3);
+  EXPECT_EQ(hundred.warnings.size(), 1u);
 }
 
 TEST(AtlasErrors, TooManyChartsForTheResolution) {
@@ -246,6 +281,8 @@ TEST(AtlasErrors, TooManyChartsForTheResolution) {
   // 40 charts of at least 1 texel + 2 padding need more than 16^2 texels.
   expect_error(build_atlas(b.scene, at_resolution(16)), StatusCode::kResourceExhausted,
                "40 lightmap charts");
+  expect_error(build_atlas(b.scene, at_resolution(16)), StatusCode::kResourceExhausted,
+               "raise --resolution");
 }
 
 TEST(AtlasErrors, InstanceWithABadMeshIndex) {
