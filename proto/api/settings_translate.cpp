@@ -176,8 +176,8 @@ bool is_zero(const Setting& st, const SettingValue& v) {
 void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
                    pipeline::BakeSettings& s, std::map<std::string, Status>* errors) {
   s = pipeline::default_settings();
-  s.atlas.max_resolution = limits.max_resolution;
-  bool size_given = false;
+  s.atlas.resolution_limit = limits.max_resolution;
+  bool max_resolution_given = false;
   for (const Setting& st : pipeline::settings_schema()) {
     if (!st.in_api()) continue;
     const pb::FieldDescriptor* f = proto_field(st.name);
@@ -195,9 +195,7 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
     } else if (st.api_zero == pipeline::ApiZero::kDefault) {
       continue;  // keeps the schema's default
     }
-    if (present &&
-        (st.name == std::string("resolution") || st.name == std::string("texel_density")))
-      size_given = true;
+    if (present && st.name == std::string("max_resolution")) max_resolution_given = true;
     if (errors) {
       if (Status c = pipeline::check_setting(st, v); !c.is_ok()) {
         errors->emplace(st.name, c);
@@ -207,13 +205,14 @@ void read_settings(const v1::BakeSettings& in, const SettingsLimits& limits,
     (void)pipeline::apply_setting(s, st, std::move(v));
   }
   // Rules of the API form (documented in luxel.proto): the sun is on when it
-  // has an illuminance; the default lightmap size respects the daemon's limit.
+  // has an illuminance; the default page size respects the daemon's limit.
   s.lights.sun.enabled = s.lights.sun.illuminance > 0;
   // Shards sample uniformly (their accumulators must merge exactly): adaptive
   // sampling left unset is off for them; adaptive=true given is refused by
   // validate_settings.
   if (s.sharded() && !in.has_adaptive()) s.adaptive = false;
-  if (!size_given) s.atlas.resolution = std::min(s.atlas.resolution, limits.max_resolution);
+  if (!max_resolution_given)
+    s.atlas.max_resolution = std::min(s.atlas.max_resolution, limits.max_resolution);
   if (!s.job.reference_bake_id.empty()) s.reference_name = "bake " + s.job.reference_bake_id;
   // Placements: a list of structures, outside the schema's scalar settings
   // (validate_settings checks them and names placements[i]).

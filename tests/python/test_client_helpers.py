@@ -171,7 +171,8 @@ class SettingsTest(unittest.TestCase):
         from luxel_client import settings
         self.assertIn("max_bounces", settings.SCHEMA, "settings_schema.json missing beside the stubs")
         d = settings.defaults()
-        self.assertEqual((d["max_bounces"], d["resolution"], d["seed"]), (4, 512, 1))
+        self.assertEqual((d["max_bounces"], d["resolution"], d["seed"]), (4, 0, 1))
+        self.assertEqual((d["texel_density"], d["max_resolution"]), (40, 1024))
         self.assertNotIn("rr_depth", d)  # local only
         self.assertIn("[0, 64]", settings.describe("max_bounces"))
         # Every API setting of the schema is a field of the proto.

@@ -66,9 +66,12 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
   auto bad = [](const char* field, const std::string& why) {
     return invalid_argument(strprintf("settings.%s: %s", field, why.c_str()));
   };
-  if (s.atlas.resolution > s.atlas.max_resolution)
+  if (s.atlas.resolution > s.atlas.resolution_limit)
     return bad("resolution", strprintf("%d exceeds %s=%d", s.atlas.resolution, resolution_limit,
-                                       s.atlas.max_resolution));
+                                       s.atlas.resolution_limit));
+  if (s.atlas.resolution == 0 && s.atlas.max_resolution > s.atlas.resolution_limit)
+    return bad("max_resolution", strprintf("%d exceeds %s=%d", s.atlas.max_resolution,
+                                           resolution_limit, s.atlas.resolution_limit));
   if (!std::isfinite(s.atlas.texel_density))
     return bad("texel_density", "does not fit a 32-bit float (at most 3.4e38)");
   if (s.atlas.resolution == 0 && !(s.atlas.texel_density > 0))

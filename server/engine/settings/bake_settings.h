@@ -167,8 +167,8 @@ struct BakeSettings {
 
 // INVALID_ARGUMENT naming the field ("settings.max_bounces: must be in [0, 64], got 99"):
 // every active setting's schema rule, then the rules between settings.
-// `resolution_limit` names where atlas.max_resolution comes from in errors.
+// `resolution_limit` names where atlas.resolution_limit comes from in errors.
 Status validate_settings(const BakeSettings& settings,
-                         const char* resolution_limit = "the engine's limit max_resolution");
+                         const char* resolution_limit = "the engine's largest lightmap side");
 
 }  // namespace luxel::pipeline

@@ -80,39 +80,63 @@ void add_bake_settings(std::vector<Setting>& t) {
                // the daemon resolves it into `reference`
                .described = Described::kNever});
   // ------------------------------------------------------------ lightmap size
+  // Without either, the size follows from the default density
+  // (atlas::kDefaultTexelDensity, why 40 in atlas.h) and pages of at most
+  // max_resolution, as Unity's and Bakery's lightmappers size theirs.
   // texel_density comes first: when both are given, resolution (applied last) wins.
   t.push_back({.name = "texel_density",
                .type = Type::kFloat,
                .units = "texels per world unit",
-               .help = "derive the lightmap size from this density instead of a resolution",
+               .help = "lightmap size from this density: pages of at most --max-resolution "
+                       "(ignored with --resolution)",
                .flag = "--texel-density",
                .metavar = "D",
-               .default_value = SettingValue::of(0),
+               .default_value = SettingValue::of(atlas::kDefaultTexelDensity),
                .min = 0,
-               .api_zero = ApiZero::kValue,
-               .api_note = "0 (unset): use resolution",
+               .min_open = true,
+               .api_note = "0 (unset): 40 unless resolution is given",
                .get = [](const BakeSettings& s) { return SettingValue::of(s.atlas.texel_density); },
                .set =
                    [](BakeSettings& s, const SettingValue& v) {
                      s.atlas.texel_density = static_cast<float>(v.number);
                      if (v.number > 0) s.atlas.resolution = 0;
-                   }});
+                   },
+               .active = [](const BakeSettings& s) { return s.atlas.resolution == 0; }});
+  t.push_back(
+      {.name = "max_resolution",
+       .type = Type::kInt,
+       .units = "texels",
+       .help = "largest lightmap page a texel density gives: past it generated UVs go "
+               "on more pages and the file's UVs get a lower density (with a warning)",
+       .flag = "--max-resolution",
+       .metavar = "N",
+       .default_value = SettingValue::of(atlas::kDefaultMaxResolution),
+       .min = 1,
+       .max = atlas::kResolutionLimit,
+       .api_note = "0 (unset): 1024, at most the daemon's --max-resolution",
+       .get = [](const BakeSettings& s) { return SettingValue::of(s.atlas.max_resolution); },
+       .set = [](BakeSettings& s,
+                 const SettingValue& v) { s.atlas.max_resolution = int(v.number); },
+       .active = [](const BakeSettings& s) { return s.atlas.resolution == 0; }});
   t.push_back({.name = "resolution",
                .type = Type::kInt,
                .units = "texels",
-               .help = "lightmap side (0 with a texel density)",
+               .help = "fixed lightmap side (per page); charts that do not fit get a lower "
+                       "density, or several pages (with a warning)",
                .flag = "--resolution",
                .metavar = "N",
-               .default_value = SettingValue::of(512),
+               .default_value = SettingValue::of(0),
                .min = 0,
                .max = kI32Max,
-               .api_note = "0 (unset) with texel_density 0: 512, at most --max-resolution",
+               .api_zero = ApiZero::kValue,
+               .api_note = "0 (unset): from texel_density; at most the daemon's --max-resolution",
                .get = [](const BakeSettings& s) { return SettingValue::of(s.atlas.resolution); },
                .set =
                    [](BakeSettings& s, const SettingValue& v) {
                      s.atlas.resolution = static_cast<int>(v.number);
                      if (v.number > 0) s.atlas.texel_density = 0;
-                   }});
+                   },
+               .active = [](const BakeSettings& s) { return s.atlas.resolution > 0; }});
   // ------------------------------------------------------------ light transport
   t.push_back({.name = "max_bounces",
                .type = Type::kInt,

@@ -177,7 +177,9 @@ TEST(SettingsProto, UnsetFieldsTakeTheApiDefaults) {
   auto s = to_engine_settings(base(), SettingsLimits{});
   ASSERT_TRUE(s) << s.status().message();
   const pipeline::BakeSettings d = pipeline::default_settings();
-  EXPECT_EQ(s->atlas.resolution, 512);
+  EXPECT_EQ(s->atlas.resolution, 0);
+  EXPECT_EQ(s->atlas.texel_density, 40);
+  EXPECT_EQ(s->atlas.max_resolution, 1024);
   EXPECT_EQ(s->samples_per_texel, 16u);
   EXPECT_EQ(s->max_bounces, d.max_bounces);
   EXPECT_EQ(s->seed, 1u);

@@ -27,8 +27,8 @@ TEST(SettingsDescribe, Defaults) {
       {"filter", "box"},
       {"intersector", "auto"},
       {"max_bounces", "4"},
+      {"max_resolution", "1024"},
       {"paths_per_iteration", "auto"},
-      {"resolution", "512"},
       {"rr_depth", "3"},
       {"samples_per_texel", "256"},
       {"seam_stitch", "off"},
@@ -37,11 +37,21 @@ TEST(SettingsDescribe, Defaults) {
       {"sky", "none"},
       {"sort_directions", "off"},
       {"target_error", "0"},
-      {"texel_density", "0"},
+      {"texel_density", "40"},
       {"time_budget_s", "0"},
       {"uv", "auto"},
   };
   EXPECT_EQ(default_settings().describe(), expected);
+  // A fixed size: the resolution, and neither the density nor the page
+  // size, which it overrides.
+  BakeSettings fixed = default_settings();
+  fixed.atlas.resolution = 256;
+  fixed.atlas.texel_density = 0;
+  Described with_resolution = expected;
+  with_resolution.erase("texel_density");
+  with_resolution.erase("max_resolution");
+  with_resolution["resolution"] = "256";
+  EXPECT_EQ(fixed.describe(), with_resolution);
 }
 
 // Every setting away from its default; the daemon's job settings, the
@@ -51,6 +61,7 @@ TEST(SettingsDescribe, EverySettingMoved) {
   BakeSettings s = default_settings();
   s.atlas.resolution = 0;
   s.atlas.texel_density = 12.5f;
+  s.atlas.max_resolution = 2048;
   s.samples_per_texel = 1000;
   s.time_budget_s = 1e6;  // %g: "1e+06"
   s.target_error = 0.01;
@@ -128,7 +139,7 @@ TEST(SettingsDescribe, EverySettingMoved) {
       {"probe_window", "lanczos"},
       {"probes", "grid:0.5"},
       {"reference", "ref.exr"},
-      {"resolution", "0"},
+      {"max_resolution", "2048"},
       {"rr_depth", "5"},
       {"samples_per_texel", "1000"},
       {"seam_stitch", "on"},
@@ -181,9 +192,11 @@ TEST(SettingsDescribe, ShardEquirectSkyAndNodeProbes) {
 }
 
 // The fingerprint of default settings is pinned: a change here orphans every
-// checkpoint on disk, so it must be deliberate.
+// checkpoint on disk, so it must be deliberate. (Changed when the default
+// size became texel_density 40 on pages of max_resolution 1024 instead of
+// resolution 512: a default bake is another lightmap.)
 TEST(SettingsDescribe, DefaultFingerprintIsPinned) {
-  EXPECT_EQ(bake_fingerprint("scene", default_settings()), "423f3930e84ab6dc18f5e9bc6f3b0139");
+  EXPECT_EQ(bake_fingerprint("scene", default_settings()), "9a2eefba0591af56c45b7fd140660805");
 }
 
 }  // namespace

@@ -57,16 +57,23 @@ TEST(SettingsSchema, DefaultsValidateAndRoundTrip) {
 
 // BakeSettings' own initialisers (read by code that builds settings by hand)
 // agree with the schema everywhere but in the lightmap size, which a
-// value-initialised BakeSettings leaves to the caller.
+// value-initialised BakeSettings leaves to the caller (no size, pages up to
+// the engine's limit); the schema's default is a texel density.
 TEST(SettingsSchema, StructInitialisersAgreeWithTheSchema) {
   const BakeSettings plain;
   for (const Setting& st : settings_schema()) {
-    if (std::string(st.name) == "resolution") continue;
+    const std::string name = st.name;
+    if (name == "resolution" || name == "texel_density" || name == "max_resolution") continue;
     EXPECT_EQ(format_setting_value(st, st.get(plain)), format_setting_value(st, st.default_value))
         << st.name;
   }
   EXPECT_EQ(plain.atlas.resolution, 0);
-  EXPECT_EQ(default_settings().atlas.resolution, 512);
+  EXPECT_EQ(plain.atlas.texel_density, 0);
+  EXPECT_EQ(plain.atlas.max_resolution, atlas::kResolutionLimit);
+  const BakeSettings d = default_settings();
+  EXPECT_EQ(d.atlas.resolution, 0);
+  EXPECT_EQ(d.atlas.texel_density, 40);
+  EXPECT_EQ(d.atlas.max_resolution, 1024);
 }
 
 TEST(SettingsValidation, IntegerRanges) {
@@ -210,14 +217,22 @@ TEST(SettingsValidation, RulesBetweenSettings) {
   s.job.reference_bake_id = "0123";
   EXPECT_TRUE(validate_settings(s).is_ok());
   s = default_settings();
-  s.atlas.max_resolution = 256;
+  s.atlas.resolution_limit = 256;
+  EXPECT_EQ(error_of(validate_settings(s, "the daemon's limit --max-resolution")),
+            "settings.max_resolution: 1024 exceeds the daemon's limit --max-resolution=256");
+  s.atlas.resolution = 512;
   EXPECT_EQ(error_of(validate_settings(s, "the daemon's limit --max-resolution")),
             "settings.resolution: 512 exceeds the daemon's limit --max-resolution=256");
+  // A resolution is a page of its own: --max-resolution does not bound it.
   s = default_settings();
-  EXPECT_EQ(cli_error("texel_density", "0", s), "ok");
-  s.atlas.resolution = 0;
-  EXPECT_EQ(error_of(validate_settings(s)),
-            "settings.resolution: give a resolution or a positive texel density");
+  EXPECT_EQ(cli_error("resolution", "4096", s), "ok");
+  EXPECT_EQ(cli_error("resolution", "9000", s),
+            "settings.resolution: 9000 exceeds the engine's largest lightmap side=8192");
+  EXPECT_EQ(cli_error("max_resolution", "9000", s),
+            "settings.max_resolution: must be in [1, 8192], got 9000");
+  EXPECT_EQ(cli_error("texel_density", "0", s), "settings.texel_density: must be > 0, got 0");
+  s.atlas.texel_density = 0;
+  EXPECT_EQ(error_of(validate_settings(s)), "settings.texel_density: must be > 0, got 0");
 }
 
 TEST(SettingsSchema, RateLimitsAreRaisedNotRejected) {
