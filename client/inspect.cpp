@@ -18,6 +18,7 @@
 #include "device/context.h"
 #include "scene/gltf_import.h"
 #include "scene/scene_stats.h"
+#include "settings/settings_schema.h"
 
 namespace luxel::cli {
 namespace {
@@ -35,6 +36,8 @@ struct InspectArgs {
 };
 
 bool parse(const std::vector<std::string>& args, InspectArgs& out) {
+  // The size a bake gets without size options (settings schema).
+  out.uv_settings.atlas = pipeline::default_settings().atlas;
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& a = args[i];
     auto value = [&](const char* name) -> const std::string* {
@@ -81,6 +84,7 @@ bool parse(const std::vector<std::string>& args, InspectArgs& out) {
         return false;
       }
       if (a == "--resolution") as.resolution = static_cast<int>(d);
+      if (a == "--resolution") as.texel_density = 0;
       if (a == "--max-resolution") as.max_resolution = static_cast<int>(d);
       if (a == "--texel-density") {
         as.texel_density = static_cast<float>(d);
@@ -113,7 +117,8 @@ int fail(const Status& st) {
 
 // The quality report of generated lightmap UVs (uv::UvReport; the manifest's
 // uv_layout carries the same figures).
-int report_uvs(const scene::Scene& scene, pipeline::BakeSettings settings) {
+int report_uvs(const scene::Scene& scene, pipeline::BakeSettings settings,
+               const std::string& file) {
   // What the default --uv auto does; when it keeps the file's TEXCOORD_1,
   // the layout --uv generate would make instead.
   settings.uv = pipeline::UvMode::kAuto;
@@ -127,12 +132,15 @@ int report_uvs(const scene::Scene& scene, pipeline::BakeSettings settings) {
     settings.uv = pipeline::UvMode::kGenerate;
     layout = pipeline::lay_out_lightmap(scene, settings);
   }
-  if (!layout) return fail(layout.status());
+  if (!layout)
+    return fail(
+        Status(layout.status().code(), "scene '" + file + "': " + layout.status().message()));
   const atlas::Atlas& at = layout->atlas;
   const uv::UvReport& u = layout->generated->report;
   std::printf("\nlightmap UVs, generated (%s)\n", auto_does.c_str());
   std::printf("atlas      %d x %d%s at %.4g texels per unit\n", at.width, at.page_height(),
               at.pages > 1 ? strprintf(", %d pages", at.pages).c_str() : "", at.texels_per_unit);
+  for (const auto& w : at.warnings) std::printf("warning    %s\n", w.c_str());
   std::printf(
       "charts     %zu on %zu meshes (%zu triangles, %zu degenerate left out, %zu seam vertices)\n",
       u.charts, u.meshes, u.triangles, u.unplaced_triangles, u.seam_vertices);
@@ -202,7 +210,7 @@ int run_inspect(const std::vector<std::string>& argv) {
     return 1;
   }
   if (args.uv) {
-    const int uv_status = report_uvs(scene.value(), args.uv_settings);
+    const int uv_status = report_uvs(scene.value(), args.uv_settings, args.scene);
     if (uv_status != 0) return uv_status;
   }
 

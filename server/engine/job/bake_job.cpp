@@ -38,9 +38,22 @@ Result<probes::ProbeBakeSettings> probe_settings(const JobInput& in) {
   return ps;
 }
 
+// The name the user knows the scene by: the job's, the file's, the scene's own.
+std::string scene_label(const JobInput& in) {
+  if (!in.scene_name.empty()) return in.scene_name;
+  if (!in.scene_file.empty()) return std::filesystem::path(in.scene_file).filename().string();
+  return in.scene->source_name;
+}
+
 Result<BakeResult> bake_lightmap(const JobInput& in, device::Context& ctx, const JobEvents& ev) {
   auto r =
       ev.bake_lightmap ? ev.bake_lightmap() : pipeline::bake(*in.scene, in.settings, ctx, ev.hooks);
+  // Refusals of the scene as laid out (no triangles, charts that fit no
+  // page, bad TEXCOORD_1) name the file here, the one place that knows it,
+  // so that the CLI and the daemon say which scene of a batch was refused.
+  const StatusCode code = r.status().code();
+  if (!r && (code == StatusCode::kInvalidArgument || code == StatusCode::kResourceExhausted))
+    return Status(code, "scene '" + scene_label(in) + "': " + r.status().message());
   if (r && ev.on_lightmap) ev.on_lightmap(r.value());
   return r;
 }

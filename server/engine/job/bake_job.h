@@ -70,7 +70,9 @@ struct JobResult {
 
 // Runs the job on `ctx` and writes its outputs into `out_dir` (created if
 // needed). A cancelled step (hooks.cancel) ends the job with what it has and
-// writes nothing. Errors name the step (and the setting or file) at fault.
+// writes nothing. Errors name the step (and the setting or file) at fault;
+// the lightmap's INVALID_ARGUMENT and RESOURCE_EXHAUSTED start with "scene
+// 'NAME': " (scene_name, else the file name).
 Result<JobResult> run_bake_job(const JobInput& input, device::Context& ctx, const JobEvents& events,
                                const std::string& out_dir);
 
