@@ -203,8 +203,14 @@ TEST(SettingsProto, UnsetFieldsTakeTheApiDefaults) {
   p.set_progress_interval_s(0.001);
   s = to_engine_settings(p, SettingsLimits{256});
   ASSERT_TRUE(s) << s.status().message();
-  EXPECT_EQ(s->atlas.resolution, 256);
+  EXPECT_EQ(s->atlas.resolution, 0);
+  EXPECT_EQ(s->atlas.max_resolution, 256);
+  EXPECT_EQ(s->atlas.resolution_limit, 256);
   EXPECT_EQ(s->progress_interval_s, 0.05);
+  // A page size given past the limit is refused, naming both.
+  p.set_max_resolution(512);
+  EXPECT_EQ(to_engine_settings(p, SettingsLimits{256}).status().message(),
+            "settings.max_resolution: 512 exceeds the daemon's limit --max-resolution=256");
 }
 
 // Distributed bakes: shards sample uniformly. adaptive left unset is off
