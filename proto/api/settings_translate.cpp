@@ -283,6 +283,13 @@ Result<v1::BakeSettings> to_proto_settings(const pipeline::BakeSettings& s) {
     if (!st.in_api() || !st.is_active(s)) continue;
     const pb::FieldDescriptor* f = proto_field(st.name);
     const SettingValue v = st.get(s);
+    // A default the API reads from 0 is left unset, so that the daemon
+    // resolves it under its own limits (max_resolution: 1024, or a lower
+    // --max-resolution) as it does for any client.
+    if (st.api_zero == pipeline::ApiZero::kDefault && !f->has_presence() && !f->is_repeated() &&
+        st.type != SettingType::kChoice && !is_zero(st, v) &&
+        pipeline::same_setting_value(st, v, st.default_value))
+      continue;
     if (is_zero(st, v)) {
       if (st.api_zero == pipeline::ApiZero::kDefault && !f->has_presence() &&
           !is_zero(st, st.default_value))

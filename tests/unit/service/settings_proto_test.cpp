@@ -207,6 +207,16 @@ TEST(SettingsProto, UnsetFieldsTakeTheApiDefaults) {
   EXPECT_EQ(s->atlas.max_resolution, 256);
   EXPECT_EQ(s->atlas.resolution_limit, 256);
   EXPECT_EQ(s->progress_interval_s, 0.05);
+  // The CLI's default bake leaves max_resolution unset, so a daemon with a
+  // lower limit takes it instead of refusing the default.
+  auto sent = to_proto_settings(pipeline::default_settings());
+  ASSERT_TRUE(sent) << sent.status().message();
+  EXPECT_EQ(sent->max_resolution(), 0u);
+  EXPECT_EQ(sent->texel_density(), 0.0f);
+  auto taken = to_engine_settings(sent.value(), SettingsLimits{256});
+  ASSERT_TRUE(taken) << taken.status().message();
+  EXPECT_EQ(taken->atlas.max_resolution, 256);
+  EXPECT_EQ(taken->atlas.texel_density, 40);
   // A page size given past the limit is refused, naming both.
   p.set_max_resolution(512);
   EXPECT_EQ(to_engine_settings(p, SettingsLimits{256}).status().message(),
