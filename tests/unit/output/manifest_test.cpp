@@ -49,6 +49,7 @@ Manifest full_manifest() {
   m.stats.termination = "samples";
   m.stats.covered_texels = 99999;
   m.dilation_texels = 4;
+  m.texels_per_unit = 12.375;
   m.denoise_json = R"({"iterations":5,"method":"atrous","sigma_luminance":2.0})";
   m.seam_stitch_json = R"({"irradiance_after":{"rms_abs":0.25},"stitched_edges":3})";
   return m;
@@ -110,6 +111,7 @@ TEST(Manifest, RoundTripKeepsEveryField) {
   EXPECT_EQ(got.stats.termination, m.stats.termination);
   EXPECT_EQ(got.stats.covered_texels, m.stats.covered_texels);
   EXPECT_EQ(got.dilation_texels, m.dilation_texels);
+  EXPECT_EQ(got.texels_per_unit, m.texels_per_unit);
   EXPECT_EQ(nlohmann::json::parse(got.denoise_json), nlohmann::json::parse(m.denoise_json));
   EXPECT_EQ(got.seam_stitch_json, m.seam_stitch_json);
 }
