@@ -185,19 +185,11 @@ TEST(ServiceStop, SubmitRefusesBakesThatCannotFit) {
   const std::string scene_id = upload_cornell(daemon);
   v1::BakeInfo info;
 
-  v1::BakeSettings dense = small_settings(16);
-  dense.set_resolution(0);
-  dense.set_texel_density(1e30f);
-  auto st = submit(daemon, scene_id, dense, &info);
-  EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
-  EXPECT_NE(st.error_message().find("settings.texel_density"), std::string::npos)
-      << st.error_message();
-
   v1::BakeSettings batch = small_settings(0);
   batch.set_time_budget_s(5);
   batch.set_paths_per_iteration(1u << 26);
   batch.set_device_memory_budget_mib(32);
-  st = submit(daemon, scene_id, batch, &info);
+  auto st = submit(daemon, scene_id, batch, &info);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
   EXPECT_NE(st.error_message().find("settings.paths_per_iteration"), std::string::npos)
       << st.error_message();
@@ -223,6 +215,21 @@ TEST(ServiceStop, SubmitRefusesBakesThatCannotFit) {
   ASSERT_TRUE(submit(daemon, scene_id, fine, &info).ok());
   const v1::BakeInfo done = wait_for_bake(daemon, info.bake_id(), is_finished);
   EXPECT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.error_message();
+
+  // A density past the page is no refusal: the layout takes the page at a
+  // lower density and says so on the bake's record (atlas/atlas.h).
+  v1::BakeSettings dense = small_settings(4);
+  dense.set_resolution(0);
+  dense.set_texel_density(1e30f);
+  dense.set_max_resolution(32);
+  ASSERT_TRUE(submit(daemon, scene_id, dense, &info).ok());
+  const v1::BakeInfo lowered = wait_for_bake(daemon, info.bake_id(), is_finished);
+  EXPECT_EQ(lowered.state(), v1::BAKE_STATE_SUCCEEDED) << lowered.error_message();
+  EXPECT_NE(lowered.lightmap_layout().find("32x32"), std::string::npos)
+      << lowered.lightmap_layout();
+  EXPECT_NE(lowered.lightmap_layout().find("; warning: texel density lowered from 1e+30"),
+            std::string::npos)
+      << lowered.lightmap_layout();
   EXPECT_EQ(daemon.stop(SIGTERM), 0);
 }
 

@@ -21,8 +21,10 @@ double mib(double bytes) {
 // Pages a layout of this scene may use: generated UVs at a density go on up
 // to 64 pages (uv::GenerateOptions::max_pages); the file's TEXCOORD_1 on
 // one, or on the pages of its placements.
-// With a resolution, generated UVs fit one page of it; only placements
-// (the file's lightmapIndex or the client's) use several.
+// With a resolution, generated UVs are counted on one page of it: they
+// take several only when the charts fit it at no density (uv/generate.h),
+// tiny pages whose texels do not bound the batch. Placements (the file's
+// lightmapIndex or the client's) use their pages.
 int pages_allowed(const scene::Scene& scene, const BakeSettings& s) {
   if (s.atlas.resolution == 0 && s.uv != UvMode::kExisting && s.node_placements.empty()) return 64;
   int pages = 1;

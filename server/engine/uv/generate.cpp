@@ -386,10 +386,11 @@ Result<PackAttempt> pack_pages_lowering(const std::vector<MeshCharts>& meshes, d
     density *= 0.85;
   }
   if (a && density < asked)
-    warnings.push_back(strprintf(
-        "texel density lowered from %g to %.3g texels per unit to fit the most pages, %d, of "
-        "%dx%d (--max-resolution); raise --max-resolution for more texels",
-        asked, density, max_pages, pack.max_resolution, pack.max_resolution));
+    warnings.push_back(
+        strprintf("texel density lowered from %g to %.3g texels per unit to fit pages of %dx%d "
+                  "(--max-resolution; each instance on one page, at most %d pages); raise "
+                  "--max-resolution for more texels",
+                  asked, density, pack.max_resolution, pack.max_resolution, max_pages));
   return a;
 }
 
