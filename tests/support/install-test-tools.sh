@@ -11,6 +11,13 @@
 #     3.11), in a venv kept outside the clone:
 #     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1. Its glTF importer and
 #     exporter (io_scene_gltf2, with the Draco encoder) ship inside the wheel.
+#   - gltfpack 1.2 (meshoptimizer's glTF packer), an independent writer of
+#     EXT_meshopt_compression: the executable inside PyPI's
+#     dsts-extractor-gltfpack 1.2.0 wheel. The wheel asks for Python 3.12 and
+#     the venv has 3.11, so pip downloads it for 3.12 and only the executable
+#     (which needs no Python) is unpacked, to
+#     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/gltfpack-1.2.0/gltfpack, where the
+#     tests' CMake looks for it beside the bpy venv.
 # Idempotent: apt runs only for what is missing, pip only when the venv lacks
 # bpy 5.0.1. Prints the venv's python as its last line.
 set -euo pipefail
@@ -37,5 +44,23 @@ if ! "$venv/bin/python" -c "import bpy, sys; sys.exit(bpy.app.version_string != 
   /usr/bin/python3.11 -m venv "$venv"
   "$venv/bin/pip" install --quiet --disable-pip-version-check "bpy==$BPY_VERSION" >&2
   "$venv/bin/python" -c "import bpy; print('install-test-tools: bpy', bpy.app.version_string)" >&2
+fi
+GLTFPACK_VERSION=1.2.0
+gltfpack="$(dirname "$venv")/gltfpack-$GLTFPACK_VERSION/gltfpack"
+if ! "$gltfpack" -v 2>/dev/null | grep -q '^gltfpack'; then
+  echo "install-test-tools: installing gltfpack $GLTFPACK_VERSION into $(dirname "$gltfpack")" >&2
+  wheels="$(mktemp -d)"
+  "$venv/bin/pip" download --quiet --disable-pip-version-check --no-deps --only-binary=:all: \
+    --python-version 3.12 -d "$wheels" "dsts-extractor-gltfpack==$GLTFPACK_VERSION" >&2
+  mkdir -p "$(dirname "$gltfpack")"
+  "$venv/bin/python" - "$wheels" "$gltfpack" <<'PY'
+import glob, sys, zipfile
+wheel = glob.glob(sys.argv[1] + "/*.whl")[0]
+with zipfile.ZipFile(wheel) as z, open(sys.argv[2], "wb") as out:
+    out.write(z.read("dsts_extractor_gltfpack/_binary/gltfpack"))
+PY
+  chmod +x "$gltfpack"
+  rm -rf "$wheels"
+  "$gltfpack" -v >&2
 fi
 echo "$venv/bin/python"
