@@ -12,6 +12,9 @@ PACKAGES=(
   # geometry and images
   libembree-dev libopenimageio-dev openimageio-tools
   libtinygltf-dev nlohmann-json3-dev libstb-dev
+  # compressed glTF geometry: KHR_draco_mesh_compression (Draco decoder) and
+  # EXT_meshopt_compression (meshoptimizer), scene/gltf_decompress.cpp
+  libdraco-dev libmeshoptimizer-dev
   # lightmap UV generation: sparse least squares for LSCM (uv/)
   libeigen3-dev
   # service: gRPC + protobuf (C++ and Python), OpenSSL for SHA-256 and TLS

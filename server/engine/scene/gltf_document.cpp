@@ -80,6 +80,15 @@ Result<Bytes> read_uri(const std::string& uri, const std::string& base_dir,
   return Bytes(s.begin(), s.end());
 }
 
+bool is_meshopt_fallback(const json& buffer) {
+  if (!buffer.contains("extensions") || !buffer["extensions"].is_object()) return false;
+  const json& e = buffer["extensions"];
+  if (!e.contains("EXT_meshopt_compression") || !e["EXT_meshopt_compression"].is_object())
+    return false;
+  const json& m = e["EXT_meshopt_compression"];
+  return m.contains("fallback") && m["fallback"].is_boolean() && m["fallback"].get<bool>();
+}
+
 void align(Bytes* bin) {
   while (bin->size() % 4 != 0) bin->push_back(0);
 }
@@ -89,29 +98,59 @@ Status merge_buffers(GltfDocument* d, const Bytes& glb_bin, const std::string& b
   json& doc = d->json;
   Bytes* bin = &d->bin;
   std::vector<size_t> base;
+  std::vector<bool> fallback;
   if (doc.contains("buffers")) {
     for (size_t b = 0; b < doc["buffers"].size(); ++b) {
       const json& buffer = doc["buffers"][b];
       align(bin);
       base.push_back(bin->size());
+      fallback.push_back(is_meshopt_fallback(buffer));
       const std::string what = strprintf("buffers[%zu]", b);
-      if (buffer.contains("uri") && buffer["uri"].is_string()) {
+      // EXT_meshopt_compression "Fallback buffers": the uncompressed copy is
+      // for loaders without the extension; its views are decoded from their
+      // compressed source instead (scene/gltf_decompress.h), so a fallback
+      // file is not read.
+      const bool skip = fallback.back() && buffer.contains("uri");
+      if (!skip && buffer.contains("uri") && buffer["uri"].is_string()) {
         auto data = read_uri(buffer["uri"].get<std::string>(), base_dir, what);
         if (!data) return data.status();
         bin->insert(bin->end(), data.value().begin(), data.value().end());
-      } else if (b == 0) {
+      } else if (b == 0 && !skip) {
         bin->insert(bin->end(), glb_bin.begin(), glb_bin.end());
       }
       // (An unused buffer without data is valid glTF; nothing refers to it.)
     }
   }
   if (doc.contains("bufferViews")) {
-    for (json& view : doc["bufferViews"]) {
+    for (size_t v = 0; v < doc["bufferViews"].size(); ++v) {
+      json& view = doc["bufferViews"][v];
       const size_t b = view.value("buffer", 0);
       if (b >= base.size())
-        return invalid_argument("a bufferView names a buffer that does not exist");
+        return invalid_argument(
+            strprintf("bufferViews[%zu] names a buffer that does not exist", v));
+      const bool compressed = view.contains("extensions") && view["extensions"].is_object() &&
+                              view["extensions"].contains("EXT_meshopt_compression") &&
+                              view["extensions"]["EXT_meshopt_compression"].is_object();
+      // The README's "Fallback buffers": only compressed views refer to a
+      // fallback buffer, and never as their compressed source.
+      if (fallback[b] && !compressed)
+        return invalid_argument(strprintf(
+            "bufferViews[%zu]: buffer %zu is an EXT_meshopt_compression fallback buffer, and the "
+            "view is not compressed",
+            v, b));
       view["buffer"] = 0;
       view["byteOffset"] = view.value("byteOffset", size_t{0}) + base[b];
+      if (!compressed) continue;
+      json& ext = view["extensions"]["EXT_meshopt_compression"];
+      const size_t source = ext.value("buffer", size_t{0});
+      if (source >= base.size() || fallback[source])
+        return invalid_argument(
+            strprintf("bufferViews[%zu] (EXT_meshopt_compression): buffer %zu %s", v, source,
+                      source >= base.size() ? "does not exist"
+                                            : "is a fallback buffer, which holds no "
+                                              "compressed data"));
+      ext["buffer"] = 0;
+      ext["byteOffset"] = ext.value("byteOffset", size_t{0}) + base[source];
     }
   }
   if (doc.contains("images")) {

@@ -30,6 +30,9 @@ int gltf_component_bytes(int component_type);
 
 // Reads a .gltf or .glb from memory; `base_dir` resolves external URIs ("":
 // they are refused). The result has one buffer and self-contained images.
+// EXT_meshopt_compression: a view's compressed source range is rebased like
+// the view; fallback buffers are not read (their views are garbage until
+// decompress_geometry decodes them).
 Result<GltfDocument> read_gltf_document(std::string_view bytes, const std::string& base_dir);
 
 // Appends `bytes` of data as a new bufferView of buffer 0 (4-byte aligned,

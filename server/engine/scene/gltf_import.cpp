@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "scene/accessor.h"
+#include "scene/gltf_decompress.h"
 #include "scene/gltf_load.h"
 #include "scene/lights.h"
 #include "scene/materials.h"
@@ -23,8 +24,11 @@ using detail::build_mesh;
 // Material-level extensions are listed in materials.cpp; these are read by
 // mesh_build.cpp and instantiate() below.
 bool supported_extension(const std::string& name) {
+  // The compressed-geometry extensions are decoded before tinygltf parses
+  // the file (scene/gltf_decompress.h), so a model never lists them; they
+  // are named here for what the file says.
   return detail::is_supported_extension(name) || name == "KHR_mesh_quantization" ||
-         name == "EXT_mesh_gpu_instancing";
+         name == "EXT_mesh_gpu_instancing" || name == kDracoExtension || name == kMeshoptExtension;
 }
 
 std::string node_label(const tinygltf::Model& model, int i) {
@@ -345,7 +349,8 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
 Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
                            const std::string& name, const ImportOptions& options) {
   tinygltf::Model model;
-  LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &model));
+  LUXEL_RETURN_IF_ERROR(
+      detail::load_model(bytes, base_dir, name, options.max_accessor_elements, &model));
   Scene scene;
   scene.source_name = name;
   // glTF 2.0 §3.12: a file that requires an extension the loader does not

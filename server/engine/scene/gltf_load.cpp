@@ -13,6 +13,8 @@
 #include <tuple>
 
 #include "common/uri.h"
+#include "scene/gltf_decompress.h"
+#include "scene/gltf_document.h"
 
 namespace luxel::scene::detail {
 namespace {
@@ -228,6 +230,15 @@ std::string describe(const char* kind, size_t i, const json& o) {
   return n.empty() ? strprintf("%s %zu", kind, i) : strprintf("%s %zu '%s'", kind, i, n.c_str());
 }
 
+bool is_meshopt_fallback(const json& buffer) {
+  auto ext = buffer.find("extensions");
+  if (ext == buffer.end() || !ext->is_object()) return false;
+  auto m = ext->find(kMeshoptExtension);
+  if (m == ext->end() || !m->is_object()) return false;
+  auto f = m->find("fallback");
+  return f != m->end() && f->is_boolean() && f->get<bool>();
+}
+
 Status check_buffers(const json& doc, const Container& c, const std::string& base_dir,
                      std::vector<uint64_t>* sizes, std::vector<size_t>* uriless) {
   auto it = doc.find("buffers");
@@ -240,6 +251,10 @@ Status check_buffers(const json& doc, const Container& c, const std::string& bas
     if (!length)
       return invalid_argument(what + ": byteLength is missing or not a non-negative integer");
     sizes->push_back(*length);
+    // EXT_meshopt_compression "Fallback buffers" are not read (their views
+    // are decoded from compressed data, scene/gltf_decompress.h); in a .glb
+    // one without uri has index 1 or above and no data.
+    if (is_meshopt_fallback(b)) continue;
     const std::string uri = get_string(b, "uri");
     uint64_t available = 0;
     if (uri.empty()) {
@@ -523,7 +538,7 @@ std::string trim(std::string s) {
 }  // namespace
 
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                  tinygltf::Model* model) {
+                  uint64_t max_decoded_elements, tinygltf::Model* model) {
   if (bytes.size() > 0xFFFFFFF0u) {
     return resource_exhausted(
         strprintf("'%s': %zu bytes, glTF files are limited to 4 GiB", name.c_str(), bytes.size()));
@@ -549,6 +564,18 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
   Rewrites rw;
   LUXEL_RETURN_IF_ERROR(check_buffers(*doc, c, base_dir, &buffer_sizes, &rw.uriless_buffers));
   LUXEL_RETURN_IF_ERROR(check_images(*doc, base_dir, buffer_sizes));
+  if (uses_compressed_geometry(*doc)) {
+    // Decoded at the JSON level (shared with the write-back of lightmap
+    // UVs), then loaded as the plain .glb it becomes; the external files it
+    // reads are the ones checked above.
+    auto plain = read_gltf_document(bytes, base_dir);
+    if (!plain) return plain.status();
+    LUXEL_RETURN_IF_ERROR(decompress_geometry(&plain.value(), max_decoded_elements));
+    if (uses_compressed_geometry(plain.value().json))
+      return internal_error("compressed geometry remained after decoding");
+    return load_model(write_glb(std::move(plain).value()), base_dir, name, max_decoded_elements,
+                      model);
+  }
   hide_unviewed_indices(&*doc, &rw);
   give_uriless_buffers_empty_data(&*doc, &rw);
   std::string rewritten;

@@ -22,8 +22,10 @@ inline constexpr int kMaxJsonDepth = 64;
 // Parses the document. External URIs resolve against base_dir; an empty
 // base_dir forbids external files. URIs must be relative and stay inside
 // base_dir (no "..", no absolute paths): uploaded scenes must not read other
-// files of the server.
+// files of the server. Compressed geometry (KHR_draco_mesh_compression,
+// EXT_meshopt_compression) is decoded first (scene/gltf_decompress.h), at
+// most `max_decoded_elements` elements; tinygltf sees the plain file.
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                  tinygltf::Model* model);
+                  uint64_t max_decoded_elements, tinygltf::Model* model);
 
 }  // namespace luxel::scene::detail

@@ -144,12 +144,6 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   const std::string ctx =
       strprintf("%s primitive %d", mesh_label(model, mesh_index).c_str(), prim_index);
 
-  if (prim.extensions.count("KHR_draco_mesh_compression")) {
-    // Its accessors have no bufferView and would read as zeros.
-    return invalid_argument(ctx +
-                            ": KHR_draco_mesh_compression is not supported; export the scene "
-                            "without Draco compression");
-  }
   // The lightmap UVs: the set the primitive's extras.lightmapTexCoord names
   // (Luxel's write-back records it there when TEXCOORD_1 was taken,
   // post/lightmapped_gltf.h), else TEXCOORD_1.
