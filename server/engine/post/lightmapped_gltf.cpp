@@ -7,6 +7,7 @@
 #include <set>
 
 #include "common/atomic_file.h"
+#include "scene/gltf_decompress.h"
 #include "scene/gltf_document.h"
 #include "scene/mesh_build.h"
 
@@ -151,6 +152,9 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
   auto read = scene::read_gltf_document(source, base_dir);
   if (!read) return read.status();
   GltfDocument& doc = read.value();
+  // Compressed geometry is written back decoded: the importer read the same
+  // decoded vertices (scene/gltf_decompress.h), which the UVs index.
+  LUXEL_RETURN_IF_ERROR(scene::decompress_geometry(&doc));
   json& j = doc.json;
 
   for (size_t m = 0; m < scene.meshes.size(); ++m) {
@@ -179,11 +183,9 @@ Result<std::string> lightmapped_glb_bytes(std::string_view source, const std::st
       const std::string where =
           strprintf("mesh '%s' primitive %d", mesh.name.c_str(), span.primitive);
       const int mode = prim.value("mode", 4);
-      if (mode < 4 || mode > 6 ||
-          (prim.contains("extensions") &&
-           prim["extensions"].contains("KHR_draco_mesh_compression"))) {
+      if (mode < 4 || mode > 6) {
         report->warnings.push_back(where + ": not triangles (mode " + std::to_string(mode) +
-                                   ") or Draco-compressed; its lightmap UVs were not written");
+                                   "); its lightmap UVs were not written");
         continue;
       }
       // Vertices of this primitive: its own (first copies), then the seam
