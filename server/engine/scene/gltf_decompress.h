@@ -23,7 +23,9 @@
 // Everything else is unchanged. Errors name the mesh and primitive or the
 // bufferView and say what is wrong; a corrupt stream is INVALID_ARGUMENT,
 // more decoded elements than `max_elements` is RESOURCE_EXHAUSTED, refused
-// before Luxel allocates the decoded data.
+// before Luxel allocates the decoded data. (Draco's decoder itself allocates
+// as its bitstream says before the decoded counts can be compared with the
+// declared ones; only the declared counts are charged before it runs.)
 #pragma once
 
 #include <cstdint>
