@@ -142,7 +142,11 @@ class BlenderAddonTest(unittest.TestCase):
 
     def test_1_bake_snapshots_apply_and_compare(self):
         from luxel_blender import apply as applier
-        bpy.context.scene.luxel.samples = 256
+        # Stopped by time, not samples: snapshots come at an interval of
+        # seconds, so a sample target a fast machine (or a warm kernel cache)
+        # reaches in one interval would leave a single snapshot.
+        bpy.context.scene.luxel.samples = 1 << 20
+        bpy.context.scene.luxel.time_s = 2.0
         seen = []  # image checksums, one per snapshot loaded
         status = []  # the status bar's text while the bake runs
 

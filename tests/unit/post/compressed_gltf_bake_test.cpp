@@ -31,20 +31,10 @@
 namespace luxel {
 namespace {
 
+using test::glb_json;
+using test::read_all;
+
 using nlohmann::json;
-
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-json glb_json(const std::string& bytes) {
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  return json::parse(bytes.substr(20, length));
-}
 
 pipeline::BakeSettings settings(pipeline::UvMode mode) {
   pipeline::BakeSettings s;

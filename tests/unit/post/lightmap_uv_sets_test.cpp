@@ -22,24 +22,14 @@
 namespace luxel {
 namespace {
 
+using test::glb_json;
+using test::read_all;
+
 using nlohmann::json;
 using test::GltfBuilder;
 
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 bool same(Vec2 a, Vec2 b) {
   return a.x == b.x && a.y == b.y;
-}
-
-json glb_json(const std::string& bytes) {
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  return json::parse(bytes.substr(20, length));
 }
 
 // A unit cube with hard edges (24 vertices). Each face maps the whole unit

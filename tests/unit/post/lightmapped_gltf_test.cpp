@@ -23,22 +23,11 @@
 namespace luxel {
 namespace {
 
+using test::glb_json;
+using test::read_all;
+
 using nlohmann::json;
 using test::GltfBuilder;
-
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// The JSON chunk of a GLB, parsed independently of the writer.
-json glb_json(const std::string& bytes) {
-  uint32_t length = 0;
-  std::memcpy(&length, bytes.data() + 12, 4);
-  return json::parse(bytes.substr(20, length));
-}
 
 // A box with hard edges (24 vertices, per-face normals), no TEXCOORD_1,
 // with TEXCOORD_0; `scale` sets its size.

@@ -30,16 +30,12 @@
 namespace luxel::scene {
 namespace {
 
+using test::glb_json;
+using test::read_all;
+
 using nlohmann::json;
 using test::GltfBuilder;
 using test::TempDir;
-
-std::string read_all(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 // A GLB's JSON and BIN chunks, read and written here independently of the
 // code under test, to edit files the tools wrote.

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 namespace luxel::test {
@@ -238,6 +239,20 @@ std::string encode_png16_gray(int w, int h, const std::vector<uint16_t>& pixels)
                            std::string("\x10\0\0\0\0", 5);
   return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", z) +
          png_chunk("IEND", "");
+}
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+json glb_json(const std::string& bytes) {
+  uint32_t length = 0;
+  if (bytes.size() < 20) return json();
+  std::memcpy(&length, bytes.data() + 12, 4);
+  return json::parse(bytes.substr(20, length));
 }
 
 }  // namespace luxel::test

@@ -74,6 +74,12 @@ std::string encode_png(int w, int h, int channels, const std::vector<uint8_t>& p
 // stored with an uncompressed deflate block.
 std::string encode_png16_gray(int w, int h, const std::vector<uint16_t>& pixels);
 
+// A whole file's bytes ("" when it cannot be read).
+std::string read_all(const std::string& path);
+
+// The JSON chunk of a GLB, parsed independently of Luxel's readers.
+json glb_json(const std::string& bytes);
+
 // A unit quad in the XY plane (z = 0), two triangles wound counter-clockwise
 // seen from +Z: positions and indices.
 extern const std::vector<float> kQuadPositions;
