@@ -151,18 +151,22 @@ class RoundTrip(unittest.TestCase):
         if not os.path.exists(written):
             return ["no _lightmapped.glb written"]
         doc = glb_json(written)
-        # Lightmap set per glTF mesh name, and per primitive in file order
-        # (Assimp makes one mesh per primitive, in that order).
-        lightmap_by_mesh, lightmap_by_prim = {}, []
-        for mesh in doc["meshes"]:
-            for prim in mesh["primitives"]:
+        # Lightmap set per mesh under the name Blender gives it (the glTF
+        # name, else "Mesh_<index>"), and per primitive under the name Assimp
+        # gives it (the name, else "meshes[<index>]", then "-<primitive>" when
+        # the mesh has several).
+        lightmap_by_mesh, lightmap_by_prim = {}, {}
+        for i, mesh in enumerate(doc["meshes"]):
+            prims = mesh["primitives"]
+            for p, prim in enumerate(prims):
                 index = prim.get("extras", {}).get("lightmapTexCoord")
-                lightmap_by_prim.append(index)
+                assimp_name = (mesh.get("name") or f"meshes[{i}]") + (f"-{p}" if len(prims) > 1 else "")
+                lightmap_by_prim[assimp_name] = index
                 if index is not None:
-                    lightmap_by_mesh.setdefault(mesh.get("name", ""), set()).add(index)
+                    lightmap_by_mesh.setdefault(mesh.get("name") or f"Mesh_{i}", set()).add(index)
 
         # `luxel inspect` and the manifest say which set holds the lightmap.
-        counts = collections.Counter(i for i in lightmap_by_prim if i is not None)
+        counts = collections.Counter(i for i in lightmap_by_prim.values() if i is not None)
         inspect = subprocess.run([ARGS.luxel, "inspect", written, "--no-trace"],
                                  capture_output=True, text=True)
         line = next((l for l in inspect.stdout.splitlines() if l.startswith("lightmap set ")), "")
@@ -204,26 +208,32 @@ class RoundTrip(unittest.TestCase):
             problems.append(f"Assimp refuses the written file: {error}")
         else:
             meshes, materials = out_a
-            if len(meshes) != len(lightmap_by_prim):
-                problems.append(f"Assimp: {len(meshes)} meshes for {len(lightmap_by_prim)} primitives")
-            else:
-                for (mesh_name, sets), index in zip(meshes, lightmap_by_prim):
-                    if index is None:
-                        continue
-                    if index >= len(sets):
-                        problems.append(f"Assimp: '{mesh_name}' has {len(sets)} UV channels, "
-                                        f"lightmap is TEXCOORD_{index}")
-                    elif not in_unit_square(sets[index][0]) or not spans_area(sets[index][0]):
-                        problems.append(f"Assimp: '{mesh_name}' lightmap UVs outside [0,1]^2")
+            # Assimp reads the default scene's meshes only.
+            for mesh_name, sets in meshes:
+                if mesh_name not in lightmap_by_prim:
+                    problems.append(f"Assimp: mesh '{mesh_name}' is not a primitive of the file")
+                    continue
+                index = lightmap_by_prim[mesh_name]
+                if index is None:
+                    continue
+                if index >= len(sets):
+                    problems.append(f"Assimp: '{mesh_name}' has {len(sets)} UV channels, "
+                                    f"lightmap is TEXCOORD_{index}")
+                elif not in_unit_square(sets[index][0]) or not spans_area(sets[index][0]):
+                    problems.append(f"Assimp: '{mesh_name}' lightmap UVs outside [0,1]^2")
             if src_a is not None:
                 src_meshes_a, src_materials_a = src_a
                 if src_materials_a != materials[:len(src_materials_a)]:
                     problems.append("Assimp: material UV sources changed")
-                if len(src_meshes_a) == len(meshes):
-                    for (mesh_name, src_sets), (_, sets) in zip(src_meshes_a, meshes):
-                        for k, (_, counter) in enumerate(src_sets):
-                            if k >= len(sets) or sets[k][1] != counter:
-                                problems.append(f"Assimp: '{mesh_name}' UV channel {k} changed")
+                written_sets = dict(meshes)
+                for mesh_name, src_sets in src_meshes_a:
+                    sets = written_sets.get(mesh_name)
+                    if sets is None:
+                        problems.append(f"Assimp: mesh '{mesh_name}' of the source is missing")
+                        continue
+                    for k, (_, counter) in enumerate(src_sets):
+                        if k >= len(sets) or sets[k][1] != counter:
+                            problems.append(f"Assimp: '{mesh_name}' UV channel {k} changed")
 
         # The written file bakes to the same bits.
         again = os.path.join(ARGS.work, "again", name)

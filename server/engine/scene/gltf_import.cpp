@@ -309,6 +309,11 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
         scene->meshes.push_back(std::move(*mesh));
         slot = static_cast<int>(scene->meshes.size() - 1);
       }
+      // A mesh of points and lines only (its primitives were skipped) has
+      // nothing to bake, occlude or lay out: no instance, so neither the
+      // atlas nor the write-back gives it a place.
+      const bool has_triangle_primitive =
+          !scene->meshes[static_cast<size_t>(slot)].primitive_spans.empty();
       Instance inst;
       inst.name = node.name.empty() ? strprintf("node[%d]", item.node) : node.name;
       inst.node_index = item.node;
@@ -316,7 +321,9 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.object_to_world = world;
       LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, -1, &inst));
       LUXEL_RETURN_IF_ERROR(instance_transforms(model, item.node, &budget, &per_instance));
-      if (per_instance.empty()) {
+      if (!has_triangle_primitive) {
+        // (skipped; see above)
+      } else if (per_instance.empty()) {
         scene->instances.push_back(std::move(inst));
       } else {
         // EXT_mesh_gpu_instancing: each instance's TRS is expressed in the
