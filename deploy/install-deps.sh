@@ -25,6 +25,8 @@ PACKAGES=(
   # tests
   googletest libgtest-dev libgmock-dev
   python3 python3-numpy
+  # pip, for Open Image Denoise's official libraries (below)
+  python3-pip
   # `luxel report --plot` and the benchmark suite's plots
   python3-matplotlib
 )
@@ -32,3 +34,24 @@ PACKAGES=(
 # shellcheck source=deploy/apt-install.sh
 source "$(dirname "$0")/apt-install.sh"
 apt_install_missing install-deps "${PACKAGES[@]}"
+
+# Intel Open Image Denoise 2.5.1 (`--denoise oidn`, post/oidn.h): Debian 12 has
+# no package, so the official libraries come from the PyPI wheel pyoidn, which
+# ships them (libOpenImageDenoise.so.2, the core with the trained weights, the
+# CPU device, TBB) under pyoidn/oidn/lib. Installed into a prefix Luxel owns,
+# never into the system's Python; Luxel dlopens it from there at run time
+# (LUXEL_OIDN_LIBRARY overrides). --no-deps: only the libraries are wanted.
+# PIP_BREAK_SYSTEM_PACKAGES: Debian's pip refuses even a --target install
+# into a Python it calls externally managed; older pips ignore the variable.
+oidn_prefix="${LUXEL_PREFIX:-/opt/luxel}/oidn"
+oidn_lib="$oidn_prefix/pyoidn/oidn/lib/libOpenImageDenoise.so.2"
+if [ -e "$oidn_lib" ]; then
+  echo "install-deps: Open Image Denoise present ($oidn_lib)"
+else
+  echo "install-deps: installing Open Image Denoise 2.5.1 into $oidn_prefix"
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+  $sudo env PIP_BREAK_SYSTEM_PACKAGES=1 python3 -m pip install --quiet --no-deps \
+    --upgrade --target "$oidn_prefix" pyoidn==2.5.1.0
+  test -e "$oidn_lib"
+fi

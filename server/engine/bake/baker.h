@@ -26,6 +26,7 @@
 #include "bake/tile_plan.h"
 #include "common/clock.h"
 #include "post/denoise.h"
+#include "post/oidn.h"
 
 namespace luxel::pipeline {
 
@@ -120,6 +121,12 @@ class Baker {
     return ProgressiveVariance::overlay(std::move(welford), v);
   }
   DenoiseParams denoise_params(size_t two_point_texels) const;
+  // settings_.denoise == oidn and the library loads (post/oidn.h): makes
+  // oidn_ on the first call; otherwise records why in oidn_missing_ (the
+  // a-trous filter runs instead). Decided once per bake.
+  bool use_oidn();
+  // The manifest's "denoise" object for what denoise() did last.
+  std::string denoise_json(size_t two_point_texels) const;
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -161,7 +168,10 @@ class Baker {
   std::unique_ptr<RadixSort> sort_;
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
-  std::unique_ptr<Denoiser> denoiser_;   // on the first denoise()
+  std::unique_ptr<Denoiser> denoiser_;  // on the first denoise()
+  std::unique_ptr<OidnDenoiser> oidn_;  // settings_.denoise == oidn, library found
+  bool oidn_tried_ = false;
+  std::string oidn_missing_;             // why oidn_ is null with denoise == oidn
   ProgressiveVariance progressive_;      // milestones of the current tile
   std::vector<float> denoise_variance_;  // finished tiles' two-point variances (-1: none)
   size_t two_point_texels_ = 0;          // how many texels have one

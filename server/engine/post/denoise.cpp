@@ -116,10 +116,17 @@ Result<std::vector<float>> Denoiser::run(const std::vector<float>& rgba,
 
 void Denoiser::clamp_to_raw(const std::vector<float>& rgba, const std::vector<float>& variance,
                             const DenoiseParams& params, std::vector<float>& out) const {
+  clamp_to_standard_errors(rgba, variance, chart_, width_, height_, params.clamp_standard_errors,
+                           out);
+}
+
+void clamp_to_standard_errors(const std::vector<float>& rgba, const std::vector<float>& variance,
+                              const std::vector<uint32_t>& chart, int width, int height,
+                              float standard_errors, std::vector<float>& out) {
   auto lum = [](const float* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
-  for (int y = 0; y < height_; ++y)
-    for (int x = 0; x < width_; ++x) {
-      const size_t t = size_t(y) * size_t(width_) + size_t(x);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t t = size_t(y) * size_t(width) + size_t(x);
       if (!(rgba[t * 4 + 3] > 0.0f)) continue;
       // The variance smoothed over the covered 3x3 neighbours of the chart:
       // a two-point variance has one degree of freedom per texel.
@@ -128,13 +135,13 @@ void Denoiser::clamp_to_raw(const std::vector<float>& rgba, const std::vector<fl
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const int qx = x + dx, qy = y + dy;
-          if (qx < 0 || qy < 0 || qx >= width_ || qy >= height_) continue;
-          const size_t q = size_t(qy) * size_t(width_) + size_t(qx);
-          if (!(rgba[q * 4 + 3] > 0.0f) || chart_[q] != chart_[t]) continue;
+          if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+          const size_t q = size_t(qy) * size_t(width) + size_t(qx);
+          if (!(rgba[q * 4 + 3] > 0.0f) || chart[q] != chart[t]) continue;
           sum += std::max(0.0f, variance[q]);
           ++n;
         }
-      const double bound = params.clamp_standard_errors * std::sqrt(sum / std::max(n, 1));
+      const double bound = standard_errors * std::sqrt(sum / std::max(n, 1));
       const double raw = lum(&rgba[t * 4]), filtered = lum(&out[t * 4]);
       const double moved = std::abs(filtered - raw);
       if (!(moved > bound)) continue;

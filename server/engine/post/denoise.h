@@ -50,6 +50,16 @@ struct DenoiseParams {
 std::vector<float> texel_variance(const std::vector<float>& rgba,
                                   const std::vector<float>& rel_error);
 
+// The blend after filtering (DenoiseParams::clamp_standard_errors, shared by
+// the a-trous and OIDN filters): each covered texel's luminance in `out` is
+// held within `standard_errors` standard errors of its raw value in `rgba`
+// (the variance averaged over its covered 3x3 neighbours on the same chart),
+// scaling the filter's change of all three channels. Uncovered texels and
+// alpha are left alone.
+void clamp_to_standard_errors(const std::vector<float>& rgba, const std::vector<float>& variance,
+                              const std::vector<uint32_t>& chart, int width, int height,
+                              float standard_errors, std::vector<float>& out);
+
 class Denoiser {
  public:
   static Result<std::unique_ptr<Denoiser>> create(device::Context& ctx,
@@ -68,7 +78,7 @@ class Denoiser {
 
  private:
   explicit Denoiser(device::Context& ctx) : ctx_(ctx) {}
-  // DenoiseParams::clamp_standard_errors on the filtered `out`.
+  // clamp_to_standard_errors on the filtered `out`.
   void clamp_to_raw(const std::vector<float>& rgba, const std::vector<float>& variance,
                     const DenoiseParams& params, std::vector<float>& out) const;
   device::Context& ctx_;

@@ -30,7 +30,7 @@ LUXEL_CHOICE_ENUM(Filter, LUXEL_FILTER_CHOICES)
 
 // Denoising of the finished lightmap (post/denoise.h): an extra output
 // irradiance_denoised.exr; the raw irradiance.exr is always written too.
-#define LUXEL_DENOISE_CHOICES(X) X(kOff, "off") X(kAtrous, "atrous")
+#define LUXEL_DENOISE_CHOICES(X) X(kOff, "off") X(kAtrous, "atrous") X(kOidn, "oidn")
 LUXEL_CHOICE_ENUM(Denoise, LUXEL_DENOISE_CHOICES)
 
 // Direct light at the texel point (irradiance lightmaps): the exact

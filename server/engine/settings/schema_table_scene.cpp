@@ -279,7 +279,9 @@ void add_scene_and_output_settings(std::vector<Setting>& t) {
        .type = Type::kChoice,
        .units = "",
        .help = "denoiser of the finished lightmap, written as irradiance_denoised.exr besides the "
-               "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; off: none)",
+               "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; oidn: Intel Open Image "
+               "Denoise's RTLightmap filter per chart, a-trous when its library is missing; off: "
+               "none)",
        .flag = "--denoise",
        .metavar = "D",
        .default_value = SettingValue::of_text(choice_name(Denoise::kOff)),

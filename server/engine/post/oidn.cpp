@@ -1,0 +1,262 @@
+#include "post/oidn.h"
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <mutex>
+#include <nlohmann/json.hpp>
+
+#include "output/dilate.h"
+#include "post/denoise.h"
+
+namespace luxel::pipeline {
+namespace {
+
+// The paths load_oidn tries, in order (oidn.h).
+std::vector<std::string> oidn_candidates() {
+  std::vector<std::string> paths;
+  if (const char* env = std::getenv("LUXEL_OIDN_LIBRARY"); env && *env) {
+    // An explicit choice is the only one: falling back to another copy would
+    // hide a wrong setting.
+    paths.push_back(env);
+    return paths;
+  }
+  const char* prefix = std::getenv("LUXEL_PREFIX");
+  paths.push_back(std::string(prefix && *prefix ? prefix : "/opt/luxel") +
+                  "/oidn/pyoidn/oidn/lib/libOpenImageDenoise.so.2");
+  paths.push_back("libOpenImageDenoise.so.2");  // the default loader path
+  return paths;
+}
+
+template <typename Fn>
+bool bind(void* handle, const char* name, Fn& out) {
+  out = reinterpret_cast<Fn>(dlsym(handle, name));
+  return out != nullptr;
+}
+
+// Opens one candidate and binds the entry points oidn_api.h declares; "" on
+// success, else why not.
+std::string open_oidn(const std::string& path, OidnLibrary& lib) {
+  // RTLD_LOCAL: the library's TBB stays its own. The wheel's libraries find
+  // each other through their RPATH ($ORIGIN/../lib).
+  void* h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (!h) {
+    const char* e = dlerror();
+    return e ? e : "dlopen failed";
+  }
+  lib.path = path;
+  const bool ok = bind(h, "oidnNewDevice", lib.new_device) &&
+                  bind(h, "oidnCommitDevice", lib.commit_device) &&
+                  bind(h, "oidnGetDeviceError", lib.get_device_error) &&
+                  bind(h, "oidnGetDeviceInt", lib.get_device_int) &&
+                  bind(h, "oidnReleaseDevice", lib.release_device) &&
+                  bind(h, "oidnNewFilter", lib.new_filter) &&
+                  bind(h, "oidnSetSharedFilterImage", lib.set_shared_filter_image) &&
+                  bind(h, "oidnSetFilterBool", lib.set_filter_bool) &&
+                  bind(h, "oidnCommitFilter", lib.commit_filter) &&
+                  bind(h, "oidnExecuteFilter", lib.execute_filter) &&
+                  bind(h, "oidnReleaseFilter", lib.release_filter);
+  if (!ok) {
+    const char* e = dlerror();
+    dlclose(h);
+    return std::string("not an Open Image Denoise 2 library: ") + (e ? e : "missing symbol");
+  }
+  // A device proves the core and the CPU module load too (they are opened
+  // lazily by the library), and gives the version.
+  oidn::Device d = lib.new_device(oidn::kDeviceCpu);
+  std::string why;
+  if (d) {
+    lib.commit_device(d);
+    const char* msg = nullptr;
+    if (lib.get_device_error(d, &msg) != oidn::kErrorNone)
+      why = std::string("no CPU device: ") + (msg ? msg : "unknown error");
+    else
+      lib.version = lib.get_device_int(d, "version");
+    lib.release_device(d);
+  } else {
+    why = "no CPU device";
+  }
+  if (!why.empty()) dlclose(h);  // a usable library is never closed (oidn.h)
+  return why;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+Result<OidnLibrary> load_oidn_uncached() {
+  std::string tried;
+  for (const std::string& path : oidn_candidates()) {
+    OidnLibrary lib;
+    const std::string why = open_oidn(path, lib);
+    if (why.empty()) return lib;
+    tried += (tried.empty() ? "" : "; ") + why;
+  }
+  return not_found(tried);
+}
+
+Result<const OidnLibrary*> load_oidn() {
+  static std::once_flag once;
+  static Result<OidnLibrary> loaded = not_found("not loaded");
+  std::call_once(once, [] { loaded = load_oidn_uncached(); });
+  if (!loaded) return loaded.status();
+  return &loaded.value();
+}
+
+OidnDenoiser::OidnDenoiser(const OidnLibrary& lib, DenoiseGuides guides, int pages)
+    : lib_(lib), guides_(std::move(guides)), pages_(std::max(pages, 1)) {}
+
+OidnDenoiser::~OidnDenoiser() {
+  if (device_) lib_.release_device(device_);
+}
+
+Status OidnDenoiser::filter(std::vector<float>& rgb, int w, int h) {
+  if (!device_) {
+    device_ = lib_.new_device(oidn::kDeviceCpu);
+    if (!device_) return unavailable("oidn: no CPU device");
+    lib_.commit_device(device_);
+  }
+  auto error = [&](const char* what) -> Status {
+    const char* msg = nullptr;
+    if (lib_.get_device_error(device_, &msg) == oidn::kErrorNone) return Status::ok();
+    return internal_error(strprintf("oidn %s: %s", what, msg ? msg : "unknown error"));
+  };
+  LUXEL_RETURN_IF_ERROR(error("device"));
+  // "RTLightmap": HDR irradiance in, the same out; in-place is allowed
+  // ("Filters": output may alias an input). directional stays false: this is
+  // the plain irradiance map (oidn.h; directional encodings are left raw).
+  oidn::Filter f = lib_.new_filter(device_, "RTLightmap");
+  if (!f) return error("new filter");
+  lib_.set_shared_filter_image(f, "color", rgb.data(), oidn::kFormatFloat3, size_t(w), size_t(h), 0,
+                               0, 0);
+  lib_.set_shared_filter_image(f, "output", rgb.data(), oidn::kFormatFloat3, size_t(w), size_t(h),
+                               0, 0, 0);
+  lib_.set_filter_bool(f, "directional", false);
+  lib_.commit_filter(f);
+  Status s = error("commit");
+  if (s.is_ok()) {
+    const auto t = std::chrono::steady_clock::now();
+    lib_.execute_filter(f);
+    stats_.filter_s += seconds_since(t);
+    s = error("execute");
+  }
+  lib_.release_filter(f);
+  stats_.filtered_texels += size_t(w) * size_t(h);
+  ++stats_.images;
+  return s;
+}
+
+Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
+                                             const std::vector<float>& variance,
+                                             const OidnParams& params) {
+  const int width = guides_.width, height = guides_.height;
+  const size_t texels = size_t(width) * size_t(height);
+  if (rgba.size() != texels * 4 || variance.size() != texels || guides_.chart.size() != texels)
+    return internal_error("oidn: input does not match the lightmap size");
+  stats_ = {};
+  auto covered = [&](size_t t) { return rgba[t * 4 + 3] > 0.0f; };
+  // The images to filter: one per chart (its bounding box), or per page.
+  struct Crop {
+    int x0, y0, x1, y1;  // inclusive
+  };
+  std::map<uint32_t, Crop> crops;
+  const int page_h = height / pages_;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t t = size_t(y) * size_t(width) + size_t(x);
+      if (!covered(t)) continue;
+      const uint32_t key = params.whole_pages ? uint32_t(y / page_h) : guides_.chart[t];
+      auto [it, fresh] = crops.try_emplace(key, Crop{x, y, x, y});
+      if (fresh) continue;
+      Crop& c = it->second;
+      c.x0 = std::min(c.x0, x), c.x1 = std::max(c.x1, x);
+      c.y0 = std::min(c.y0, y), c.y1 = std::max(c.y1, y);
+    }
+  std::vector<float> out = rgba;
+  std::vector<float> rgb;
+  for (const auto& [crop_key, c] : crops) {
+    const uint32_t key = crop_key;
+    const int w = c.x1 - c.x0 + 1, h = c.y1 - c.y0 + 1;
+    auto mine = [&](size_t t) {
+      return covered(t) && (params.whole_pages ? uint32_t(int(t / size_t(width)) / page_h) == key
+                                               : guides_.chart[t] == key);
+    };
+    // The crop with only this chart's texels marked covered, dilated into
+    // the rest (output/dilate.h: thesis section 6.4.1's padding fill), so the
+    // network sees neither background nor a neighbour. Texels the dilation
+    // does not reach (holes far inside the box) get the chart's mean.
+    // Channel 3 marks what holds a value: 1 on the chart, and dilation
+    // carries the 1 to the texels it fills.
+    output::Image img = output::make_image(w, h, 4), cover = output::make_image(w, h, 1);
+    double sum[3] = {0, 0, 0};
+    size_t n = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t t = size_t(c.y0 + y) * size_t(width) + size_t(c.x0 + x);
+        if (!mine(t)) continue;
+        for (int k = 0; k < 3; ++k) {
+          img.at(x, y, k) = rgba[t * 4 + k];
+          sum[k] += rgba[t * 4 + k];
+        }
+        img.at(x, y, 3) = 1.0f;
+        cover.at(x, y, 0) = 1.0f;
+        ++n;
+      }
+    constexpr int kDilateTexels = 8;
+    LUXEL_RETURN_IF_ERROR(output::dilate(img, cover, kDilateTexels));
+    rgb.assign(size_t(w) * size_t(h) * 3, 0.0f);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const bool filled = img.at(x, y, 3) > 0.0f;
+        for (int k = 0; k < 3; ++k)
+          rgb[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(k)] =
+              filled ? img.at(x, y, k) : float(sum[k] / double(std::max<size_t>(n, 1)));
+      }
+    LUXEL_RETURN_IF_ERROR(filter(rgb, w, h));
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const size_t t = size_t(c.y0 + y) * size_t(width) + size_t(c.x0 + x);
+        if (!mine(t)) continue;
+        for (int k = 0; k < 3; ++k) {
+          const float v = rgb[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(k)];
+          // The network's output is not constrained: irradiance is never
+          // negative, and a non-finite value keeps the raw one.
+          out[t * 4 + k] = std::isfinite(v) ? std::max(v, 0.0f) : rgba[t * 4 + k];
+        }
+      }
+  }
+  if (params.clamp_standard_errors > 0)
+    clamp_to_standard_errors(rgba, variance, guides_.chart, width, height,
+                             params.clamp_standard_errors, out);
+  return out;
+}
+
+std::string OidnDenoiser::describe_json(const OidnParams& params) const {
+  nlohmann::json j = {
+      {"method", "oidn"},
+      {"filter", "RTLightmap"},
+      {"reference", "Intel Open Image Denoise, RTLightmap filter (HDR irradiance)"},
+      {"library", lib_.path},
+      {"version", lib_.version},
+      {"device", "cpu"},
+      {"isolation", params.whole_pages
+                        ? "per lightmap page, charts dilated into their padding"
+                        : "per chart: its bounding box, other texels filled from the chart "
+                          "(dilation, then its mean)"},
+      {"images", stats_.images},
+      {"filtered_texels", stats_.filtered_texels},
+      {"filter_seconds", stats_.filter_s},
+      {"seconds_per_megatexel", stats_.seconds_per_megatexel()},
+      {"variance", params.variance_source},
+      {"clamp_standard_errors", params.clamp_standard_errors},
+      {"directional", "not filtered (left raw)"}};
+  return j.dump();
+}
+
+}  // namespace luxel::pipeline
