@@ -1,5 +1,6 @@
-// bench_denoise: accuracy and cost of the a-trous lightmap denoiser
-// (post/denoise.h), the figures of docs/accuracy.md "Denoiser".
+// bench_denoise: accuracy and cost of the lightmap denoisers, a-trous
+// (post/denoise.h) and Open Image Denoise's RTLightmap (post/oidn.h), the
+// figures of docs/accuracy.md "Denoiser" and "Open Image Denoise".
 //
 //   bench_denoise [--resolution N] [--bounces B] [--ref-spp N] [--spp 4,16,64]
 //                 [--sky] [--ref-cache FILE.exr]
@@ -18,10 +19,16 @@
 // --sigma-l / --sigma-n / --iterations: the filter run again with these
 // parameters (DenoiseParams) instead of the bake's defaults.
 //
+// One row per spp and filter: raw, a-trous (the bake's), and, when its
+// library loads, OIDN run on the same raw bake and variances as a bake with
+// `denoise = oidn` runs it (per chart, blended) and without the blend; the
+// OIDN rows give the filter's seconds per megatexel of filtered crops.
+//
 // --timing: an open plane covering an N x N lightmap (2 samples per texel,
 // constant sky); CPU (user + sys, all threads) and wall seconds of building
 // the host guides, and of one filter run (upload, 5 launches, read back; the
-// best of 3 after a warm-up run), per N.
+// best of 3 after a warm-up run), per N; and OIDN's wall seconds for the same
+// image (one chart: one filter call; best of 3), with seconds per megatexel.
 #include "post/denoise.h"
 
 #include <sys/resource.h>
@@ -41,6 +48,7 @@
 #include "device/context.h"
 #include "output/exr.h"
 #include "post/denoise_guides.h"
+#include "post/oidn.h"
 #include "scene/gltf_import.h"
 
 using namespace luxel;
@@ -142,7 +150,9 @@ double cpu_seconds() {
 void timing(const std::vector<int>& sizes, device::Context& ctx) {
   std::printf(
       "| lightmap | covered texels | guides CPU s | guides wall s | filter CPU s (5 launches + "
-      "transfers) | filter wall s |\n|---|---|---|---|---|---|\n");
+      "transfers) | filter wall s | OIDN wall s | OIDN s per Mtexel |\n"
+      "|---|---|---|---|---|---|---|---|\n");
+  auto oidn = pipeline::load_oidn();
   for (int n : sizes) {
     scene::Scene s;
     s.source_name = "plane";
@@ -185,8 +195,19 @@ void timing(const std::vector<int>& sizes, device::Context& ctx) {
       best_wall = std::min(best_wall, seconds_since(t));
       best_cpu = std::min(best_cpu, cpu_seconds() - c);
     }
-    std::printf("| %d² | %zu | %.3f | %.3f | %.3f | %.3f |\n", n, r.covered_texels, guide_cpu,
-                guide_wall, best_cpu, best_wall);
+    double oidn_wall = 0, oidn_per_mtexel = 0;
+    if (oidn) {
+      pipeline::OidnDenoiser od(*oidn.value(), guides, r.atlas.pages);
+      oidn_wall = 1e30;
+      for (int k = 0; k < 3; ++k) {
+        const auto t = std::chrono::steady_clock::now();
+        if (!od.run(r.irradiance, variance, {})) die("oidn failed");
+        if (seconds_since(t) < oidn_wall)
+          oidn_wall = seconds_since(t), oidn_per_mtexel = od.stats().seconds_per_megatexel();
+      }
+    }
+    std::printf("| %d² | %zu | %.3f | %.3f | %.3f | %.3f | %.3f | %.3f |\n", n, r.covered_texels,
+                guide_cpu, guide_wall, best_cpu, best_wall, oidn_wall, oidn_per_mtexel);
   }
 }
 
@@ -240,6 +261,7 @@ int main(int argc, char** argv) {
   pipeline::BakeSettings st;
   st.atlas.resolution = resolution;
   st.max_bounces = bounces;
+  st.denoise = pipeline::Denoise::kAtrous;  // off by default: the bake gives a-trous's map
   if (sky) {
     st.lights.sky.kind = pipeline::SkySettings::Kind::kConstant;
     st.lights.sky.color = {0.4f, 0.5f, 0.7f};
@@ -268,10 +290,11 @@ int main(int argc, char** argv) {
     }
   }
 
+  auto oidn = pipeline::load_oidn();
+  if (!oidn) std::fprintf(stderr, "no OIDN rows: %s\n", oidn.status().message().c_str());
   std::printf(
-      "| spp | all: RMSE raw | denoised | relMSE raw | denoised | edges: RMSE raw | "
-      "denoised | relMSE raw | denoised | edge texels / covered |\n"
-      "|---|---|---|---|---|---|---|---|---|---|\n");
+      "| spp | filter | all: RMSE | relMSE | edges: RMSE | relMSE | filter s per Mtexel |\n"
+      "|---|---|---|---|---|---|---|\n");
   for (int spp : spps) {
     st.samples_per_texel = uint32_t(spp);
     st.seed = 1;
@@ -281,7 +304,6 @@ int main(int argc, char** argv) {
     if (!info) die(info.status().to_string());
     const auto guides = pipeline::build_denoise_guides(scene.value(), r.atlas, info.value());
     const auto edges = edge_texels(guides, ref);
-    const Err a = error(r.irradiance, ref, r.irradiance, nullptr);
     std::vector<float> denoised = r.irradiance_denoised;
     if (custom) {
       auto d = pipeline::Denoiser::create(*ctx.value(), guides);
@@ -291,12 +313,24 @@ int main(int argc, char** argv) {
       if (!o) die(o.status().to_string());
       denoised = std::move(o.value());
     }
-    const Err b = error(denoised, ref, r.irradiance, nullptr);
-    const Err c = error(r.irradiance, ref, r.irradiance, &edges);
-    const Err d = error(denoised, ref, r.irradiance, &edges);
-    std::printf("| %d | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %.4g | %zu / %zu |\n", spp,
-                a.rmse, b.rmse, a.rel_mse, b.rel_mse, c.rmse, d.rmse, c.rel_mse, d.rel_mse,
-                c.texels, a.texels);
+    auto row = [&](const char* name, const std::vector<float>& x, double per_mtexel) {
+      const Err a = error(x, ref, r.irradiance, nullptr);
+      const Err e = error(x, ref, r.irradiance, &edges);
+      std::printf("| %d | %s | %.4g | %.4g | %.4g | %.4g | %s |\n", spp, name, a.rmse, a.rel_mse,
+                  e.rmse, e.rel_mse, per_mtexel > 0 ? strprintf("%.3f", per_mtexel).c_str() : "-");
+    };
+    row("raw", r.irradiance, 0);
+    row("a-trous", denoised, 0);
+    if (oidn) {
+      pipeline::OidnDenoiser od(*oidn.value(), guides, r.atlas.pages);
+      for (float blend : {1.0f, 0.0f}) {
+        pipeline::OidnParams p;
+        p.clamp_standard_errors = blend;
+        auto o = od.run(r.irradiance, r.denoise_variance, p);
+        if (!o) die(o.status().to_string());
+        row(blend > 0 ? "oidn" : "oidn, no blend", o.value(), od.stats().seconds_per_megatexel());
+      }
+    }
     std::fflush(stdout);
   }
   return 0;
