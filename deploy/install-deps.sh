@@ -43,9 +43,13 @@ apt_install_missing install-deps "${PACKAGES[@]}"
 # (LUXEL_OIDN_LIBRARY overrides). --no-deps: only the libraries are wanted.
 # PIP_BREAK_SYSTEM_PACKAGES: Debian's pip refuses even a --target install
 # into a Python it calls externally managed; older pips ignore the variable.
+# LUXEL_WITH_OIDN=0 skips it (the container image: Debian packages only, and
+# its bakes fall back to the a-trous filter).
 oidn_prefix="${LUXEL_PREFIX:-/opt/luxel}/oidn"
 oidn_lib="$oidn_prefix/pyoidn/oidn/lib/libOpenImageDenoise.so.2"
-if [ -e "$oidn_lib" ]; then
+if [ "${LUXEL_WITH_OIDN:-1}" = "0" ]; then
+  echo "install-deps: Open Image Denoise skipped (LUXEL_WITH_OIDN=0)"
+elif [ -e "$oidn_lib" ]; then
   echo "install-deps: Open Image Denoise present ($oidn_lib)"
 else
   echo "install-deps: installing Open Image Denoise 2.5.1 into $oidn_prefix"
