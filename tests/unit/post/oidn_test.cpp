@@ -9,7 +9,8 @@
 //       in the bake and for the filter without the blend; the same check
 //       FAILS for the injected error, the filter without the blend over the
 //       whole page at once (charts only dilated into their padding);
-//   (c) a converged input (zero variance) comes out unchanged;
+//   (c) a converged input (zero variance) comes out unchanged; the same
+//       input gives the same bits;
 //   (d) missing library: run once more by ctest with LUXEL_OIDN_LIBRARY at a
 //       file that does not exist (oidn_missing_test): `denoise = oidn` bakes
 //       with the a-trous filter and the manifest's denoise object says why.
@@ -185,6 +186,10 @@ TEST_F(OidnTest, ConvergedInputUnchanged) {
   auto free = d.run(b.irradiance, b.denoise_variance, off);
   ASSERT_TRUE(free);
   EXPECT_NE(free.value(), b.irradiance);
+  // Like the bake, the same input gives the same bits (OIDN's CPU device).
+  auto again = d.run(b.irradiance, b.denoise_variance, off);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again.value(), free.value());
 }
 
 // (d) Only in the run ctest starts with LUXEL_OIDN_LIBRARY at a nonexistent
