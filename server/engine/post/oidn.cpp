@@ -41,8 +41,11 @@ bool bind(void* handle, const char* name, Fn& out) {
 // Opens one candidate and binds the entry points oidn_api.h declares; "" on
 // success, else why not.
 std::string open_oidn(const std::string& path, OidnLibrary& lib) {
-  // RTLD_LOCAL: the library's TBB stays its own. The wheel's libraries find
-  // each other through their RPATH ($ORIGIN/../lib).
+  // The wheel's libraries find each other through their RPATH
+  // ($ORIGIN/../lib). Its libtbb.so.12 is not the one used when Embree has
+  // already loaded Debian's (same SONAME: the loader reuses it); OIDN runs on
+  // that one (oidn_test does). RTLD_LOCAL keeps OIDN's symbols out of the
+  // global scope.
   void* h = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (!h) {
     const char* e = dlerror();
