@@ -10,6 +10,7 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 
+#include "common/clock.h"
 #include "output/dilate.h"
 #include "post/denoise.h"
 
@@ -87,13 +88,27 @@ std::string open_oidn(const std::string& path, OidnLibrary& lib) {
   return why;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 }  // namespace
 
+// AddressSanitizer aborts the process when a library is dlopened with
+// RTLD_DEEPBIND (google/sanitizers#611), and the TBB that OIDN runs on opens
+// its topology helper (libtbbbind) that way. A sanitizer build therefore never
+// loads OIDN: it denoises with a-trous and says why, like a machine without
+// the library.
+#if defined(__SANITIZE_ADDRESS__)
+#define LUXEL_OIDN_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define LUXEL_OIDN_UNDER_ASAN 1
+#endif
+#endif
+
 Result<OidnLibrary> load_oidn_uncached() {
+#ifdef LUXEL_OIDN_UNDER_ASAN
+  return not_found(
+      "not loaded in an AddressSanitizer build (OIDN's TBB dlopens libtbbbind with "
+      "RTLD_DEEPBIND, which the sanitizer refuses)");
+#endif
   std::string tried;
   for (const std::string& path : oidn_candidates()) {
     OidnLibrary lib;
