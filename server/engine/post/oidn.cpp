@@ -104,13 +104,14 @@ std::string open_oidn(const std::string& path, OidnLibrary& lib) {
 #endif
 
 Result<OidnLibrary> load_oidn_uncached() {
-#ifdef LUXEL_OIDN_UNDER_ASAN
-  return not_found(
-      "not loaded in an AddressSanitizer build (OIDN's TBB dlopens libtbbbind with "
-      "RTLD_DEEPBIND, which the sanitizer refuses)");
-#endif
   std::string tried;
   for (const std::string& path : oidn_candidates()) {
+#ifdef LUXEL_OIDN_UNDER_ASAN
+    tried += (tried.empty() ? "" : "; ") + path +
+             ": not loaded in an AddressSanitizer build (OIDN's TBB dlopens libtbbbind with "
+             "RTLD_DEEPBIND, which the sanitizer refuses)";
+    continue;
+#endif
     OidnLibrary lib;
     const std::string why = open_oidn(path, lib);
     if (why.empty()) return lib;
