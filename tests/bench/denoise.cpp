@@ -36,6 +36,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <utility>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -323,12 +324,16 @@ int main(int argc, char** argv) {
     row("a-trous", denoised, 0);
     if (oidn) {
       pipeline::OidnDenoiser od(*oidn.value(), guides, r.atlas.pages);
-      for (float blend : {1.0f, 0.0f}) {
+      const std::pair<pipeline::OidnBlend, const char*> blends[] = {
+          {pipeline::OidnBlend::kShrink, "oidn (shrink, the bake's)"},
+          {pipeline::OidnBlend::kClamp, "oidn, clamp 1 SE"},
+          {pipeline::OidnBlend::kNone, "oidn, no blend"}};
+      for (const auto& [blend, label] : blends) {
         pipeline::OidnParams p;
-        p.clamp_standard_errors = blend;
+        p.blend = blend;
         auto o = od.run(r.irradiance, r.denoise_variance, p);
         if (!o) die(o.status().to_string());
-        row(blend > 0 ? "oidn" : "oidn, no blend", o.value(), od.stats().seconds_per_megatexel());
+        row(label, o.value(), od.stats().seconds_per_megatexel());
       }
     }
     std::fflush(stdout);

@@ -9,8 +9,13 @@ Each configuration switches some of the features on over the configuration
   analytic   + analytic direct light with ratio-estimator shadows
   adaptive   + adaptive sampling
   denoise    + the a-trous denoiser (RMSE of irradiance_denoised.exr)
+  oidn       + Open Image Denoise's RTLightmap filter (irradiance_denoised.exr)
   all        every feature on (what the defaults are meant to be)
   all_but_X  (--leave-one-out) every feature but X
+  default    no option at all: what a bake gets today
+  default_raw  the defaults with --denoise off (the raw map a default bake also writes)
+  default_atrous  the defaults with --denoise atrous
+  default_oidn    the defaults with --denoise oidn
 
 Settings come from `luxel settings --json`, so the flags follow the schema; a
 configuration that needs a setting the binary lacks is reported as absent.
@@ -64,11 +69,21 @@ FEATURES = {  # feature -> (setting name, value when on, value when off)
 SHARED = ["cornell_box.glb", "breakfast_room.glb", "sponza.glb", "gas_station.glb"]
 
 
+# Configurations that change one setting of another configuration:
+# name -> (base features, {setting name: value}). A base of None is the
+# defaults.
+VARIANTS = {"oidn": ({"denoise"}, {"denoise": "oidn"}),
+            "default_raw": (None, {"denoise": "off"}),
+            "default_oidn": (None, {"denoise": "oidn"}),
+            "default_atrous": (None, {"denoise": "atrous"})}
+
+
 def configs(leave_one_out):
     # "default": no option at all, what a bake gets today (its features are
     # whatever the defaults are: None).
     out = [("before", set()), ("default", None), ("analytic", {"analytic"}), ("adaptive", {"adaptive"}),
            ("denoise", {"denoise"}), ("stitch", {"stitch"}), ("all", set(FEATURES))]
+    out += [(name, base) for name, (base, _) in VARIANTS.items()]
     if leave_one_out:
         out += [("all_but_" + f, set(FEATURES) - {f}) for f in FEATURES if f != "stitch"]
     return out
@@ -110,14 +125,23 @@ def schema(luxel):
     return {s["name"]: s for s in json.loads(r.stdout)["settings"]}
 
 
-def options_for(features_on, sch):
+def options_for(features_on, sch, overrides=None):
     """CLI options that set every feature on or off; None when a needed setting is missing.
-    features_on None: no options (the defaults)."""
+    features_on None: no options (the defaults). `overrides`: {setting: value} replacing what a
+    feature sets (or added to the defaults)."""
+    overrides = overrides or {}
+    for name, want in overrides.items():
+        if name not in sch or (sch[name].get("choices") and want not in sch[name]["choices"]):
+            return None
     if features_on is None:
-        return []
+        opts = []
+        for name, want in overrides.items():
+            if str(sch[name]["default"]) != str(want):
+                opts += [sch[name]["flag"], str(want)]
+        return opts
     opts = []
     for f, (name, on, off) in FEATURES.items():
-        want = on if f in features_on else off
+        want = overrides.get(name, on) if f in features_on else off
         s = sch.get(name)
         if s is None:
             if f in features_on:
@@ -240,7 +264,7 @@ def main(argv):
         sres = {"resolution": res, "reference": str(ref_dir), "configs": {}}
         results["scenes"][name] = sres
         for cname, on in cfgs:
-            opts = options_for(on, sch)
+            opts = options_for(on, sch, VARIANTS.get(cname, (None, {}))[1])
             if opts is None:
                 sres["configs"][cname] = {"absent": True}
                 print("  %-16s absent (the binary lacks a setting)" % cname, flush=True)
@@ -256,7 +280,11 @@ def main(argv):
                     failures.append("%s/%s at %g s: %s" % (name, cname, b, msg))
                     continue
                 man = json.loads((bdir / "manifest.json").read_text(encoding="utf-8"))
-                denoised = "denoise" in on if on is not None else sch["denoise"]["default"] != "off"
+                # The map a user gets: the denoised one whenever the bake wrote it.
+                denoised = any(f.get("role") == "irradiance_denoised" for f in man.get("files", []))
+                if on is not None and "denoise" in on and not denoised:
+                    failures.append("%s/%s: no denoised map (%s)" % (name, cname, man.get("denoise")))
+                    continue
                 fmap = bdir / ("irradiance_denoised.exr" if denoised else "irradiance.exr")
                 if not fmap.is_file():
                     failures.append("%s/%s: %s missing" % (name, cname, fmap.name))

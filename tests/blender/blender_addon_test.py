@@ -171,7 +171,9 @@ class BlenderAddonTest(unittest.TestCase):
         self.assertEqual(os.listdir(session.snapshots_dir), [], "snapshot files left behind")
 
         image = bpy.data.images[applier.LIGHTMAP_IMAGE]
-        self.assertTrue(image.filepath.endswith("irradiance.exr"))
+        # The denoised map when the daemon has OIDN (denoise = auto), else the raw one.
+        self.assertTrue(image.filepath.endswith(os.path.basename(applier.lightmap_file(session.results_dir))))
+        self.assertRegex(image.filepath, r"irradiance(_denoised)?\.exr$")
         px = pixels(image)[..., :3]
         self.assertTrue(np.isfinite(px).all())
         self.assertGreaterEqual(px.min(), 0.0)

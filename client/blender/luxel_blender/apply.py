@@ -348,12 +348,19 @@ def use_existing_uvs(results_dir, exported_glb):
     return objects, warnings
 
 
+def lightmap_file(results_dir):
+    """The map to show: the denoised one when the bake wrote it (the default
+    denoiser, docs/api.md "Denoised lightmap"), else the raw irradiance.exr."""
+    denoised = os.path.join(results_dir, "irradiance_denoised.exr")
+    return denoised if os.path.isfile(denoised) else os.path.join(results_dir, "irradiance.exr")
+
+
 def apply_results(results_dir, lightmapped_glb, exported_glb, baked_only=True):
     """Lightmap image + UVs + materials. ``lightmapped_glb``: Luxel's
     write-back, None when the bake used the scene's own UVs (then
     ``exported_glb``, the scene as sent, names the objects). Returns
     (objects, warnings)."""
-    image = lightmap_image(os.path.join(results_dir, "irradiance.exr"))
+    image = lightmap_image(lightmap_file(results_dir))
     if lightmapped_glb:
         objects, warnings = apply_uvs(results_dir, lightmapped_glb)
     else:

@@ -186,6 +186,9 @@ class Session:
                      # float snapshots: the same irradiance the final map has,
                      # so the materials can show them as they come
                      "--snapshot-format", "exr", "--snapshot-interval", c.snapshot_interval_s,
+                     # previews through the bake's denoiser (OIDN by default),
+                     # so the first snapshot already looks like the result
+                     "--denoise-snapshots",
                      "--progress-interval", min(1.0, c.snapshot_interval_s)]
         else:
             args += ["--local"]

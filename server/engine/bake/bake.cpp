@@ -73,10 +73,12 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   finish_result(s_, settings_, result_);
   // Device memory of the bake (with a snapshot denoiser, held beside it).
   size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
-  if (settings_.denoise != Denoise::kOff) {
+  if (denoise_method() != Denoise::kOff) {
     auto held = denoise_result();
     if (!held) return held.status();
     peak = std::max(peak, held.value());
+  } else if (settings_.denoise == Denoise::kAuto) {
+    result_.denoise_json = auto_off_json();
   }
   record_final_progress(progress_, ctx_, result_);
   result_.termination = why;
@@ -186,7 +188,7 @@ Status Baker::send_snapshot(const Tile& tile) {
   snap.pages = s_.atlas.pages;
   snap.irradiance = result_.irradiance;  // the finished tiles (zero untiled)
   fill_irradiance(s_, state.value().mean, tile.begin, snap.irradiance);
-  if (hooks_->denoise_snapshots && settings_.denoise != Denoise::kOff) {
+  if (hooks_->denoise_snapshots && denoise_method() != Denoise::kOff) {
     std::vector<float> rel_error = result_.rel_error;
     fill_rel_error(s_, state.value(), tile.begin, rel_error);
     size_t two_point = 0;

@@ -64,6 +64,10 @@ struct EncodedLightmap {
   std::string name;                 // "sh2", "sg12", "ambient-dice9", ...
   int count = 0;                    // coefficients per colour channel
   std::vector<float> coefficients;  // texel-major, count * RGB (lobe-major), row 0 = top
+  // The coefficients through Open Image Denoise's directional mode (SH
+  // encodings when the bake denoises with OIDN, post/oidn.h run_sh); empty
+  // otherwise (the manifest's denoise.directional says why).
+  std::vector<float> coefficients_denoised;
   std::string manifest_json;        // basis, frame, solver (without the file entry)
   double residual_rms = -1;         // progressive solvers: mean over covered texels of the running
                                     // residual RMS (luminance); -1 for projection

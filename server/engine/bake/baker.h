@@ -103,8 +103,11 @@ class Baker {
   // The denoiser's variances come from ProgressiveVariance (box filter; the
   // Gaussian filter's weighted samples keep the Welford variance).
   bool tracks_progressive_variance() const {
-    return settings_.denoise != Denoise::kOff && settings_.filter == Filter::kBox;
+    return denoise_method() != Denoise::kOff && settings_.filter == Filter::kBox;
   }
+  // settings_.denoise with auto decided: oidn when its library loads in this
+  // process (load_oidn keeps the first answer), else off (baker_denoise.cpp).
+  Denoise denoise_method() const;
   // Variances for the denoiser of the whole atlas (`rgba`, `rel_error`):
   // Welford's from the relative errors, replaced by the two-point estimates
   // of the finished tiles (denoise_variance_) and, with `state`, of the
@@ -121,12 +124,18 @@ class Baker {
     return ProgressiveVariance::overlay(std::move(welford), v);
   }
   DenoiseParams denoise_params(size_t two_point_texels) const;
-  // settings_.denoise == oidn and the library loads (post/oidn.h): makes
+  // denoise_method() == oidn and the library loads (post/oidn.h): makes
   // oidn_ on the first call; otherwise records why in oidn_missing_ (the
   // a-trous filter runs instead). Decided once per bake.
   bool use_oidn();
   // The manifest's "denoise" object for what denoise() did last.
   std::string denoise_json(size_t two_point_texels) const;
+  // OIDN's directional mode on each SH encoding of `result`
+  // (coefficients_denoised); returns what the manifest says of them.
+  Result<std::string> denoise_sh_encodings(BakeResult& result);
+  // The manifest's "denoise" object when auto found no OIDN: why the map
+  // stays raw.
+  std::string auto_off_json() const;
   Result<BakeCheckpoint> read_state() {
     BakeCheckpoint c;
     LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
@@ -169,7 +178,7 @@ class Baker {
   std::unique_ptr<StreamCompaction> compaction_;  // null with compaction off
   std::unique_ptr<OffsetBuffer> offset_buffer_;
   std::unique_ptr<Denoiser> denoiser_;  // on the first denoise()
-  std::unique_ptr<OidnDenoiser> oidn_;  // settings_.denoise == oidn, library found
+  std::unique_ptr<OidnDenoiser> oidn_;  // denoise_method() == oidn, library found
   bool oidn_tried_ = false;
   std::string oidn_missing_;             // why oidn_ is null with denoise == oidn
   ProgressiveVariance progressive_;      // milestones of the current tile

@@ -2,10 +2,16 @@
 // denoised lightmap, with the variance guide of bake/progressive_variance.h.
 // `denoise = oidn` runs Open Image Denoise (post/oidn.h) when its library
 // loads and the a-trous filter otherwise, saying why in the manifest.
+// `denoise = auto` (the default) runs OIDN when its library loads and leaves
+// the map raw otherwise: measured at equal time, OIDN with the
+// standard-error blend beat the raw map on every scene, while the a-trous
+// filter lost on the foliage and sky courtyard scenes (docs/accuracy.md
+// "Denoiser: the default").
 #include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "bake/baker.h"
+#include "encode/basis.h"
 
 namespace luxel::pipeline {
 
@@ -25,8 +31,26 @@ Result<std::vector<float>> Baker::denoise(const std::vector<float>& rgba,
   return denoiser_->run(rgba, variance, denoise_params(two_point_texels));
 }
 
+Denoise Baker::denoise_method() const {
+  if (settings_.denoise != Denoise::kAuto) return settings_.denoise;
+  // One shard's map holds part of the samples and is never delivered: only
+  // the merge of all shards is (shards/shard_merge.h), and it denoises.
+  if (settings_.sharded()) return Denoise::kOff;
+  return load_oidn() ? Denoise::kOidn : Denoise::kOff;
+}
+
+std::string Baker::auto_off_json() const {
+  auto lib = load_oidn();
+  nlohmann::json j = {{"method", "off"},
+                      {"auto", "Open Image Denoise not found, so the map stays raw (auto never "
+                               "picks the a-trous filter: docs/accuracy.md \"Denoiser: the "
+                               "default\")"},
+                      {"oidn", lib ? std::string() : "not found: " + lib.status().message()}};
+  return j.dump();
+}
+
 bool Baker::use_oidn() {
-  if (settings_.denoise != Denoise::kOidn) return false;
+  if (denoise_method() != Denoise::kOidn) return false;
   if (!oidn_tried_) {
     oidn_tried_ = true;
     auto lib = load_oidn();
@@ -44,12 +68,73 @@ std::string Baker::denoise_json(size_t two_point_texels) const {
   if (oidn_) {
     OidnParams o;
     o.variance_source = p.variance_source;
-    return oidn_->describe_json(o);
+    nlohmann::json j = nlohmann::json::parse(oidn_->describe_json(o));
+    j["chosen_by"] = settings_.denoise == Denoise::kAuto ? "auto" : "the settings";
+    return j.dump();
   }
-  if (settings_.denoise != Denoise::kOidn) return p.describe_json();
+  if (denoise_method() != Denoise::kOidn) return p.describe_json();
   nlohmann::json j = nlohmann::json::parse(p.describe_json());
   j["oidn"] = oidn_missing_;
   return j.dump();
+}
+
+namespace {
+
+// max |Y_i| / Y_0 of each SH coefficient over the sphere, on a Fibonacci
+// set of directions: a non-negative radiance's coefficient i is at most that
+// times L0 in magnitude (the coefficient of a single direction w is Y_i(w),
+// and Y_0 is constant), so the quotient lies in [-1, 1] as the filter's
+// directional mode needs.
+std::vector<float> sh_band_bounds(const encode::SphericalBasis& basis) {
+  const int n = basis.size();
+  std::vector<float> bound(static_cast<size_t>(n), 0.0f);
+  std::vector<float> y(static_cast<size_t>(n), 0.0f);
+  constexpr int kDirections = 8192;
+  for (int d = 0; d < kDirections; ++d) {
+    const double z = 1.0 - (2.0 * d + 1.0) / kDirections;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = d * 2.399963229728653;  // golden angle
+    basis.evaluate(Vec3{float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)}, y.data());
+    for (int i = 0; i < n; ++i) bound[size_t(i)] = std::max(bound[size_t(i)], std::abs(y[size_t(i)]));
+  }
+  for (int i = n - 1; i >= 0; --i) bound[size_t(i)] /= bound[0];
+  return bound;
+}
+
+}  // namespace
+
+Result<std::string> Baker::denoise_sh_encodings(BakeResult& result) {
+  std::vector<std::string> filtered, raw;
+  for (EncodedLightmap& e : result.encodings) {
+    auto basis = encode::SphericalBasis::from_name(e.name);
+    const bool sh = basis && (basis.value().spec().kind == encode::BasisKind::kShL1 ||
+                              basis.value().spec().kind == encode::BasisKind::kShL2);
+    if (!sh) {
+      raw.push_back(e.name);
+      continue;
+    }
+    OidnParams p;
+    auto out = oidn_->run_sh(e.coefficients, e.count, result.irradiance, result.rel_error,
+                             sh_band_bounds(basis.value()), p);
+    if (!out) return out.status();
+    e.coefficients_denoised = std::move(out.value());
+    filtered.push_back(e.name);
+  }
+  std::string says;
+  auto list = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+  };
+  if (!filtered.empty())
+    says = list(filtered) +
+           ": L0 as HDR, higher bands divided by L0 and their bound in the directional mode, "
+           "each value within one standard error of its raw one (<encoding>_denoised.exr)";
+  if (!raw.empty())
+    says += (says.empty() ? "" : "; ") + list(raw) +
+            ": left raw (docs/accuracy.md \"Open Image Denoise\": scaling lobes by the "
+            "denoised irradiance was not measured to help)";
+  return says.empty() ? std::string("no directional encodings") : says;
 }
 
 DenoiseParams Baker::denoise_params(size_t two_point_texels) const {
@@ -90,6 +175,13 @@ Result<size_t> Baker::denoise_result() {
   result.irradiance_denoised = std::move(filtered.value());
   result.denoise_variance = variance;
   result.denoise_json = denoise_json(two_point);
+  if (oidn_) {
+    auto directional = denoise_sh_encodings(result);
+    if (!directional) return directional.status();
+    nlohmann::json j = nlohmann::json::parse(result.denoise_json);
+    j["directional"] = directional.value();
+    result.denoise_json = j.dump();
+  }
   result.denoise_s = seconds_since(t_denoise);
   return s_.tracer->device_bytes() + (denoiser_ ? denoiser_->device_bytes() : 0);
 }

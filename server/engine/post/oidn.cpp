@@ -88,6 +88,51 @@ std::string open_oidn(const std::string& path, OidnLibrary& lib) {
   return why;
 }
 
+// The estimate that blends the network's output f back towards the raw mean r
+// of each texel (OidnBlend::kShrink): out = r + w (f - r). With the raw
+// mean's noise of variance s2 and the filter's bias b at the texel (its own
+// noise neglected), the squared error (1 - w)^2 s2 + w^2 b^2 is least at
+// w = s2 / (s2 + b^2), the Wiener (James-Stein) shrinkage factor, and the
+// expected squared change E[(f - r)^2] is s2 + b^2, so w = s2 / d2. Both are
+// averaged over the texel's covered 3x3 neighbours on its chart, since one
+// texel's change is a single noisy draw. Where the filter only removes noise
+// (d2 ~ s2) it keeps the whole change; where it moves texels by more than the
+// noise (a gradient or a shadow it blurs) it keeps a fraction that falls with
+// the noise, so a converged map is returned unchanged. Compared with clamping
+// every change at one standard error (kClamp), it filters more on flat noise
+// and less where the filter is biased.
+void shrink_to_noise(const std::vector<float>& rgba, const std::vector<float>& variance,
+                     const std::vector<uint32_t>& chart, int width, int height,
+                     std::vector<float>& out) {
+  auto lum = [](const float* c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+  const size_t texels = size_t(width) * size_t(height);
+  std::vector<double> d2(texels, 0.0);
+  for (size_t t = 0; t < texels; ++t)
+    if (rgba[t * 4 + 3] > 0.0f) {
+      const double d = lum(&out[t * 4]) - lum(&rgba[t * 4]);
+      d2[t] = d * d;
+    }
+  const std::vector<float> filtered = out;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const size_t t = size_t(y) * size_t(width) + size_t(x);
+      if (!(rgba[t * 4 + 3] > 0.0f)) continue;
+      double s2 = 0, change = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
+          const size_t q = size_t(qy) * size_t(width) + size_t(qx);
+          if (!(rgba[q * 4 + 3] > 0.0f) || chart[q] != chart[t]) continue;
+          s2 += std::max(0.0f, variance[q]);
+          change += d2[q];
+        }
+      const double w = change > s2 ? s2 / change : 1.0;
+      for (int c = 0; c < 3; ++c)
+        out[t * 4 + c] = rgba[t * 4 + c] + float(w) * (filtered[t * 4 + c] - rgba[t * 4 + c]);
+    }
+}
+
 }  // namespace
 
 // AddressSanitizer aborts the process when a library is dlopened with
@@ -135,7 +180,7 @@ OidnDenoiser::~OidnDenoiser() {
   if (device_) lib_.release_device(device_);
 }
 
-Status OidnDenoiser::filter(std::vector<float>& rgb, int w, int h) {
+Status OidnDenoiser::filter(std::vector<float>& rgb, int w, int h, bool directional) {
   if (!device_) {
     device_ = lib_.new_device(oidn::kDeviceCpu);
     if (!device_) return unavailable("oidn: no CPU device");
@@ -147,16 +192,16 @@ Status OidnDenoiser::filter(std::vector<float>& rgb, int w, int h) {
     return internal_error(strprintf("oidn %s: %s", what, msg ? msg : "unknown error"));
   };
   LUXEL_RETURN_IF_ERROR(error("device"));
-  // "RTLightmap": HDR irradiance in, the same out; in-place is allowed
-  // ("Filters": output may alias an input). directional stays false: this is
-  // the plain irradiance map (oidn.h; directional encodings are left raw).
+  // "RTLightmap": HDR irradiance in, the same out, or with `directional`
+  // normalised directional coefficients in [-1, 1] (oidn_directional.cpp);
+  // in-place is allowed ("Filters": output may alias an input).
   oidn::Filter f = lib_.new_filter(device_, "RTLightmap");
   if (!f) return error("new filter");
   lib_.set_shared_filter_image(f, "color", rgb.data(), oidn::kFormatFloat3, size_t(w), size_t(h), 0,
                                0, 0);
   lib_.set_shared_filter_image(f, "output", rgb.data(), oidn::kFormatFloat3, size_t(w), size_t(h),
                                0, 0, 0);
-  lib_.set_filter_bool(f, "directional", false);
+  lib_.set_filter_bool(f, "directional", directional);
   lib_.commit_filter(f);
   Status s = error("commit");
   if (s.is_ok()) {
@@ -171,14 +216,9 @@ Status OidnDenoiser::filter(std::vector<float>& rgb, int w, int h) {
   return s;
 }
 
-Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
-                                             const std::vector<float>& variance,
-                                             const OidnParams& params) {
+Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<float>& rgba,
+                                   bool directional, bool whole_pages) {
   const int width = guides_.width, height = guides_.height;
-  const size_t texels = size_t(width) * size_t(height);
-  if (rgba.size() != texels * 4 || variance.size() != texels || guides_.chart.size() != texels)
-    return internal_error("oidn: input does not match the lightmap size");
-  stats_ = {};
   auto covered = [&](size_t t) { return rgba[t * 4 + 3] > 0.0f; };
   // The images to filter: one per chart (its bounding box), or per page.
   struct Crop {
@@ -190,21 +230,21 @@ Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
     for (int x = 0; x < width; ++x) {
       const size_t t = size_t(y) * size_t(width) + size_t(x);
       if (!covered(t)) continue;
-      const uint32_t key = params.whole_pages ? uint32_t(y / page_h) : guides_.chart[t];
+      const uint32_t key = whole_pages ? uint32_t(y / page_h) : guides_.chart[t];
       auto [it, fresh] = crops.try_emplace(key, Crop{x, y, x, y});
       if (fresh) continue;
       Crop& c = it->second;
       c.x0 = std::min(c.x0, x), c.x1 = std::max(c.x1, x);
       c.y0 = std::min(c.y0, y), c.y1 = std::max(c.y1, y);
     }
-  std::vector<float> out = rgba;
+  const std::vector<float> in = plane;
   std::vector<float> rgb;
   for (const auto& [crop_key, c] : crops) {
     const uint32_t key = crop_key;
     const int w = c.x1 - c.x0 + 1, h = c.y1 - c.y0 + 1;
     auto mine = [&](size_t t) {
-      return covered(t) && (params.whole_pages ? uint32_t(int(t / size_t(width)) / page_h) == key
-                                               : guides_.chart[t] == key);
+      return covered(t) && (whole_pages ? uint32_t(int(t / size_t(width)) / page_h) == key
+                                        : guides_.chart[t] == key);
     };
     // The crop with only this chart's texels marked covered, dilated into
     // the rest (output/dilate.h: thesis section 6.4.1's padding fill), so the
@@ -220,8 +260,8 @@ Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
         const size_t t = size_t(c.y0 + y) * size_t(width) + size_t(c.x0 + x);
         if (!mine(t)) continue;
         for (int k = 0; k < 3; ++k) {
-          img.at(x, y, k) = rgba[t * 4 + k];
-          sum[k] += rgba[t * 4 + k];
+          img.at(x, y, k) = in[t * 3 + size_t(k)];
+          sum[k] += in[t * 3 + size_t(k)];
         }
         img.at(x, y, 3) = 1.0f;
         cover.at(x, y, 0) = 1.0f;
@@ -237,23 +277,57 @@ Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
           rgb[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(k)] =
               filled ? img.at(x, y, k) : float(sum[k] / double(std::max<size_t>(n, 1)));
       }
-    LUXEL_RETURN_IF_ERROR(filter(rgb, w, h));
+    LUXEL_RETURN_IF_ERROR(filter(rgb, w, h, directional));
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         const size_t t = size_t(c.y0 + y) * size_t(width) + size_t(c.x0 + x);
         if (!mine(t)) continue;
         for (int k = 0; k < 3; ++k) {
           const float v = rgb[(size_t(y) * size_t(w) + size_t(x)) * 3 + size_t(k)];
-          // The network's output is not constrained: irradiance is never
-          // negative, and a non-finite value keeps the raw one.
-          out[t * 4 + k] = std::isfinite(v) ? std::max(v, 0.0f) : rgba[t * 4 + k];
+          // A non-finite output keeps the input value.
+          plane[t * 3 + size_t(k)] = std::isfinite(v) ? v : in[t * 3 + size_t(k)];
         }
       }
   }
-  if (params.clamp_standard_errors > 0)
-    clamp_to_standard_errors(rgba, variance, guides_.chart, width, height,
-                             params.clamp_standard_errors, out);
+  return Status::ok();
+}
+
+Result<std::vector<float>> OidnDenoiser::run(const std::vector<float>& rgba,
+                                             const std::vector<float>& variance,
+                                             const OidnParams& params) {
+  const int width = guides_.width, height = guides_.height;
+  const size_t texels = size_t(width) * size_t(height);
+  if (rgba.size() != texels * 4 || variance.size() != texels || guides_.chart.size() != texels)
+    return internal_error("oidn: input does not match the lightmap size");
+  stats_ = {};
+  std::vector<float> plane(texels * 3);
+  for (size_t t = 0; t < texels; ++t)
+    for (size_t k = 0; k < 3; ++k) plane[t * 3 + k] = rgba[t * 4 + k];
+  LUXEL_RETURN_IF_ERROR(filter_charts(plane, rgba, /*directional=*/false, params.whole_pages));
+  std::vector<float> out = rgba;
+  for (size_t t = 0; t < texels; ++t) {
+    if (!(rgba[t * 4 + 3] > 0.0f)) continue;
+    // The network's output is not constrained: irradiance is never negative.
+    for (size_t k = 0; k < 3; ++k) out[t * 4 + k] = std::max(plane[t * 3 + k], 0.0f);
+  }
+  blend(rgba, variance, params, out);
   return out;
+}
+
+void OidnDenoiser::blend(const std::vector<float>& rgba, const std::vector<float>& variance,
+                         const OidnParams& params, std::vector<float>& out) const {
+  switch (params.blend) {
+    case OidnBlend::kShrink:
+      shrink_to_noise(rgba, variance, guides_.chart, guides_.width, guides_.height, out);
+      break;
+    case OidnBlend::kClamp:
+      if (params.clamp_standard_errors > 0)
+        clamp_to_standard_errors(rgba, variance, guides_.chart, guides_.width, guides_.height,
+                                 params.clamp_standard_errors, out);
+      break;
+    case OidnBlend::kNone:
+      break;
+  }
 }
 
 std::string OidnDenoiser::describe_json(const OidnParams& params) const {
@@ -273,8 +347,13 @@ std::string OidnDenoiser::describe_json(const OidnParams& params) const {
       {"filter_seconds", stats_.filter_s},
       {"seconds_per_megatexel", stats_.seconds_per_megatexel()},
       {"variance", params.variance_source},
-      {"clamp_standard_errors", params.clamp_standard_errors},
-      {"directional", "not filtered (left raw)"}};
+      {"blend", params.blend == OidnBlend::kShrink
+                    ? "each texel keeps min(1, s2/d2) of the filter's change (s2: variance of "
+                      "its raw mean, d2: squared change, both over its 3x3 chart neighbours)"
+                : params.blend == OidnBlend::kClamp
+                    ? strprintf("within %g standard errors of the raw value",
+                                double(params.clamp_standard_errors))
+                    : std::string("none")}};
   return j.dump();
 }
 

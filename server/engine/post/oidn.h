@@ -17,10 +17,10 @@
 // charts) are filled from the chart itself (output/dilate.h, then the chart's
 // mean), so neither the black background nor a neighbouring chart's light
 // enters the filter. Only the chart's covered texels are written back;
-// uncovered ones keep the raw values. Afterwards each texel is held within
-// `clamp_standard_errors` standard errors of its raw value, the same blend as
-// the a-trous filter (clamp_to_standard_errors), so a converged bake comes out
-// unchanged and the filter's bias shrinks with the noise.
+// uncovered ones keep the raw values. Afterwards the filter's change of each
+// texel is shrunk by the ratio of the raw map's noise to the change
+// (OidnBlend::kShrink), so a converged bake comes out unchanged and the
+// filter's bias shrinks with the noise.
 #pragma once
 
 #include <memory>
@@ -59,8 +59,23 @@ Result<const OidnLibrary*> load_oidn();
 // LUXEL_OIDN_LIBRARY elsewhere.
 Result<OidnLibrary> load_oidn_uncached();
 
+// How the filtered map is blended back towards the raw one, so that the
+// denoised map converges to the raw map as the noise falls.
+enum class OidnBlend {
+  // Each texel keeps the fraction w = min(1, s2 / d2) of the filter's change
+  // of its luminance, s2 the variance of its raw mean and d2 the squared
+  // change, both averaged over its covered 3x3 neighbours on the chart
+  // (shrink_to_noise in oidn.cpp says why).
+  kShrink,
+  // Each texel within clamp_standard_errors standard errors of its raw value
+  // (clamp_to_standard_errors, the a-trous filter's blend).
+  kClamp,
+  kNone,  // the network's output as it is (tests and benchmarks only)
+};
+
 struct OidnParams {
-  // As DenoiseParams::clamp_standard_errors (0: off).
+  OidnBlend blend = OidnBlend::kShrink;
+  // kClamp: as DenoiseParams::clamp_standard_errors.
   float clamp_standard_errors = 1.0f;
   // Test hook (the injected error of the leak test): filter each lightmap
   // page as one image, charts dilated into the padding but side by side.
@@ -94,13 +109,39 @@ class OidnDenoiser {
   Result<std::vector<float>> run(const std::vector<float>& rgba, const std::vector<float>& variance,
                                  const OidnParams& params);
 
+  // Spherical-harmonic coefficients of a directional encoding (oidn_directional.cpp):
+  // `coefficients` texel-major, `count` (4: L1, 9: L2) x RGB each, lobe-major
+  // (BakeResult's layout); `rgba` the irradiance map (its alpha says which
+  // texels are covered); `rel_error` each texel's relative standard error.
+  // L0 is filtered as HDR, each higher coefficient divided by L0 and by its
+  // bound `band_bounds[i]` (max |Y_i| / Y_0 over the sphere, so that it lies
+  // in [-1, 1] for non-negative radiance) and filtered in the filter's
+  // directional mode, then multiplied back by the filtered L0. L0 and the
+  // normalised bands are blended back towards their raw values by
+  // params.blend (L0's variance: the texel's relative error times L0; a
+  // normalised band's standard error: the texel's relative error).
+  Result<std::vector<float>> run_sh(const std::vector<float>& coefficients, int count,
+                                    const std::vector<float>& rgba,
+                                    const std::vector<float>& rel_error,
+                                    const std::vector<float>& band_bounds,
+                                    const OidnParams& params);
+
   const OidnRunStats& stats() const { return stats_; }
   // {"method":"oidn","filter":"RTLightmap",...} for the manifest.
   std::string describe_json(const OidnParams& params) const;
 
  private:
-  // Filters the w x h RGB image in place.
-  Status filter(std::vector<float>& rgb, int w, int h);
+  // Filters the w x h RGB image in place (`directional`: the filter's mode
+  // for normalised coefficients in [-1, 1]).
+  Status filter(std::vector<float>& rgb, int w, int h, bool directional);
+  // Filters a whole-atlas plane of 3 values per texel in place, one chart at
+  // a time (or one page, `whole_pages`), covered texels (alpha of `rgba` > 0)
+  // only: the cut-out and fill oidn.h describes.
+  Status filter_charts(std::vector<float>& plane, const std::vector<float>& rgba, bool directional,
+                       bool whole_pages);
+  // params.blend applied to the filtered RGBA `out` of the raw `rgba`.
+  void blend(const std::vector<float>& rgba, const std::vector<float>& variance,
+             const OidnParams& params, std::vector<float>& out) const;
   const OidnLibrary& lib_;
   DenoiseGuides guides_;
   int pages_ = 1;

@@ -28,9 +28,13 @@ namespace luxel::pipeline {
 #define LUXEL_FILTER_CHOICES(X) X(kBox, "box") X(kGaussian, "gaussian")
 LUXEL_CHOICE_ENUM(Filter, LUXEL_FILTER_CHOICES)
 
-// Denoising of the finished lightmap (post/denoise.h): an extra output
-// irradiance_denoised.exr; the raw irradiance.exr is always written too.
-#define LUXEL_DENOISE_CHOICES(X) X(kOff, "off") X(kAtrous, "atrous") X(kOidn, "oidn")
+// Denoising of the finished lightmap (post/denoise.h, post/oidn.h): an extra
+// output irradiance_denoised.exr; the raw irradiance.exr is always written
+// too. kAuto is Open Image Denoise when its library loads and off otherwise
+// (bake/baker_denoise.cpp; the rule and its measurements: docs/accuracy.md
+// "Denoiser: the default").
+#define LUXEL_DENOISE_CHOICES(X) \
+  X(kOff, "off") X(kAtrous, "atrous") X(kOidn, "oidn") X(kAuto, "auto")
 LUXEL_CHOICE_ENUM(Denoise, LUXEL_DENOISE_CHOICES)
 
 // Direct light at the texel point (irradiance lightmaps): the exact
@@ -148,7 +152,7 @@ struct BakeSettings {
 
   double progress_interval_s = 1.0;  // progress callback period
   int dilation_texels = 2;           // output: fill uncovered texels this far
-  Denoise denoise = Denoise::kOff;   // output: irradiance_denoised.exr besides irradiance.exr
+  Denoise denoise = Denoise::kAuto;  // output: irradiance_denoised.exr besides irradiance.exr
   bool seam_stitch = false;          // output: make texels agree across UV seams (seam_stitch.h)
   JobSettings job;                   // daemon only
 

@@ -279,12 +279,12 @@ void add_scene_and_output_settings(std::vector<Setting>& t) {
        .type = Type::kChoice,
        .units = "",
        .help = "denoiser of the finished lightmap, written as irradiance_denoised.exr besides the "
-               "raw irradiance.exr (atrous: edge-avoiding a-trous wavelets; oidn: Intel Open Image "
-               "Denoise's RTLightmap filter per chart, a-trous when its library is missing; off: "
-               "none)",
+               "raw irradiance.exr (auto: oidn when its library loads, else off; atrous: "
+               "edge-avoiding a-trous wavelets; oidn: Intel Open Image Denoise's RTLightmap filter "
+               "per chart, a-trous when its library is missing; off: none)",
        .flag = "--denoise",
        .metavar = "D",
-       .default_value = SettingValue::of_text(choice_name(Denoise::kOff)),
+       .default_value = SettingValue::of_text(choice_name(Denoise::kAuto)),
        .choices = choice_list<Denoise>(),
        LUXEL_CHOICE(denoise),
        .described = Described::kUnlessDefault});

@@ -13,11 +13,19 @@
 //       input gives the same bits;
 //   (d) missing library: run once more by ctest with LUXEL_OIDN_LIBRARY at a
 //       file that does not exist (oidn_missing_test): `denoise = oidn` bakes
-//       with the a-trous filter and the manifest's denoise object says why.
+//       with the a-trous filter and the manifest's denoise object says why;
+//       `denoise = auto` (the default) leaves the map raw and says why;
+//   (e) SH lightmaps (the filter's directional mode): at 16 spp the denoised
+//       sh1 coefficients are closer to their closed forms (L0 from the
+//       emitter's solid angle, L1 from its vector form factor) than the raw
+//       ones, and unbiased; scaling the denoised L1 bands by 1.5 (the
+//       injected error) breaks the same bound;
+//   (f) `denoise = auto` with the library present is OIDN.
 #include "post/oidn.h"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -147,7 +155,7 @@ TEST_F(OidnTest, DoesNotLeakAcrossCharts) {
                            pipeline::build_denoise_guides(t.scene, b.atlas, info.value()),
                            b.atlas.pages);
   pipeline::OidnParams chart;
-  chart.clamp_standard_errors = 0;
+  chart.blend = pipeline::OidnBlend::kNone;
   pipeline::OidnParams page = chart;
   page.whole_pages = true;
   auto alone = d.run(b.irradiance, b.denoise_variance, chart);
@@ -182,7 +190,7 @@ TEST_F(OidnTest, ConvergedInputUnchanged) {
   EXPECT_EQ(out.value(), b.irradiance);
   // Without the blend the filter does change the map (the check is not empty).
   pipeline::OidnParams off;
-  off.clamp_standard_errors = 0;
+  off.blend = pipeline::OidnBlend::kNone;
   auto free = d.run(b.irradiance, b.denoise_variance, off);
   ASSERT_TRUE(free);
   EXPECT_NE(free.value(), b.irradiance);
@@ -190,6 +198,130 @@ TEST_F(OidnTest, ConvergedInputUnchanged) {
   auto again = d.run(b.irradiance, b.denoise_variance, off);
   ASSERT_TRUE(again);
   EXPECT_EQ(again.value(), free.value());
+}
+
+// Solid angle of the triangle (a, b, c) seen from the origin (Van Oosterom
+// and Strackee 1983): tan(omega / 2) = |a.(b x c)| / (|a||b||c| + (a.b)|c|
+// + (a.c)|b| + (b.c)|a|).
+double triangle_solid_angle(Vec3 a, Vec3 b, Vec3 c) {
+  const double la = length(a), lb = length(b), lc = length(c);
+  const double num = std::fabs(double(dot(a, cross(b, c))));
+  const double den = la * lb * lc + double(dot(a, b)) * lc + double(dot(a, c)) * lb +
+                     double(dot(b, c)) * la;
+  return 2.0 * std::atan2(num, den);
+}
+
+// sh1 radiance coefficients (kernels/shared/bases.h order: Y00, Y1-1 ~ y,
+// Y10 ~ z, Y11 ~ x; world directions, bake/encodings.h) of the light
+// from quad q's emitter at plane point x: c0 = Y00 L omega and
+// c1 = 0.4886 L Phi, with Phi = integral of w over the emitter's solid angle,
+// the vector form factor 1/2 sum theta_i unit(r_i x r_i+1) (Arvo 1995,
+// Eq. 6, before the dot product with the normal).
+std::array<double, 4> sh1_closed_form(const testing::LitQuad& q, Vec3 x) {
+  Vec3 r[4];
+  for (int i = 0; i < 4; ++i) r[i] = q.emitter[i] - x;
+  const double omega = triangle_solid_angle(r[0], r[1], r[2]) + triangle_solid_angle(r[0], r[2], r[3]);
+  Vec3 phi{0, 0, 0};
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 a = normalize(r[i]), b = normalize(r[(i + 1) % 4]);
+    const float theta = std::acos(std::clamp(dot(a, b), -1.0f, 1.0f));
+    phi = phi + normalize(cross(a, b)) * (0.5f * theta);
+  }
+  const Vec3 centre = (r[0] + r[1] + r[2] + r[3]) * 0.25f;
+  if (dot(phi, centre) < 0) phi = phi * -1.0f;
+  const double k = 0.488602512 * q.le;
+  return {0.282094792 * q.le * omega, k * phi.y, k * phi.z, k * phi.x};
+}
+
+// (e) One plane under a 1 x 1 emitter, sh1, 16 spp: per coefficient, RMSE
+// against the closed form averaged over each texel's sample points.
+TEST_F(OidnTest, ShBandsCloserToClosedFormInDirectionalMode) {
+  TwoCharts t = two_charts(1.0f, 1.0f, 0.5f);
+  t.scene.meshes.resize(2);
+  t.scene.instances.resize(2);
+  pipeline::BakeSettings st = settings(64, 16);
+  st.encodings.names = {"sh1"};
+  auto r = pipeline::bake(t.scene, st, *ctx_);
+  ASSERT_TRUE(r) << r.status().to_string();
+  const pipeline::BakeResult& b = r.value();
+  ASSERT_EQ(b.encodings.size(), 1u);
+  const pipeline::EncodedLightmap& e = b.encodings[0];
+  ASSERT_EQ(e.count, 4);
+  ASSERT_EQ(e.coefficients_denoised.size(), e.coefficients.size()) << b.denoise_json;
+  EXPECT_NE(nlohmann::json::parse(b.denoise_json)["directional"].get<std::string>().find("sh1"),
+            std::string::npos);
+  auto info = atlas::build_sample_info(t.scene, b.atlas);
+  ASSERT_TRUE(info);
+  const atlas::SampleInfo& si = info.value();
+  // The closed form per texel (green channel), over its sample points.
+  std::vector<std::array<double, 4>> ref(b.irradiance.size() / 4, {NAN, NAN, NAN, NAN});
+  for (uint32_t texel : si.covered_texels) {
+    const uint32_t valid = cl::lux_sample_info_count(si.words.data(), si.offsets[texel]);
+    std::array<double, 4> sum{0, 0, 0, 0};
+    bool ok = true;
+    for (uint32_t k = 0; k < valid && ok; ++k) {
+      const atlas::SamplePoint sp = atlas::sample_point(si, texel, k);
+      ok = sp.instance == 0;  // plane 0 only
+      const testing::LitQuad& q = t.q[0];
+      const double u = sp.x / b.atlas.width, v = sp.y / b.atlas.height;
+      const Vec3 x{float(q.x0 + 2 * (v - q.v0) / (q.v1 - q.v0)), 0,
+                   float(-1 + 2 * (u - q.u0) / (q.u1 - q.u0))};
+      const auto c = sh1_closed_form(q, x);
+      for (int i = 0; i < 4; ++i) sum[i] += c[i];
+    }
+    if (!ok || valid == 0) continue;
+    for (int i = 0; i < 4; ++i) ref[texel][i] = sum[i] / valid;
+  }
+  // RMSE of coefficient i (green channel) against ref, and its bias: the
+  // mean difference over the RMS of ref (the bands along the plane average
+  // to 0 by symmetry, so a ratio of means would say nothing).
+  struct Cmp {
+    double rmse, bias;
+    size_t n;
+  };
+  auto compare = [&](const std::vector<float>& c, int i, double scale_bands) {
+    double sq = 0, diff = 0, ref_sq = 0;
+    size_t n = 0;
+    for (size_t t = 0; t < ref.size(); ++t) {
+      if (std::isnan(ref[t][i])) continue;
+      const double v = c[t * 12 + size_t(i) * 3 + 1] * (i > 0 ? scale_bands : 1.0);
+      sq += (v - ref[t][i]) * (v - ref[t][i]);
+      diff += v - ref[t][i];
+      ref_sq += ref[t][i] * ref[t][i];
+      ++n;
+    }
+    const double m = double(std::max<size_t>(n, 1));
+    return Cmp{std::sqrt(sq / m), diff / m / std::sqrt(ref_sq / m), n};
+  };
+  for (int i = 0; i < 4; ++i) {  // L0; y (the normal); z and x (along the plane)
+    const Cmp raw = compare(e.coefficients, i, 1.0);
+    const Cmp dn = compare(e.coefficients_denoised, i, 1.0);
+    const Cmp injected = compare(e.coefficients_denoised, i, 1.5);
+    std::printf("  sh1 c%d: %zu texels, RMSE raw %.4f oidn %.4f (bands x1.5: %.4f), bias raw "
+                "%+.4f oidn %+.4f (x1.5: %+.4f)\n",
+                i, raw.n, raw.rmse, dn.rmse, injected.rmse, raw.bias, dn.bias, injected.bias);
+    ASSERT_GT(raw.n, 1500u);
+    EXPECT_LT(std::fabs(raw.bias), 0.03) << "the raw bake itself must match the closed form";
+    EXPECT_LT(dn.rmse, 0.8 * raw.rmse) << "coefficient " << i;
+    EXPECT_LT(std::fabs(dn.bias), 0.03) << "coefficient " << i;
+    if (i > 0)
+      EXPECT_FALSE(injected.rmse < 0.8 * raw.rmse && std::fabs(injected.bias) < 0.03)
+          << "the injected error must fail the same checks";
+  }
+  for (float v : e.coefficients_denoised) ASSERT_TRUE(std::isfinite(v));
+}
+
+// (f) auto picks OIDN when it loads.
+TEST_F(OidnTest, AutoIsOidnWhenTheLibraryLoads) {
+  TwoCharts t = two_charts(1.0f, 1.0f, 0.5f);
+  pipeline::BakeSettings st = settings(32, 4);
+  st.denoise = pipeline::Denoise::kAuto;
+  auto r = pipeline::bake(t.scene, st, *ctx_);
+  ASSERT_TRUE(r) << r.status().to_string();
+  const auto j = nlohmann::json::parse(r.value().denoise_json);
+  EXPECT_EQ(j["method"], "oidn");
+  EXPECT_EQ(j["chosen_by"], "auto");
+  EXPECT_EQ(r.value().irradiance_denoised.size(), r.value().irradiance.size());
 }
 
 // (d) Only in the run ctest starts with LUXEL_OIDN_LIBRARY at a nonexistent
@@ -221,6 +353,16 @@ TEST(OidnMissing, FallsBackToAtrousAndSaysWhy) {
   auto a = pipeline::bake(t.scene, s, ctx);
   ASSERT_TRUE(a);
   EXPECT_EQ(r.value().irradiance_denoised, a.value().irradiance_denoised);
+  // auto without the library: the raw map only, and the manifest says why.
+  s.denoise = pipeline::Denoise::kAuto;
+  auto raw = pipeline::bake(t.scene, s, ctx);
+  ASSERT_TRUE(raw);
+  EXPECT_TRUE(raw.value().irradiance_denoised.empty());
+  const auto k = nlohmann::json::parse(raw.value().denoise_json);
+  std::printf("  manifest denoise (auto): %s\n", raw.value().denoise_json.c_str());
+  EXPECT_EQ(k["method"], "off");
+  EXPECT_NE(k["oidn"].get<std::string>().find("nonexistent"), std::string::npos);
+  EXPECT_EQ(raw.value().irradiance, a.value().irradiance) << "denoising never changes the raw map";
 }
 
 }  // namespace
