@@ -123,30 +123,28 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
 #if LUX_BASIS
 #error "LUX_DIRECT_ANALYTIC is for irradiance lightmaps only"
 #endif
-  /* Analytic direct light with stochastic shadows (support thesis Eq. 2.25,
-   * Heitz et al. 2018). Eq. 2.25 over N light samples of the texel,
-   *   E ~ E_u * (sum f V / p) / (sum f / p),
-   * E_u exact (shading/analytic_light.h), is to first order in the
-   * deviation of (1/N) sum f/p from E_u (the delta method) the mean of the
-   * per-sample values
-   *   E_u + (f V - f) / p = E_u - (f / p) (1 - V),
-   * the difference (regression) form of the ratio estimator. We accumulate
-   * that form, one light sample per path, through the same Welford mean as
-   * every other sample: it is unbiased at any sample count (the ratio's
-   * O(1/N) bias is gone), equals E_u exactly wherever the sampled light point
-   * is visible (noise comes only from visibility, never from the emitter's
-   * shape or size), and the Welford variance of these values is exactly the
-   * delta-method variance of the ratio, so stats.h's relative standard error
-   * keeps its meaning. Keeping per-texel sums of f V / p and f / p instead
-   * would add per-texel state to checkpoints, tiles and shard merges for an
-   * estimator that is biased at low counts. Lights that are not analytic
-   * (sky, textured emitters, sun discs) keep the plain NEE term f V / p: the
-   * sampled light decides which term its sample feeds, so both stay unbiased
-   * under the one light-selection pdf. Analytic lights are sampled in
-   * proportion to their exact irradiance here (scatter.h), so f / p ~ E_u
-   * and umbrae are nearly noise-free too. The visible part f V / p is added
-   * by resolve_shadows as before. */
-  path.radiance.xyz = analytic_e - (analytic_sample ? contribution : (float3)(0.0f));
+  /* Analytic direct light (support thesis Eq. 2.25, Heitz et al. 2018).
+   * Eq. 2.25 writes the shadowed irradiance as E_u (exact, unshadowed;
+   * shading/analytic_light.h) times the ratio sum(f V / p) / sum(f / p) of
+   * light samples. lux_next_event picks the analytic light in proportion to
+   * its exact irradiance here (luminance), so every analytic sample has
+   * f / p = E_u / P_a (P_a: the analytic lights' share of the light table),
+   * and the one-sample ratio E_u (f V / p) / (f / p), over the choice of the
+   * analytic part, is the plain term f V / p: unbiased at every sample
+   * count and never negative. Where P_a = 1 (no sky, sun disc or textured
+   * emitter besides the analytic lights) and the lights share a colour, it
+   * is exact wherever the texel point sees all or none of them. Nothing is
+   * added here: resolve_shadows adds f V / p as for any light sample.
+   *
+   * The difference form E_u - (f / p)(1 - V) used before is unbiased too,
+   * but one occluded sample gives E_u (1 - 1 / P_a) < 0 when P_a < 1, and a
+   * negative channel for a light whose colour differs from the others' (the
+   * choice follows luminance, not each channel): delivered lightmaps had
+   * negative texels. The ratio proper over per-texel sums is non-negative
+   * but biased at low counts and needs per-texel state in checkpoints, tiles
+   * and shard merges (docs/accuracy.md, "Analytic direct light"). */
+  (void)analytic_sample;
+  (void)analytic_e;
 #endif
   shadow_rays[gid] = shadow;
   shadow_contrib[gid] = (float4)(contribution, 0.0f);

@@ -79,15 +79,16 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
 #if LUX_DIRECT_ANALYTIC
   if (sensor) {
     /* At the texel point (raygen.h) the analytic lights' exact irradiance is
-     * E_a, and their samples only estimate visibility. When the power table
-     * picks an analytic light (probability P_a, their total pmf), the light
-     * actually sampled is analytic light k with probability e_k / e_a
-     * (luminance of each one's exact irradiance here), so the sample's
-     * f / p is close to E_a / P_a whatever the lights' sizes and distances:
-     * then E_a - (f / p)(1 - V) is near E_a V, the ratio estimator's value
-     * (exact in umbra and full light alike). Lights that are not analytic
+     * E_a = sum of e_k. When the power table picks an analytic light
+     * (probability P_a, their total pmf), the light actually sampled is
+     * analytic light k with probability e_k / e_a (luminance of each one's
+     * exact irradiance here), so the sample's f / p is E_a / P_a (in
+     * luminance) whatever the lights' sizes and distances, and f V / p is
+     * the one-sample ratio estimate of Eq. 2.25 (support thesis), exact in
+     * umbra and full light alike when P_a = 1. Lights that are not analytic
      * keep their power pmf, so MIS with first segments stays consistent;
-     * analytic ones get no MIS, and first segments ignore them (shade.h). */
+     * analytic ones get no MIS, and first segments ignore them (shade.h).
+     * E_a is returned for the caller's information only. */
     const LuxLight picked = lights[light];
     float p_a = 0.0f, w_sum = 0.0f, w_chosen = 0.0f;
     int chosen = -1;

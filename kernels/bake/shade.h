@@ -69,8 +69,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
       w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light,
                                                                path.prev_pos.xyz, s.p, s.ng_front));
 #if LUX_DIRECT_ANALYTIC
-    /* The texel point's irradiance from this emitter is exact already
-     * (raygen.h): its first segment must not count it again. */
+    /* The texel point's light sample carries this emitter alone, with MIS
+     * weight 1 (scatter.h, raygen.h): its first segment must not count it
+     * again. */
     if (path.depth == 0u && s.light >= 0) {
       const LuxLight hit_light = lights[s.light];
       if (lux_light_is_analytic(&hit_light)) w = 0.0f;
