@@ -466,7 +466,51 @@ def version_key(v):
     return tuple(int(x) if x.isdigit() else 0 for x in v.split("."))
 
 
-def side_by_side(res, versions):
+CALIBRATION = ("sky_plane", "lights_plane")
+CAL_TOL = 0.005   # |Cycles / Luxel - 1| allowed beyond 5 sigma of noise
+
+
+def calibration(res, versions):
+    """per Cycles version: the calibration scenes' Cycles / Luxel ratios
+    (interior texels: every channel, and every chart's luminance) and
+    whether each lies within CAL_TOL + 5 sigma of 1. A version whose
+    calibration fails (or did not run) has ratios that do not count."""
+    out = {}
+    for v in versions:
+        rows, ok = [], True
+        for r in res:
+            if r["cycles_version"] != v or r["name"] not in CALIBRATION:
+                continue
+            g = r["agreement"]["interior"]
+            checks = [(rt, se) for rt, se in zip(g["ratio_rgb"], g["ratio_se_rgb"])]
+            checks += [(c["ratio"], c["ratio_se"]) for c in g["charts"]]
+            passed = all(abs(rt - 1.0) <= CAL_TOL + 5.0 * se for rt, se in checks)
+            ok &= passed
+            rows.append({"scene": r["name"], "ratio_rgb": g["ratio_rgb"],
+                         "charts": [c["ratio"] for c in g["charts"]], "pass": passed})
+        out[v] = {"scenes": rows, "pass": ok and len(rows) == len(CALIBRATION)}
+    return out
+
+
+def calibration_table(cal):
+    rows = []
+    for v, c in cal.items():
+        for x in c["scenes"]:
+            rows.append([v, x["scene"], " / ".join(f"{t:.4f}" for t in x["ratio_rgb"]),
+                         " / ".join(f"{t:.4f}" for t in x["charts"]), "pass" if x["pass"] else "**FAIL**"])
+        if len(c["scenes"]) < len(CALIBRATION):
+            rows.append([v, "(not run: " + ", ".join(n for n in CALIBRATION
+                                                     if n not in [x["scene"] for x in c["scenes"]]) + ")",
+                         "-", "-", "**no calibration**"])
+    return ("### Calibration: Cycles / Luxel on the closed-form scenes\n\n"
+            f"Interior texels, converged maps; pass: every channel and every chart within "
+            f"{CAL_TOL:.1%} + 5σ of 1. A version that does not pass (or was not calibrated in this "
+            "run) has time ratios that do not count.\n\n"
+            + md_table(["Cycles", "scene", "R / G / B", "per chart (luminance)", "calibration"], rows)
+            + "\n")
+
+
+def side_by_side(res, versions, cal):
     """every Cycles version in one table per scene: time to equal error
     (matched texels) in the engine and end to end, at one common error level"""
     rows = []
@@ -504,7 +548,8 @@ def side_by_side(res, versions):
     for kind in ("engine", "e2e"):
         head += [f"{kind} relMSE", f"Luxel {kind} s"]
         for v in versions:
-            head += [f"Cycles {v} {kind} s", f"{v} ratio (geo. mean)"]
+            mark = "" if cal[v]["pass"] else " (not calibrated)"
+            head += [f"Cycles {v}{mark} {kind} s", f"{v} ratio (geo. mean)"]
     return ("### Cycles versions side by side: time to equal relMSE (matched texels)\n\n"
             "At one error level per scene inside the range every Cycles ladder shares with "
             "Luxel's (the geometric middle of the common range). Engine: Luxel trace seconds vs "
@@ -559,12 +604,17 @@ def summary(res):
 
 def report(res):
     versions = sorted({r["cycles_version"] for r in res}, key=version_key)
-    out = [side_by_side(res, versions)] if len(versions) > 1 else []
+    cal = calibration(res, versions)
+    out = [calibration_table(cal)]
+    out += [side_by_side(res, versions, cal)] if len(versions) > 1 else []
     for v in versions:
         part = [r for r in res if r["cycles_version"] == v]
         s = summary(part)
         if s and len(versions) > 1:
             s = s.replace("### Summary:", f"### Cycles {v}, summary:", 1)
+        if s and not cal[v]["pass"]:
+            s = s.replace("\n\n", f"\n\n**Cycles {v} is not calibrated in this run: these ratios do "
+                          "not count.**\n\n", 1)
         out.append(s)
     for r in res:
         st, a = r["settings"], r["agreement"]
