@@ -6,7 +6,16 @@ Run inside Blender (Debian 12: blender 3.4.1):
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
       --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
       [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
-      [--diffuse-weight nv|vh-average]
+      [--diffuse-weight nv|vh-average] [--denoise oidn [--denoise-filter RTLightmap|RT]]
+
+or with Blender as a Python module (PyPI bpy 5.0.1, tests/support/bpy-venv.sh;
+no blender binary, the same arguments without "--"):
+
+  ~/.cache/luxel/bpy-5.0.1/bin/python tests/bench/peers/blender_bake.py --scene ...
+
+Differences between the versions are looked up, not assumed: the importer's
+lighting-mode option, the linear colour space's name, the Principled
+emission socket, the colour mix node, the spot attenuation (README.md).
 
 What it does (README.md next to this file explains the conversions):
 
@@ -43,7 +52,10 @@ What it does (README.md next to this file explains the conversions):
   7. writes DIR/blender_s<SAMPLES>_seed<SEED>.exr (RGBA float32, row 0 = top,
      RGB multiplied by pi so it is irradiance E in W/m^2 like Luxel's:
      Blender's diffuse pass without colour is E / pi) and DIR/blender.json
-     with the timings.
+     with the timings and the Cycles settings left at their defaults (light
+     tree, sampling pattern); --denoise oidn adds each bake denoised by Open
+     Image Denoise (oidn_lightmap.py), blender_s<SAMPLES>_seed<SEED>_oidn.exr,
+     its seconds apart from the bake's.
 """
 # Over 500 lines: it runs inside Blender as one script (scene import, the matched material graph, the bake, the EXR writer) for both Blender versions.
 import argparse
@@ -94,6 +106,11 @@ def parse_args():
                     help="matched graph: the dielectric's diffuse weight 1 - F(0.04, n.wo) (default) "
                          "or 1 - (Appendix B's F(V.H) averaged over wi)")
     ap.add_argument("--uv-map", default=None, help="UV map name (default: the second one)")
+    ap.add_argument("--denoise", choices=["none", "oidn"], default="none",
+                    help="oidn: also write each bake denoised by Open Image Denoise "
+                         "(blender_s<N>_seed<S>_oidn.exr; its seconds apart in blender.json)")
+    ap.add_argument("--denoise-filter", choices=["RTLightmap", "RT"], default="RTLightmap",
+                    help="OIDN filter: RTLightmap (for lightmaps) or RT with hdr (the compositor's)")
     ap.add_argument("--warmup", action="store_true",
                     help="one 1-spp bake before the runs, timed apart (first-bake costs)")
     ap.add_argument("--t0", type=float, default=None,
@@ -492,7 +509,8 @@ def exr_writer():
         return "blender"
 
 
-def write_exr(path, img, res):
+def baked_pixels(img, res):
+    """the baked image as irradiance, (res, res, 4) float32, row 0 = top"""
     px = np.empty(res * res * 4, np.float32)
     img.pixels.foreach_get(px)
     # Blender stores rows bottom-up (row 0 = Blender v 0 = glTF v 1): flip so
@@ -500,6 +518,10 @@ def write_exr(path, img, res):
     # Blender's diffuse pass without colour is E / pi: multiply RGB by pi.
     px = np.flipud(px.reshape(res, res, 4)).copy()
     px[..., :3] *= math.pi
+    return px
+
+
+def write_exr(path, px, res):
     if exr_writer() == "OpenImageIO":
         import OpenImageIO as oiio
         spec = oiio.ImageSpec(res, res, 4, "float")
@@ -633,6 +655,11 @@ def main():
             runs.append((int(spp), int(seed or 1)))
     bakes = []
     warmup_s = None
+    oidn = None
+    if a.denoise == "oidn":   # the device is made before the timed bakes
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import oidn_lightmap
+        oidn = oidn_lightmap.Oidn()
     if a.warmup:
         c.samples, c.seed = 1, 9
         t = time.time()
@@ -650,8 +677,16 @@ def main():
         # a SAMPLES@SEED repeated in --runs (a warm-up bake) gets its own file
         tag = "" if (spp, seed) not in runs[:i] else f"_run{i}"
         name = f"blender_s{spp}_seed{seed}{tag}.exr"
-        write_exr(os.path.join(a.out, name), img, a.resolution)
-        bakes.append({"samples": spp, "seed": seed, "seconds": dt, "file": name})
+        px = baked_pixels(img, a.resolution)
+        write_exr(os.path.join(a.out, name), px, a.resolution)
+        bake = {"samples": spp, "seed": seed, "seconds": dt, "file": name}
+        if oidn is not None:
+            t = time.time()
+            px[..., :3] = oidn.denoise(px[..., :3], a.denoise_filter)
+            bake["denoise_s"] = time.time() - t
+            bake["denoised_file"] = name.replace(".exr", "_oidn.exr")
+            write_exr(os.path.join(a.out, bake["denoised_file"]), px, a.resolution)
+        bakes.append(bake)
         print(f"blender_bake: {spp:6d} spp seed {seed}: {dt:8.3f} s", flush=True)
 
     info = {
@@ -666,6 +701,9 @@ def main():
         "use_light_tree": getattr(c, "use_light_tree", None),   # 3.6+, on by default
         "use_guiding": getattr(c, "use_guiding", None),
         "denoising": c.use_denoising, "adaptive_sampling": c.use_adaptive_sampling,
+        "denoise": None if oidn is None else {"filter": a.denoise_filter, "library": oidn.path,
+                                              "oidn_version": oidn.version, "device": "CPU",
+                                              "inputs": "colour only"},
         # Blender (binary) or `import bpy` (module) start up to this script
         "startup_s": (T_STARTED - a.t0) if a.t0 else None,
         "import_s": t_import, "setup_s": t_setup, "warmup_s": warmup_s,

@@ -151,7 +151,11 @@ def speed_table(luxel, blender, nlev=5):
     """common error levels over the overlap of both ladders -> t_Cycles / t_Luxel"""
     if not luxel or not blender:
         return {"levels": [], "note": "no ladder"}
-    el, eb = [p[1] for p in luxel], [p[1] for p in blender]
+    # errors at 0 (noise subtraction leaves nothing: short quick-mode
+    # references) have no place on a log scale
+    el, eb = [p[1] for p in luxel if p[1] > 0], [p[1] for p in blender if p[1] > 0]
+    if not el or not eb:
+        return {"levels": [], "note": "no error above the reference's noise"}
     lo, hi = max(min(el), min(eb)), min(max(el), max(eb))
     if not lo < hi:
         return {"levels": [], "note": "error ranges do not overlap"}
