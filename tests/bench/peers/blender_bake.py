@@ -6,7 +6,7 @@ Run inside Blender (Debian 12: blender 3.4.1):
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
       --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
       [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
-      [--diffuse-weight nv|vh-average] [--denoise oidn [--denoise-filter RTLightmap|RT]]
+      [--diffuse-weight nv|vh-average] [--denoise oidn [--denoise-filter RT|RTLightmap]]
 
 or with Blender as a Python module (PyPI bpy 5.0.1, tests/support/bpy-venv.sh;
 no blender binary, the same arguments without "--"):
@@ -109,8 +109,9 @@ def parse_args():
     ap.add_argument("--denoise", choices=["none", "oidn"], default="none",
                     help="oidn: also write each bake denoised by Open Image Denoise "
                          "(blender_s<N>_seed<S>_oidn.exr; its seconds apart in blender.json)")
-    ap.add_argument("--denoise-filter", choices=["RTLightmap", "RT"], default="RTLightmap",
-                    help="OIDN filter: RTLightmap (for lightmaps) or RT with hdr (the compositor's)")
+    ap.add_argument("--denoise-filter", choices=["RT", "RTLightmap"], default="RT",
+                    help="OIDN filter: RT with hdr (the compositor's Denoise node; bpy 5.0.1's OIDN "
+                         "has only its weights) or RTLightmap (needs LUXEL_OIDN_LIB, e.g. Luxel's)")
     ap.add_argument("--warmup", action="store_true",
                     help="one 1-spp bake before the runs, timed apart (first-bake costs)")
     ap.add_argument("--t0", type=float, default=None,

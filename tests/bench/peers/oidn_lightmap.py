@@ -3,14 +3,19 @@
 What a Blender user does with a noisy bake: run OIDN over the image. Through
 OIDN's C API with ctypes (pyoidn needs cffi, which neither Debian's python3
 nor the bpy venv has), on the CPU device, colour input only (a bake has no
-albedo or normal pass), filter "RTLightmap" (OIDN's filter for HDR
-lightmaps, the one Luxel's own --denoise oidn runs) or "RT" with hdr on
-(what 5.0.1's compositor Denoise node runs on a render).
+albedo or normal pass), filter "RT" with hdr on (what 5.0.1's compositor
+Denoise node runs; the only weights bpy 5.0.1's OIDN 2.3.3 ships: its
+RTLightmap fails with "unsupported combination of input features") or
+"RTLightmap" (OIDN's filter for HDR lightmaps, the one Luxel's own --denoise
+oidn runs; LUXEL_OIDN_LIB=/opt/luxel/oidn/pyoidn/oidn/lib/libOpenImageDenoise.so.2,
+Luxel's 2.5.1, worked inside bpy 5.0.1 beside Blender's 2.3.3).
 
-The library: $LUXEL_OIDN_LIB, else the one inside the bpy module (5.0.1 ships
-OIDN 2.3.3 for Cycles and the compositor), else Luxel's
-(/opt/luxel/oidn from deploy/install-deps.sh: 2.5.1). Debian's Blender 3.4.1
-is built without OIDN, so under it only Luxel's is found.
+The library: Blender's own, the one this process already loaded (bpy 5.0.1
+ships OIDN 2.3.3 in bpy/lib for Cycles and the compositor), or
+$LUXEL_OIDN_LIB. Debian's Blender 3.4.1 is built without OIDN, so its users
+cannot denoise in Blender; loading another OIDN with its own TBB into it
+aborts (munmap_chunk(): invalid pointer, Luxel's 2.5.1 from /opt/luxel
+against Debian's TBB), so no other library is tried.
 """
 import ctypes
 import os
@@ -23,16 +28,18 @@ QUALITY_HIGH = 6
 
 
 def candidates():
+    """$LUXEL_OIDN_LIB, then libOpenImageDenoise.so.2 beside any OIDN
+    library this process has mapped (Blender's own)"""
     paths = []
     if os.environ.get("LUXEL_OIDN_LIB"):
         paths.append(os.environ["LUXEL_OIDN_LIB"])
-    try:
-        import bpy
-        paths.append(os.path.join(os.path.dirname(bpy.__file__), "lib", "libOpenImageDenoise.so.2"))
-    except ImportError:
-        pass
-    prefix = os.environ.get("LUXEL_PREFIX", "/opt/luxel")
-    paths.append(os.path.join(prefix, "oidn", "pyoidn", "oidn", "lib", "libOpenImageDenoise.so.2"))
+    with open("/proc/self/maps") as f:
+        for line in f:
+            lib = line.split()[-1]
+            if "libOpenImageDenoise" in lib:
+                p = os.path.join(os.path.dirname(lib), "libOpenImageDenoise.so.2")
+                if p not in paths:
+                    paths.append(p)
     return paths
 
 
@@ -42,7 +49,8 @@ class Oidn:
     def __init__(self):
         self.path = next((p for p in candidates() if os.path.isfile(p)), None)
         if self.path is None:
-            raise SystemExit("--denoise: no libOpenImageDenoise.so.2 among " + ", ".join(candidates()))
+            raise SystemExit("--denoise: this Blender has no Open Image Denoise loaded (Debian's 3.4.1 "
+                             "is built without it); LUXEL_OIDN_LIB=path names another, at your risk")
         lib = ctypes.CDLL(self.path)
         vp, cp = ctypes.c_void_p, ctypes.c_char_p
         lib.oidnNewDevice.restype = vp
@@ -72,7 +80,7 @@ class Oidn:
         if self.lib.oidnGetDeviceError(self.device, ctypes.byref(msg)):
             raise RuntimeError(f"OIDN {what}: {msg.value.decode() if msg.value else 'error'}")
 
-    def denoise(self, rgb, filter_type="RTLightmap"):
+    def denoise(self, rgb, filter_type="RT"):
         """rgb: (h, w, 3) float32 -> a denoised copy"""
         src = np.ascontiguousarray(rgb, np.float32)
         dst = np.empty_like(src)
