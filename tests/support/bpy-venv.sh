@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by tests/support/install-test-tools.sh (the round-trip and add-on
 # tests), tests/bench/peers/install-blender.sh and run_peer_bench.sh (the
 # second Cycles peer): one venv holding Blender as the `bpy` module from PyPI
@@ -9,6 +10,7 @@
 #   bpy_venv_install   installs it unless ready (pip, about 370 MB); needs
 #                      BPY_APT_PACKAGES installed first; logs to stderr
 BPY_VERSION=5.0.1
+# shellcheck disable=SC2034  # used by the scripts that source this file
 BPY_APT_PACKAGES=(
   # Debian's python3.11 with venv/ensurepip
   python3 python3-venv

@@ -503,11 +503,8 @@ def add_sun(scene, spec):
 def exr_writer():
     """OpenImageIO's Python bindings where this Python has them (Debian's
     blender runs Debian's python3), else Blender's own image writer"""
-    try:
-        import OpenImageIO  # noqa: F401
-        return "OpenImageIO"
-    except ImportError:
-        return "blender"
+    import importlib.util
+    return "OpenImageIO" if importlib.util.find_spec("OpenImageIO") else "blender"
 
 
 def baked_pixels(img, res):
