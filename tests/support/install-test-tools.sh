@@ -9,7 +9,8 @@
 #     asserts on glTF extras).
 #   - Blender 5.0.1 as the `bpy` module from PyPI (the newest for Python
 #     3.11), in a venv kept outside the clone:
-#     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1. Its glTF importer and
+#     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1 (tests/support/bpy-venv.sh,
+#     shared with tests/bench/peers/install-blender.sh). Its glTF importer and
 #     exporter (io_scene_gltf2, with the Draco encoder) ship inside the wheel.
 #   - gltfpack 1.2 (meshoptimizer's glTF packer), an independent writer of
 #     EXT_meshopt_compression: the executable inside PyPI's
@@ -25,26 +26,15 @@ here="$(cd "$(dirname "$0")" && pwd)"
 
 PACKAGES=(
   assimp-utils libassimp-dev
-  # the venv for bpy: Debian's python3.11 with venv/ensurepip
-  python3 python3-venv
-  # shared libraries bpy 5.0.1's __init__.so links (ldd; X11 client
-  # libraries only, no display is opened in background mode)
-  libx11-6 libxrender1 libxfixes3 libxi6 libxkbcommon0 libxext6 libsm6 libice6 libgl1
 )
+# shellcheck source=tests/support/bpy-venv.sh
+source "$here/bpy-venv.sh"
 # shellcheck source=deploy/apt-install.sh
 source "$here/../../deploy/apt-install.sh"
-apt_install_missing install-test-tools "${PACKAGES[@]}" >&2
+apt_install_missing install-test-tools "${PACKAGES[@]}" "${BPY_APT_PACKAGES[@]}" >&2
 
-BPY_VERSION=5.0.1
-venv="${LUXEL_TOOLS_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/luxel}/bpy-$BPY_VERSION"
-if ! "$venv/bin/python" -c "import bpy, sys; sys.exit(bpy.app.version_string != '$BPY_VERSION')" \
-    >/dev/null 2>&1; then
-  echo "install-test-tools: installing bpy==$BPY_VERSION into $venv (about 370 MB)" >&2
-  rm -rf "$venv"
-  /usr/bin/python3.11 -m venv "$venv"
-  "$venv/bin/pip" install --quiet --disable-pip-version-check "bpy==$BPY_VERSION" >&2
-  "$venv/bin/python" -c "import bpy; print('install-test-tools: bpy', bpy.app.version_string)" >&2
-fi
+bpy_venv_install
+venv="$(bpy_venv_dir)"
 GLTFPACK_VERSION=1.2.0
 gltfpack="$(dirname "$venv")/gltfpack-$GLTFPACK_VERSION/gltfpack"
 if ! "$gltfpack" -v 2>/dev/null | grep -q '^gltfpack'; then

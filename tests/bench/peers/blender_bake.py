@@ -6,7 +6,16 @@ Run inside Blender (Debian 12: blender 3.4.1):
       --scene scenes/cornell_box.gltf --out DIR --resolution 64 --bounces 4 \
       --runs 1@3,16@3,64@3,256@3,4096@1 [--sky R,G,B] [--sun X,Y,Z,E,DEG] \
       [--directional-radius DEG] [--t0 EPOCH_SECONDS] [--materials matched|principled]
-      [--diffuse-weight nv|vh-average]
+      [--diffuse-weight nv|vh-average] [--denoise oidn [--denoise-filter RT|RTLightmap]]
+
+or with Blender as a Python module (PyPI bpy 5.0.1, tests/support/bpy-venv.sh;
+no blender binary, the same arguments without "--"):
+
+  ~/.cache/luxel/bpy-5.0.1/bin/python tests/bench/peers/blender_bake.py --scene ...
+
+Differences between the versions are looked up, not assumed: the importer's
+lighting-mode option, the linear colour space's name, the Principled
+emission socket, the colour mix node, the spot attenuation (README.md).
 
 What it does (README.md next to this file explains the conversions):
 
@@ -43,7 +52,10 @@ What it does (README.md next to this file explains the conversions):
   7. writes DIR/blender_s<SAMPLES>_seed<SEED>.exr (RGBA float32, row 0 = top,
      RGB multiplied by pi so it is irradiance E in W/m^2 like Luxel's:
      Blender's diffuse pass without colour is E / pi) and DIR/blender.json
-     with the timings.
+     with the timings and the Cycles settings left at their defaults (light
+     tree, sampling pattern); --denoise oidn adds each bake denoised by Open
+     Image Denoise (oidn_lightmap.py), blender_s<SAMPLES>_seed<SEED>_oidn.exr,
+     its seconds apart from the bake's.
 """
 # Over 500 lines: it runs inside Blender as one script (scene import, the matched material graph, the bake, the EXR writer) for both Blender versions.
 import argparse
@@ -53,8 +65,6 @@ import os
 import sys
 import time
 import warnings
-
-T_SCRIPT = time.time()
 
 import numpy as np  # noqa: E402
 
@@ -67,9 +77,19 @@ with warnings.catch_warnings():
 
 import bpy  # noqa: E402
 
+# as bpy 5.0.1's module (`python blender_bake.py ...`) Blender starts here,
+# at `import bpy`; inside the blender binary it started before the script
+T_STARTED = time.time()
+AS_MODULE = not bpy.app.binary_path   # the PyPI bpy module: no blender binary
+
 
 def parse_args():
-    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    # blender -b ... --python blender_bake.py -- ARGS: ours follow "--";
+    # python blender_bake.py ARGS (bpy module): sys.argv is ours
+    if "--" in sys.argv:
+        argv = sys.argv[sys.argv.index("--") + 1:]
+    else:
+        argv = sys.argv[1:] if AS_MODULE else []
     ap = argparse.ArgumentParser(prog="blender_bake.py")
     ap.add_argument("--scene", required=True)
     ap.add_argument("--out", required=True)
@@ -86,11 +106,70 @@ def parse_args():
                     help="matched graph: the dielectric's diffuse weight 1 - F(0.04, n.wo) (default) "
                          "or 1 - (Appendix B's F(V.H) averaged over wi)")
     ap.add_argument("--uv-map", default=None, help="UV map name (default: the second one)")
+    ap.add_argument("--denoise", choices=["none", "oidn"], default="none",
+                    help="oidn: also write each bake denoised by Open Image Denoise "
+                         "(blender_s<N>_seed<S>_oidn.exr; its seconds apart in blender.json)")
+    ap.add_argument("--denoise-filter", choices=["RT", "RTLightmap"], default="RT",
+                    help="OIDN filter: RT with hdr (the compositor's Denoise node; bpy 5.0.1's OIDN "
+                         "has only its weights) or RTLightmap (needs LUXEL_OIDN_LIB, e.g. Luxel's)")
     ap.add_argument("--warmup", action="store_true",
                     help="one 1-spp bake before the runs, timed apart (first-bake costs)")
     ap.add_argument("--t0", type=float, default=None,
                     help="epoch seconds when the caller started blender (startup time)")
     return ap.parse_args(argv)
+
+
+def first_of(names, available, what):
+    """the first of names (newest Blender's spelling first) that exists"""
+    for n in names:
+        if n in available:
+            return n
+    raise SystemExit(f"Blender {bpy.app.version_string}: none of {names} among the {what}")
+
+
+def principled_input(bsdf, names):
+    """a Principled BSDF input by its name in this Blender version (4.0
+    renamed "Emission" to "Emission Color")"""
+    return bsdf.inputs[first_of(names, bsdf.inputs.keys(), "Principled BSDF inputs")]
+
+
+def colour_space(names):
+    """the first of names that is a colour space of this Blender version
+    ("Linear" in 3.4, "Linear Rec.709" from 4.0)"""
+    prop = bpy.types.ColorManagedInputColorspaceSettings.bl_rna.properties["name"]
+    return first_of(names, [i.identifier for i in prop.enum_items], "colour spaces")
+
+
+def import_gltf(path):
+    """glTF import with lighting mode COMPAT ("Unitless"): the option is
+    convert_lighting_mode up to 3.6, export_import_convert_lighting_mode from
+    4.0 (io_scene_gltf2 shares it with the exporter)"""
+    props = [p.identifier for p in bpy.ops.import_scene.gltf.get_rna_type().properties]
+    opt = first_of(["export_import_convert_lighting_mode", "convert_lighting_mode"], props,
+                   "glTF importer options")
+    bpy.ops.import_scene.gltf(filepath=os.path.abspath(path), **{opt: "COMPAT"})
+    return opt
+
+
+def mix_rgb(nt, blend):
+    """a colour mix node of blend_type `blend`: (factor, A, B, result)
+    sockets. ShaderNodeMix (3.4+; the float/vector/colour sockets share
+    names, so they are taken by identifier) where it exists, else the legacy
+    ShaderNodeMixRGB (Fac, Color1, Color2 -> Color). Same maths: factor
+    clamped to [0, 1], result not clamped."""
+    if hasattr(bpy.types, "ShaderNodeMix"):
+        n = nt.nodes.new("ShaderNodeMix")
+        n.data_type = "RGBA"
+        n.blend_type = blend
+        n.clamp_factor = True
+        n.clamp_result = False
+        ins = {s.identifier: s for s in n.inputs}
+        outs = {s.identifier: s for s in n.outputs}
+        return ins["Factor_Float"], ins["A_Color"], ins["B_Color"], outs["Result_Color"]
+    n = nt.nodes.new("ShaderNodeMixRGB")
+    n.blend_type = blend
+    n.use_clamp = False
+    return n.inputs["Fac"], n.inputs["Color1"], n.inputs["Color2"], n.outputs["Color"]
 
 
 def socket_or_value(sock):
@@ -120,12 +199,11 @@ def is_rough_dielectric(bsdf):
 def schlick(nt, f0, c5):
     """Schlick F = f0 + (1 - f0) c5 = mix(f0, 1, c5) as a colour socket;
     f0 = (socket, value)"""
-    fres = nt.nodes.new("ShaderNodeMixRGB")
-    fres.blend_type = "MIX"
-    nt.links.new(c5, fres.inputs["Fac"])
-    feed(nt, f0, fres.inputs["Color1"])
-    fres.inputs["Color2"].default_value = (1.0, 1.0, 1.0, 1.0)
-    return fres.outputs["Color"]
+    fac, a, b, result = mix_rgb(nt, "MIX")
+    nt.links.new(c5, fac)
+    feed(nt, f0, a)
+    b.default_value = (1.0, 1.0, 1.0, 1.0)
+    return result
 
 
 def multiscatter_ggx(nt, colour, rough):
@@ -215,12 +293,11 @@ def luxel_bsdf(nt, bsdf, specular, diffuse_weight):
         for ch in ("Red", "Green", "Blue"):
             nt.links.new(fd, gray.inputs[ch])
         nt.links.new(gray.outputs["Color"], inv.inputs["Color"])
-    dcol = nt.nodes.new("ShaderNodeMixRGB")
-    dcol.blend_type = "MULTIPLY"
-    dcol.inputs["Fac"].default_value = 1.0
-    feed(nt, base, dcol.inputs["Color1"])
-    nt.links.new(inv.outputs["Color"], dcol.inputs["Color2"])
-    nt.links.new(dcol.outputs["Color"], diffuse.inputs["Color"])
+    fac, a, b, dcol = mix_rgb(nt, "MULTIPLY")
+    fac.default_value = 1.0
+    feed(nt, base, a)
+    nt.links.new(inv.outputs["Color"], b)
+    nt.links.new(dcol, diffuse.inputs["Color"])
     dielectric = nt.nodes.new("ShaderNodeAddShader")
     nt.links.new(diffuse.outputs["BSDF"], dielectric.inputs[0])
     nt.links.new(multiscatter_ggx(nt, f_diel, rough), dielectric.inputs[1])
@@ -244,8 +321,9 @@ def convert_material(mat, mode, specular, diffuse_weight="nv"):
     if bsdf is None or out is None:
         raise SystemExit(f"material {mat.name}: no Principled BSDF from the glTF importer")
     base = bsdf.inputs["Base Color"]
-    emis = bsdf.inputs["Emission"]
-    strength = float(bsdf.inputs["Emission Strength"].default_value)
+    emis = principled_input(bsdf, ["Emission Color", "Emission"])
+    emis_strength = principled_input(bsdf, ["Emission Strength"])
+    strength = float(emis_strength.default_value)
     info = {"base_color": "texture" if base.is_linked else [round(x, 6) for x in list(base.default_value)[:3]],
             "metallic": "texture" if bsdf.inputs["Metallic"].is_linked
             else round(bsdf.inputs["Metallic"].default_value, 6),
@@ -260,7 +338,7 @@ def convert_material(mat, mode, specular, diffuse_weight="nv"):
         shader = luxel_bsdf(nt, bsdf, specular, diffuse_weight)
     else:
         # the importer's Principled BSDF without its emission (added below)
-        bsdf.inputs["Emission Strength"].default_value = 0.0
+        emis_strength.default_value = 0.0
         shader = bsdf.outputs["BSDF"]
     if max(list(emis.default_value)[:3]) * strength > 0.0:
         em = nt.nodes.new("ShaderNodeEmission")
@@ -318,14 +396,22 @@ def world_axis(obj):
     return v.normalized()
 
 
+# Cycles' spot attenuation carries a cos(theta) factor in 3.4 and not in 5.0.1
+# (kernel/light/spot.h: the smoothstep alone). Versions in between were not
+# checked; 4.0 is where the spot light code was rewritten (spot.h's
+# scaled_axis), so the switch is put there.
+SPOT_HAS_COS = bpy.app.version < (4, 0, 0)
+
+
 def spot_falloff_nodes(light, axis, inner, outer):
     """Cycles 3.4's spot (kernel/light/spot.h, spot_light_attenuation) is
     cos(theta) x smoothstep over its blend zone; with blend 0 it is
-    cos(theta) inside the cone. glTF's (and Luxel's, kernels/shading/lights.h)
+    cos(theta) inside the cone. 5.0.1's is the smoothstep alone: 1 inside
+    the cone with blend 0. glTF's (and Luxel's, kernels/shading/lights.h)
     is the square of a linear ramp in cos theta from the outer to the inner
-    cone. The light's Emission strength becomes ramp^2 / cos(theta), with
-    cos(theta) = |Incoming . axis| (Incoming: from the light towards the lit
-    point in a light shader)."""
+    cone. The light's Emission strength becomes ramp^2 / cos(theta) (3.4)
+    or ramp^2 (5.0.1), with cos(theta) = |Incoming . axis| (Incoming: from
+    the light towards the lit point in a light shader)."""
     light.use_nodes = True
     nt = light.node_tree
     em = next(n for n in nt.nodes if n.type == "EMISSION")
@@ -348,6 +434,9 @@ def spot_falloff_nodes(light, axis, inner, outer):
     sq.operation = "MULTIPLY"
     nt.links.new(ramp.outputs["Value"], sq.inputs[0])
     nt.links.new(ramp.outputs["Value"], sq.inputs[1])
+    if not SPOT_HAS_COS:
+        nt.links.new(sq.outputs["Value"], em.inputs["Strength"])
+        return
     div = nt.nodes.new("ShaderNodeMath")
     div.operation = "DIVIDE"
     nt.links.new(sq.outputs["Value"], div.inputs[0])
@@ -389,7 +478,8 @@ def match_lights(scene, gltf, directional_radius_deg):
             lt.spot_size = 2.0 * outer
             lt.spot_blend = 0.0
             spot_falloff_nodes(lt, axis, inner, outer)
-            rec.update(inner=inner, outer=outer, spot_size=lt.spot_size)
+            rec.update(inner=inner, outer=outer, spot_size=lt.spot_size,
+                       strength="ramp^2 / cos" if SPOT_HAS_COS else "ramp^2")
         out.append(rec)
     return out
 
@@ -410,7 +500,15 @@ def add_sun(scene, spec):
     return {"name": "luxel_sun", "type": "SUN", "direction_blender": list(d), "energy": e, "angle_rad": lt.angle}
 
 
-def write_exr(path, img, res):
+def exr_writer():
+    """OpenImageIO's Python bindings where this Python has them (Debian's
+    blender runs Debian's python3), else Blender's own image writer"""
+    import importlib.util
+    return "OpenImageIO" if importlib.util.find_spec("OpenImageIO") else "blender"
+
+
+def baked_pixels(img, res):
+    """the baked image as irradiance, (res, res, 4) float32, row 0 = top"""
     px = np.empty(res * res * 4, np.float32)
     img.pixels.foreach_get(px)
     # Blender stores rows bottom-up (row 0 = Blender v 0 = glTF v 1): flip so
@@ -418,11 +516,12 @@ def write_exr(path, img, res):
     # Blender's diffuse pass without colour is E / pi: multiply RGB by pi.
     px = np.flipud(px.reshape(res, res, 4)).copy()
     px[..., :3] *= math.pi
-    try:
+    return px
+
+
+def write_exr(path, px, res):
+    if exr_writer() == "OpenImageIO":
         import OpenImageIO as oiio
-    except ImportError:
-        oiio = None
-    if oiio is not None:
         spec = oiio.ImageSpec(res, res, 4, "float")
         spec.attribute("compression", "zip")
         o = oiio.ImageOutput.create(path)
@@ -432,6 +531,10 @@ def write_exr(path, img, res):
         o.close()
     else:  # Blender's own writer (it flips back to bottom-up in memory)
         tmp = bpy.data.images.new("out", res, res, alpha=True, float_buffer=True)
+        # Non-Color, or the writer encodes the pixels with the sRGB curve
+        # (0.5 -> 0.7354) in 3.4 and 5.0 alike, "Linear"/"Linear Rec.709"
+        # images included: only Non-Color is written as is
+        tmp.colorspace_settings.name = "Non-Color"
         tmp.pixels.foreach_set(np.flipud(px).ravel())
         tmp.filepath_raw = path
         tmp.file_format = "OPEN_EXR"
@@ -443,8 +546,10 @@ def main():
     a = parse_args()
     os.makedirs(a.out, exist_ok=True)
     t_import0 = time.time()
+    # the blender binary ran with --factory-startup; the bpy module loads the
+    # user's startup file and preferences: this resets both to factory settings
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    bpy.ops.import_scene.gltf(filepath=os.path.abspath(a.scene), convert_lighting_mode="COMPAT")
+    lighting_option = import_gltf(a.scene)
     t_import = time.time() - t_import0
 
     t_setup0 = time.time()
@@ -483,9 +588,9 @@ def main():
         triangles += len(o.data.loop_triangles)
 
     img = bpy.data.images.new("lightmap", a.resolution, a.resolution, alpha=True, float_buffer=True)
-    img.colorspace_settings.name = "Linear"
+    img.colorspace_settings.name = colour_space(["Linear Rec.709", "Linear"])
     materials = {}
-    used = [m for m in bpy.data.materials if m.use_nodes and m.users > 0]
+    used = [m for m in bpy.data.materials if m.node_tree is not None and m.users > 0]
     specular = not all(is_rough_dielectric(next(n for n in m.node_tree.nodes
                                                   if n.type == "BSDF_PRINCIPLED")) for m in used)
     for m in used:
@@ -499,7 +604,8 @@ def main():
 
     world = bpy.data.worlds.new("luxel_sky")
     scene.world = world
-    world.use_nodes = True
+    if world.node_tree is None:   # 3.4; from 4.x (5.0: use_nodes deprecated) a new world has its nodes
+        world.use_nodes = True
     bg = world.node_tree.nodes["Background"]
     sky = [float(x) for x in a.sky.split(",")] if a.sky else [0.0, 0.0, 0.0]
     bg.inputs["Color"].default_value = (*sky, 1.0)
@@ -524,6 +630,8 @@ def main():
     c.volume_bounces = 0
     c.min_light_bounces = 0
     c.min_transparent_bounces = 0
+    if hasattr(c, "use_guiding"):   # path guiding (3.4+): off, its default on CPU too
+        c.use_guiding = False
     bk = scene.render.bake
     bk.use_pass_direct = True
     bk.use_pass_indirect = True
@@ -545,6 +653,11 @@ def main():
             runs.append((int(spp), int(seed or 1)))
     bakes = []
     warmup_s = None
+    oidn = None
+    if a.denoise == "oidn":   # the device is made before the timed bakes
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import oidn_lightmap
+        oidn = oidn_lightmap.Oidn()
     if a.warmup:
         c.samples, c.seed = 1, 9
         t = time.time()
@@ -562,8 +675,16 @@ def main():
         # a SAMPLES@SEED repeated in --runs (a warm-up bake) gets its own file
         tag = "" if (spp, seed) not in runs[:i] else f"_run{i}"
         name = f"blender_s{spp}_seed{seed}{tag}.exr"
-        write_exr(os.path.join(a.out, name), img, a.resolution)
-        bakes.append({"samples": spp, "seed": seed, "seconds": dt, "file": name})
+        px = baked_pixels(img, a.resolution)
+        write_exr(os.path.join(a.out, name), px, a.resolution)
+        bake = {"samples": spp, "seed": seed, "seconds": dt, "file": name}
+        if oidn is not None:
+            t = time.time()
+            px[..., :3] = oidn.denoise(px[..., :3], a.denoise_filter)
+            bake["denoise_s"] = time.time() - t
+            bake["denoised_file"] = name.replace(".exr", "_oidn.exr")
+            write_exr(os.path.join(a.out, bake["denoised_file"]), px, a.resolution)
+        bakes.append(bake)
         print(f"blender_bake: {spp:6d} spp seed {seed}: {dt:8.3f} s", flush=True)
 
     info = {
@@ -571,8 +692,18 @@ def main():
         "scene": a.scene, "resolution": a.resolution, "bounces": a.bounces,
         "sky": sky, "materials": a.materials, "diffuse_weight": a.diffuse_weight, "uv_map": uv_name,
         "objects": len(meshes), "objects_joined": n_objects, "threads": scene.render.threads, "triangles": triangles,
+        "as_module": AS_MODULE, "gltf_lighting_option": lighting_option,
+        "bake_colour_space": img.colorspace_settings.name, "exr_writer": exr_writer(),
+        # Cycles' defaults that differ between versions, left as they are
         "sampling_pattern": c.sampling_pattern,
-        "startup_s": (T_SCRIPT - a.t0) if a.t0 else None,
+        "use_light_tree": getattr(c, "use_light_tree", None),   # 3.6+, on by default
+        "use_guiding": getattr(c, "use_guiding", None),
+        "denoising": c.use_denoising, "adaptive_sampling": c.use_adaptive_sampling,
+        "denoise": None if oidn is None else {"filter": a.denoise_filter, "library": oidn.path,
+                                              "oidn_version": oidn.version, "device": "CPU",
+                                              "inputs": "colour only"},
+        # Blender (binary) or `import bpy` (module) start up to this script
+        "startup_s": (T_STARTED - a.t0) if a.t0 else None,
         "import_s": t_import, "setup_s": t_setup, "warmup_s": warmup_s,
         "material_conversion": materials, "specular_layer": specular, "lights": lights,
         "bakes": bakes,

@@ -3,10 +3,15 @@
 
   /usr/bin/python3 tests/bench/peers/compare.py OUT
 
-Reads OUT/<scene>/{settings.json, luxel_ref/, luxel/s<N>/, blender/, hires/}
-for every scene directory, prints Markdown tables (agreement, error ladders,
-time to equal error, speed ratios) and writes OUT/summary.json,
-OUT/<scene>/errors.csv and, with matplotlib, OUT/<scene>/error_vs_time.png.
+Reads OUT/<scene>/{settings.json, luxel_ref/, luxel/s<N>/, blender-<V>/,
+hires/} for every scene directory, one blender-<V>/ per Cycles version V that
+run_peer_bench.sh ran (PEER_BLENDERS; a blender/ directory of older runs is
+read as its blender.json's version), prints Markdown tables (agreement, error
+ladders, time to equal error, speed ratios) and writes OUT/summary.json (one
+entry per scene and Cycles version), OUT/<scene>/errors.csv and, with
+matplotlib, OUT/<scene>/error_vs_time.png. With two or more Cycles versions
+the report starts with their columns side by side, and the per-version files
+are errors_cycles-<V>.csv and error_vs_time_cycles-<V>.png.
 
 Conventions (README.md next to this file):
   * both images hold irradiance E in W/m^2 (Blender's pass already x pi),
@@ -146,7 +151,11 @@ def speed_table(luxel, blender, nlev=5):
     """common error levels over the overlap of both ladders -> t_Cycles / t_Luxel"""
     if not luxel or not blender:
         return {"levels": [], "note": "no ladder"}
-    el, eb = [p[1] for p in luxel], [p[1] for p in blender]
+    # errors at 0 (noise subtraction leaves nothing: short quick-mode
+    # references) have no place on a log scale
+    el, eb = [p[1] for p in luxel if p[1] > 0], [p[1] for p in blender if p[1] > 0]
+    if not el or not eb:
+        return {"levels": [], "note": "no error above the reference's noise"}
     lo, hi = max(min(el), min(eb)), min(max(el), max(eb))
     if not lo < hi:
         return {"levels": [], "note": "error ranges do not overlap"}
@@ -223,7 +232,7 @@ def split_by_geometry(st, mask, matched, ref, bhi, bvar, lab):
     scene = st.get("scene")
     if not scene or not os.path.isfile(scene):
         return {}
-    mat_id, pos, nrm, names, tris, norms = texel_geometry.rasterise(scene, st["resolution"])
+    mat_id, pos, nrm, names, tris, norms = rasterise_once(scene, st["resolution"])
     out = {"by_material": {}, "crease": {}}
     for key, m in (("interior", mask), ("matched", matched)):
         rows = []
@@ -253,10 +262,31 @@ def split_by_geometry(st, mask, matched, ref, bhi, bvar, lab):
     return out
 
 
-def hires_check(sdir, res, ref_rgb, bhi, flagged):
+def peer_dirs(sdir):
+    """[(Cycles version, directory name)] of a scene, in version order:
+    blender-<V>/, or the blender/ of a single-version run"""
+    out = []
+    for d in sorted(os.listdir(sdir)):
+        f = os.path.join(sdir, d, "blender.json")
+        if (d == "blender" or d.startswith("blender-")) and os.path.isfile(f):
+            out.append((json.load(open(f))["blender_version"], d))
+    return sorted(out, key=lambda vd: tuple(int(x) for x in vd[0].split(".") if x.isdigit()))
+
+
+_GEOMETRY = {}
+
+
+def rasterise_once(scene, res):
+    """texel_geometry.rasterise, once per scene for all Cycles versions"""
+    if (scene, res) not in _GEOMETRY:
+        _GEOMETRY[(scene, res)] = texel_geometry.rasterise(scene, res)
+    return _GEOMETRY[(scene, res)]
+
+
+def hires_check(sdir, res, ref_rgb, bhi, flagged, bdir_name):
     """Luxel and Cycles at 4x the resolution, box-filtered down, on the flagged texels"""
     hd = os.path.join(sdir, "hires")
-    if not os.path.isdir(hd) or not flagged.any():
+    if not os.path.isdir(os.path.join(hd, bdir_name)) or not flagged.any():
         return None
     st = json.load(open(os.path.join(hd, "settings.json")))
     k = st["resolution"] // res
@@ -265,7 +295,7 @@ def hires_check(sdir, res, ref_rgb, bhi, flagged):
         return a[..., :3].reshape(res, k, res, k, 3).mean(axis=(1, 3))
 
     lh = down(read_exr(os.path.join(hd, "luxel", "irradiance.exr")))
-    bh = down(read_exr(os.path.join(hd, "blender", f"blender_s{st['blender_spp']}_seed1.exr")))
+    bh = down(read_exr(os.path.join(hd, bdir_name, f"blender_s{st['blender_spp']}_seed1.exr")))
     f = flagged
     vals = {"luxel": ref_rgb[f] @ LUM, "cycles": bhi[f] @ LUM,
             "luxel_hires": lh[f] @ LUM, "cycles_hires": bh[f] @ LUM}
@@ -279,12 +309,14 @@ def hires_check(sdir, res, ref_rgb, bhi, flagged):
             "rms_vs_luxel_hires": {key: rel_rms(v) for key, v in vals.items()}}
 
 
-def analyse(sdir):
+def analyse(sdir, version, bdir_name, tag):
+    """one scene against one Cycles version (its bakes in sdir/bdir_name);
+    tag: "" or "_cycles-<version>", the suffix of its errors.csv and plot"""
     st = json.load(open(os.path.join(sdir, "settings.json")))
     name = st["name"]
     ref = Ref(os.path.join(sdir, "luxel_ref"))
-    bj = json.load(open(os.path.join(sdir, "blender", "blender.json")))
-    bdir = os.path.join(sdir, "blender")
+    bdir = os.path.join(sdir, bdir_name)
+    bj = json.load(open(os.path.join(bdir, "blender.json")))
     hi_spp = st["blender_hi"]
     b1 = read_exr(os.path.join(bdir, f"blender_s{hi_spp}_seed1.exr"))
     b2 = read_exr(os.path.join(bdir, f"blender_s{hi_spp}_seed2.exr"))
@@ -308,7 +340,7 @@ def analyse(sdir):
              "flagged": int(flagged.sum())}
     for key, m in (("interior", mask), ("matched", matched)):
         agree[key] = agreement(ref.rgb[m], bhi[m], ref.var[m], bvar[m], lab[m], lab)
-    agree["hires"] = hires_check(sdir, st["resolution"], ref.rgb, bhi, flagged)
+    agree["hires"] = hires_check(sdir, st["resolution"], ref.rgb, bhi, flagged, bdir_name)
     agree.update(split_by_geometry(st, mask, matched, ref, bhi, bvar, lab))
 
     # ---- ladders ----------------------------------------------------------
@@ -347,13 +379,16 @@ def analyse(sdir):
         speed["own_relmse"] = speed_table(
             [(r["trace_s"], r["interior"]["relmse"]) for r in lux],
             [(r["bake_s"], r["own"]["relmse"]) for r in bl if "own" in r])
-        write_csv(sdir, lux, bl)
-        plot(sdir, name, st, lux, bl)
-    return {"name": name, "settings": st, "agreement": agree, "luxel": lux, "blender": bl,
+        write_csv(sdir, lux, bl, tag)
+        plot(sdir, name, st, lux, bl, version, tag)
+    return {"name": name, "cycles_version": version, "settings": st, "agreement": agree,
+            "luxel": lux, "blender": bl,
             "blender_overheads": {"startup_s": bj["startup_s"], "import_s": bj["import_s"],
                                   "setup_s": bj["setup_s"], "warmup_s": bj.get("warmup_s")},
             "luxel_ref_seconds": ref.manifest["stats"]["seconds"], "speed": speed,
             "triangles": bj.get("triangles"),
+            "cycles_settings": {k: bj.get(k) for k in ("sampling_pattern", "use_light_tree", "use_guiding",
+                                                       "as_module", "exr_writer", "threads")},
             "lights": ", ".join(x.get('type', 'SUN').lower() for x in bj.get("lights", [])) or None,
             "luxel_features": ref.manifest.get("features")}
 
@@ -387,8 +422,8 @@ def split(lux, bl, table):
     return out
 
 
-def write_csv(sdir, lux, bl):
-    with open(os.path.join(sdir, "errors.csv"), "w", newline="") as f:
+def write_csv(sdir, lux, bl, tag):
+    with open(os.path.join(sdir, f"errors{tag}.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["renderer", "spp", "seed", "seconds_engine", "seconds_end_to_end", "texels",
                     "rmse", "relmse", "rmse_raw", "relmse_raw", "matched_rmse", "matched_relmse",
@@ -404,7 +439,7 @@ def write_csv(sdir, lux, bl):
                         r["own"]["relmse"] if "own" in r else ""])
 
 
-def plot(sdir, name, st, lux, bl):
+def plot(sdir, name, st, lux, bl, version, tag):
     try:
         import matplotlib
         matplotlib.use("Agg")
@@ -416,19 +451,121 @@ def plot(sdir, name, st, lux, bl):
         ax.loglog([r["trace_s"] for r in lux], [r[sel]["relmse"] for r in lux], "o" + ls, color="C0",
                   label=f"Luxel, trace time ({sel})")
         ax.loglog([r["bake_s"] for r in bl], [r[sel]["relmse"] for r in bl], "s" + ls, color="C1",
-                  label=f"Cycles, bake call ({sel})")
+                  label=f"Cycles {version}, bake call ({sel})")
     ax.loglog([r["wall_s"] for r in lux], [r["matched"]["relmse"] for r in lux], "o:", color="C2",
               label="Luxel, process wall (matched)")
     ax.loglog([r["cold_s"] for r in bl], [r["matched"]["relmse"] for r in bl], "s:", color="C3",
-              label="Cycles, + start and import (matched)")
+              label=f"Cycles {version}, + start and import (matched)")
     ax.set_xlabel("seconds")
     ax.set_ylabel("relMSE vs Luxel reference")
     ax.set_title(f"{name}: {st['resolution']}², {st['bounces']} bounces")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(sdir, "error_vs_time.png"), dpi=100)
+    fig.savefig(os.path.join(sdir, f"error_vs_time{tag}.png"), dpi=100)
     plt.close(fig)
+
+
+def version_key(v):
+    return tuple(int(x) if x.isdigit() else 0 for x in v.split("."))
+
+
+CALIBRATION = ("sky_plane", "lights_plane")
+CAL_TOL = 0.005   # |Cycles / Luxel - 1| allowed beyond 5 sigma of noise
+
+
+def calibration(res, versions):
+    """per Cycles version: the calibration scenes' Cycles / Luxel ratios
+    (interior texels: every channel, and every chart's luminance) and
+    whether each lies within CAL_TOL + 5 sigma of 1. A version whose
+    calibration fails (or did not run) has ratios that do not count."""
+    out = {}
+    for v in versions:
+        rows, ok = [], True
+        for r in res:
+            if r["cycles_version"] != v or r["name"] not in CALIBRATION:
+                continue
+            g = r["agreement"]["interior"]
+            checks = [(rt, se) for rt, se in zip(g["ratio_rgb"], g["ratio_se_rgb"])]
+            checks += [(c["ratio"], c["ratio_se"]) for c in g["charts"]]
+            passed = all(abs(rt - 1.0) <= CAL_TOL + 5.0 * se for rt, se in checks)
+            ok &= passed
+            rows.append({"scene": r["name"], "ratio_rgb": g["ratio_rgb"],
+                         "charts": [c["ratio"] for c in g["charts"]], "pass": passed})
+        out[v] = {"scenes": rows, "pass": ok and len(rows) == len(CALIBRATION)}
+    return out
+
+
+def calibration_table(cal):
+    rows = []
+    for v, c in cal.items():
+        for x in c["scenes"]:
+            rows.append([v, x["scene"], " / ".join(f"{t:.4f}" for t in x["ratio_rgb"]),
+                         " / ".join(f"{t:.4f}" for t in x["charts"]), "pass" if x["pass"] else "**FAIL**"])
+        if len(c["scenes"]) < len(CALIBRATION):
+            rows.append([v, "(not run: " + ", ".join(n for n in CALIBRATION
+                                                     if n not in [x["scene"] for x in c["scenes"]]) + ")",
+                         "-", "-", "**no calibration**"])
+    return ("### Calibration: Cycles / Luxel on the closed-form scenes\n\n"
+            f"Interior texels, converged maps; pass: every channel and every chart within "
+            f"{CAL_TOL:.1%} + 5σ of 1. A version that does not pass (or was not calibrated in this "
+            "run) has time ratios that do not count.\n\n"
+            + md_table(["Cycles", "scene", "R / G / B", "per chart (luminance)", "calibration"], rows)
+            + "\n")
+
+
+def side_by_side(res, versions, cal):
+    """every Cycles version in one table per scene: time to equal error
+    (matched texels) in the engine and end to end, at one common error level"""
+    rows = []
+    names = []
+    for r in res:
+        if r["name"] not in names:
+            names.append(r["name"])
+    for name in names:
+        per = {r["cycles_version"]: r for r in res if r["name"] == name}
+        if not all((per.get(v, {}).get("speed") or {}).get("engine_matched_relmse", {}).get("levels")
+                   for v in versions):
+            continue
+        row = [name]
+        for kind, lx, bx in (("engine", "trace_s", "bake_s"), ("end_to_end", "wall_s", "cold_s")):
+            # one error level inside every version's common range with Luxel
+            lo = max(min(lv["error"] for lv in per[v]["speed"][f"{kind}_matched_relmse"]["levels"] or [{"error": math.inf}])
+                     for v in versions)
+            hi = min(max(lv["error"] for lv in per[v]["speed"][f"{kind}_matched_relmse"]["levels"] or [{"error": 0.0}])
+                     for v in versions)
+            if not lo <= hi:
+                row += ["-"] * (2 + 2 * len(versions))
+                continue
+            level = math.sqrt(lo * hi)
+            first = per[versions[0]]
+            tl = time_at([(x[lx], x["matched"]["relmse"]) for x in first["luxel"]], level)
+            row += [level, tl]
+            for v in versions:
+                tb = time_at([(x[bx], x["matched"]["relmse"]) for x in per[v]["blender"]], level)
+                gm = per[v]["speed"][f"{kind}_matched_relmse"]["geomean_ratio"]
+                row += [tb, f"{tb / tl:.2f} ({gm:.2f})" if tb and tl else "-"]
+        rows.append(row)
+    if not rows:
+        return ""
+    head = ["scene"]
+    for kind in ("engine", "e2e"):
+        head += [f"{kind} relMSE", f"Luxel {kind} s"]
+        for v in versions:
+            mark = "" if cal[v]["pass"] else " (not calibrated)"
+            head += [f"Cycles {v}{mark} {kind} s", f"{v} ratio (geo. mean)"]
+    return ("### Cycles versions side by side: time to equal relMSE (matched texels)\n\n"
+            "At one error level per scene inside the range every Cycles ladder shares with "
+            "Luxel's (the geometric middle of the common range). Engine: Luxel trace seconds vs "
+            "one Cycles bake call (bpy.ops.object.bake); e2e: Luxel process wall vs Blender start "
+            "(3.4.1: the blender binary; 5.0.1: `import bpy`) + import + setup + bake call. Ratio: "
+            "Cycles / Luxel at that level (> 1: Luxel faster), in brackets the geometric mean over "
+            "the five levels of that version's own table below. Cycles settings per version: "
+            + "; ".join(f"{v}: " + ", ".join(f"{k} {val}" for k, val in
+                                              next(r for r in res if r["cycles_version"] == v)
+                                              ["cycles_settings"].items() if val is not None)
+                        for v in versions)
+            + ".\n\n" + md_table(head, rows) + "\n")
 
 
 def summary(res):
@@ -470,10 +607,23 @@ def summary(res):
 
 
 def report(res):
-    out = [summary(res)]
+    versions = sorted({r["cycles_version"] for r in res}, key=version_key)
+    cal = calibration(res, versions)
+    out = [calibration_table(cal)]
+    out += [side_by_side(res, versions, cal)] if len(versions) > 1 else []
+    for v in versions:
+        part = [r for r in res if r["cycles_version"] == v]
+        s = summary(part)
+        if s and len(versions) > 1:
+            s = s.replace("### Summary:", f"### Cycles {v}, summary:", 1)
+        if s and not cal[v]["pass"]:
+            s = s.replace("\n\n", f"\n\n**Cycles {v} is not calibrated in this run: these ratios do "
+                          "not count.**\n\n", 1)
+        out.append(s)
     for r in res:
         st, a = r["settings"], r["agreement"]
-        out.append(f"\n### {r['name']}: {st['resolution']}², {st['bounces']} bounces, "
+        against = f" (Cycles {r['cycles_version']})" if len(versions) > 1 else ""
+        out.append(f"\n### {r['name']}{against}: {st['resolution']}², {st['bounces']} bounces, "
                    f"sky {st['sky'] or 'none'}, sun {st.get('sun') or 'none'}, "
                    f"{r.get('triangles') or '?'} triangles, lights: {r.get('lights') or 'none'}\n")
         out.append(f"Reference: Luxel {a['ref_spp']} spp, seed 1 ({fmt(r['luxel_ref_seconds'])} s "
@@ -605,7 +755,12 @@ def main():
     scenes = [d for d in os.listdir(root) if os.path.isfile(os.path.join(root, d, "settings.json"))]
     order = ["sky_plane", "lights_plane", "cornell_box", "sky_courtyard", "lights_courtyard"]
     scenes.sort(key=lambda s: (order.index(s) if s in order else len(order), s))
-    res = [analyse(os.path.join(root, s)) for s in scenes]
+    res = []
+    for s in scenes:
+        sdir = os.path.join(root, s)
+        peers = peer_dirs(sdir)
+        for version, d in peers:
+            res.append(analyse(sdir, version, d, f"_cycles-{version}" if len(peers) > 1 else ""))
     with open(os.path.join(root, "summary.json"), "w") as f:
         json.dump(res, f, indent=1)
     print(report(res))

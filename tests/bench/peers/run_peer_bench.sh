@@ -1,9 +1,15 @@
 #!/usr/bin/env bash
 # Luxel vs Blender Cycles, side by side. One command, one machine,
-# one run: bakes every scene with both renderers, then prints the tables.
+# one run: bakes every scene with Luxel and with each Cycles version, then
+# prints the tables.
 #
-#   tests/bench/peers/install-blender.sh     # once (apt: blender, python3-openimageio)
+#   tests/bench/peers/install-blender.sh     # once (apt: blender 3.4.1, python3-openimageio;
+#                                            # pip: bpy 5.0.1 in ~/.cache/luxel/bpy-5.0.1)
 #   tests/bench/peers/run_peer_bench.sh [OUT]   # default OUT = out/peers
+#
+# PEER_BLENDERS=3.4.1,5.0.1 (the default: every one installed): the Cycles
+# versions, each a column of the report. 3.4.1 is Debian's `blender` binary
+# (BLENDER=...), 5.0.1 the bpy module in the venv of tests/support/bpy-venv.sh.
 #
 # Needs a built luxel (build/client/luxel, or set LUXEL=...). About 4.5
 # minutes on a 2-core machine for the five 64^2 scenes. PEER_HEAVY=1 adds the gas
@@ -18,12 +24,40 @@ ROOT=$(cd "$HERE/../../.." && pwd)
 OUT=${1:-$ROOT/out/peers}
 LUXEL=${LUXEL:-$ROOT/build/client/luxel}
 BLENDER=${BLENDER:-blender}
+# shellcheck source=tests/support/bpy-venv.sh
+source "$ROOT/tests/support/bpy-venv.sh"
+BPY_PY="$(bpy_venv_dir)/bin/python"
 PY=/usr/bin/python3          # Debian's python: numpy + OpenImageIO bindings
 RES=${PEER_RES:-64}
 BOUNCES=${PEER_BOUNCES:-4}
 SKY=0.5,0.8,1.0              # constant sky radiance (W/m^2/sr) of the sky scenes
 
-command -v "$BLENDER" >/dev/null || { echo "run_peer_bench: no blender; run $HERE/install-blender.sh" >&2; exit 2; }
+# the Cycles versions installed: the blender binary's, the bpy venv's
+BIN_VERSION=$("$BLENDER" --version 2>/dev/null | head -1 | cut -d' ' -f2 || true)
+installed=()
+[ -n "$BIN_VERSION" ] && installed+=("$BIN_VERSION")
+bpy_venv_ready && [ "$BPY_VERSION" != "$BIN_VERSION" ] && installed+=("$BPY_VERSION")
+if [ -n "${PEER_BLENDERS:-}" ]; then
+  IFS=',' read -r -a PEERS <<< "$PEER_BLENDERS"
+else
+  PEERS=("${installed[@]}")
+fi
+[ ${#PEERS[@]} -gt 0 ] || { echo "run_peer_bench: no Blender; run $HERE/install-blender.sh" >&2; exit 2; }
+for v in "${PEERS[@]}"; do
+  [[ " ${installed[*]} " == *" $v "* ]] || {
+    echo "run_peer_bench: Cycles $v is not installed (have: ${installed[*]:-none}; blender binary" \
+         "'$BLENDER', bpy venv $(bpy_venv_dir)); run $HERE/install-blender.sh" >&2; exit 2; }
+done
+# blender_bake VERSION ARGS...: blender_bake.py under that Cycles version
+blender_bake() {
+  local v="$1"
+  shift
+  if [ "$v" = "$BIN_VERSION" ]; then
+    "$BLENDER" -b --factory-startup --python "$HERE/blender_bake.py" -- "$@"
+  else   # the bpy module: plain python, factory settings reset by the script
+    "$BPY_PY" "$HERE/blender_bake.py" "$@"
+  fi
+}
 [ -x "$LUXEL" ] || { echo "run_peer_bench: no luxel at $LUXEL (build first, or set LUXEL)" >&2; exit 2; }
 "$PY" -c "import numpy, OpenImageIO" 2>/dev/null || { echo "run_peer_bench: $PY lacks numpy/OpenImageIO; run $HERE/install-blender.sh" >&2; exit 2; }
 
@@ -95,7 +129,13 @@ mkdir -p "$OUT/scenes"
   echo "date: $(date -u +%Y-%m-%dT%H:%M:%SZ)"
   echo "git: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)$(git -C "$ROOT" diff --quiet 2>/dev/null || echo -dirty)"
   echo "luxel: $("$LUXEL" --version 2>&1 | head -1)"
-  echo "blender: $("$BLENDER" --version 2>/dev/null | head -1)"
+  for v in "${PEERS[@]}"; do
+    if [ "$v" = "$BIN_VERSION" ]; then
+      echo "blender $v: $(command -v "$BLENDER") (binary)"
+    else
+      echo "blender $v: $BPY_PY (bpy module)"
+    fi
+  done
   echo "resolution: $RES (unless a scene sets its own), bounces: $BOUNCES"
   echo "opencl: $(clinfo -l 2>/dev/null | tr '\n' ' ' || true)"
   lscpu | head -20
@@ -139,18 +179,20 @@ EOF
     elapsed "$t0" "$(now)" > "$d/luxel/s$spp/wall_s.txt"
     echo "   luxel $spp spp: $(grep '^baked' "$d/luxel/s$spp.log" | cut -c12-60) (process $(cat "$d/luxel/s$spp/wall_s.txt") s)"
   done
-  # Cycles: one Blender process per scene; the ladder (seed 3) and the
-  # converged map (seeds 1 and 2) after a timed warm-up bake.
+  # Cycles: one Blender process per scene and version; the ladder (seed 3)
+  # and the converged map (seeds 1 and 2) after a timed warm-up bake.
   runs=""
   for spp in ${bl_ladder//,/ }; do runs="$runs,$spp@3"; done
   runs="${runs#,},$bl_hi@1,$bl_hi@2"
   runs=${runs#,}
-  echo "== $name: Cycles ($runs)"
-  "$BLENDER" -b --factory-startup --python "$HERE/blender_bake.py" -- --scene "$scene" \
-      --out "$d/blender" --resolution "$res" --bounces "$BOUNCES" --runs "$runs" --warmup \
-      "${blarg[@]}" --t0 "$(now)" > "$d/blender.log" 2>&1 \
-    || { tail -30 "$d/blender.log" >&2; exit 1; }
-  grep '^blender_bake' "$d/blender.log" | sed 's/^/   /'
+  for v in "${PEERS[@]}"; do
+    echo "== $name: Cycles $v ($runs)"
+    blender_bake "$v" --scene "$scene" \
+        --out "$d/blender-$v" --resolution "$res" --bounces "$BOUNCES" --runs "$runs" --warmup \
+        "${blarg[@]}" --t0 "$(now)" > "$d/blender-$v.log" 2>&1 \
+      || { tail -30 "$d/blender-$v.log" >&2; exit 1; }
+    grep '^blender_bake' "$d/blender-$v.log" | sed 's/^/   /'
+  done
   if [ "$hires_spp" != 0 ]; then
     # filter check (not timed): both renderers at 4x the resolution, for the
     # texels where the converged maps disagree (compare.py box-filters down)
@@ -160,9 +202,11 @@ EOF
     echo "{\"resolution\": $hr, \"luxel_spp\": $hires_spp, \"blender_spp\": $hires_spp}" > "$d/hires/settings.json"
     "$LUXEL" bake "$scene" --local --out "$d/hires/luxel" --resolution "$hr" --samples "$hires_spp" \
         --bounces "$BOUNCES" --seed 1 "${skyarg[@]}" --quiet > "$d/hires/luxel.log"
-    "$BLENDER" -b --factory-startup --python "$HERE/blender_bake.py" -- --scene "$scene" \
-        --out "$d/hires/blender" --resolution "$hr" --bounces "$BOUNCES" --runs "$hires_spp@1" \
-        "${blarg[@]}" > "$d/hires/blender.log" 2>&1 || { tail -30 "$d/hires/blender.log" >&2; exit 1; }
+    for v in "${PEERS[@]}"; do
+      blender_bake "$v" --scene "$scene" \
+          --out "$d/hires/blender-$v" --resolution "$hr" --bounces "$BOUNCES" --runs "$hires_spp@1" \
+          "${blarg[@]}" > "$d/hires/blender-$v.log" 2>&1 || { tail -30 "$d/hires/blender-$v.log" >&2; exit 1; }
+    done
   fi
 done
 echo "== all bakes: $(elapsed "$T_ALL" "$(now)") s"
