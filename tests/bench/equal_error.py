@@ -189,7 +189,11 @@ def post_seconds(manifest):
     s = 0.0
     for key in ("denoise", "seam_stitch"):
         v = manifest.get(key)
-        if isinstance(v, dict):  # "seconds", "find_seconds", "stitch_seconds", ...
+        if not isinstance(v, dict):
+            continue
+        if isinstance(v.get("seconds"), (int, float)):  # the whole step (its parts are inside it)
+            s += float(v["seconds"])
+        else:  # "find_seconds", "stitch_seconds", ...
             s += sum(float(x) for k, x in v.items() if k.endswith("seconds") and isinstance(x, (int, float)))
     return s
 
