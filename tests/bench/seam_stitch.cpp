@@ -4,10 +4,14 @@
 // and after, the most negative value, and the solve's CPU seconds.
 //   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]
 //                     [--min-edge TEXELS] [--min-chart TEXELS] [--clamp 0|1]
-//                     [--write OUT.exr]
-// The defaults are the bake's. --write saves the stitched map (to compare
-// option choices against a reference without re-baking). SEAM_DEBUG=1 also prints every 20th-part
-// seam with its values and the seams around the lowest texel.
+//                     [--sigmas Z] [--rel-gap G] [--noise 0|1] [--write OUT.exr]
+// The defaults are the bake's: sample points whose gap exceeds Z standard
+// deviations (from DIR/rel_error.exr) and G times the sides' mean are left out
+// (SeamStitchOptions::structure_sigmas); --noise 0 stitches every point (as
+// before that rule). --write saves the stitched map (to compare
+// option choices against a reference without re-baking). SEAM_DEBUG=1 also
+// prints every 20th-part seam with its values, every stitched seam (those
+// the narrow-chart rule keeps) and the seams around the lowest texel.
 #include "output/seam_stitch.h"
 
 #include <algorithm>
@@ -32,7 +36,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   output::SeamStitchOptions o;
-  bool clamp = true;  // as the bake does for irradiance
+  bool clamp = true;        // as the bake does for irradiance
+  bool noise_bound = true;  // as the bake does
   std::string write_path;
   for (int i = 3; i + 1 < argc; i += 2) {
     const std::string a = argv[i];
@@ -45,11 +50,21 @@ int main(int argc, char** argv) {
     if (a == "--min-edge") o.min_edge_texels = v;
     if (a == "--min-chart") o.min_chart_texels = v;
     if (a == "--clamp") clamp = v != 0;
+    if (a == "--sigmas") o.structure_sigmas = v;
+    if (a == "--rel-gap") o.structure_rel_gap = v;
+    if (a == "--move") o.max_move_sigmas = v;
+    if (a == "--noise") noise_bound = v != 0;
   }
   auto scene = scene::import_gltf_file(argv[1]);
   if (!scene) return std::fprintf(stderr, "%s\n", scene.status().to_string().c_str()), 1;
   auto img = output::read_exr(std::string(argv[2]) + "/irradiance.exr");
   if (!img) return std::fprintf(stderr, "%s\n", img.status().to_string().c_str()), 1;
+  std::vector<float> rel_error;
+  if (noise_bound) {
+    auto rel = output::read_exr(std::string(argv[2]) + "/rel_error.exr");
+    if (!rel) return std::fprintf(stderr, "%s\n", rel.status().to_string().c_str()), 1;
+    rel_error = rel.value().pixels;  // one channel
+  }
   pipeline::BakeSettings s = pipeline::default_settings();
   s.atlas.resolution = img.value().width;
   auto layout = pipeline::lay_out_lightmap(scene.value(), s);
@@ -78,11 +93,17 @@ int main(int argc, char** argv) {
           e.a0.x, e.a0.y, e.a1.x, e.a1.y, px(ma, 1), px(ma, 3), e.b0.x, e.b0.y, e.b1.x, e.b1.y,
           px(mb, 1), px(mb, 3));
     }
+    for (const auto& e : edges)
+      if (e.chart_texels >= o.min_chart_texels)
+        std::printf("stitched: chart %.2f A (%.2f,%.2f)-(%.2f,%.2f) | B (%.2f,%.2f)-(%.2f,%.2f)\n",
+                    e.chart_texels, e.a0.x, e.a0.y, e.a1.x, e.a1.y, e.b0.x, e.b0.y, e.b1.x,
+                    e.b1.y);
   }
   const std::clock_t c1 = std::clock();
   const output::SeamStitcher st(im.width, im.height, edges, coverage, o);
   const auto before = st.measure(im.pixels, 4, 0, 3);
-  const int it = st.stitch(im.pixels, 4, 0, 3, clamp);
+  size_t structural = 0;
+  const int it = st.stitch(im.pixels, 4, 0, 3, clamp, rel_error, &structural);
   const double stitch_s = double(std::clock() - c1) / CLOCKS_PER_SEC;
   const auto after = st.measure(im.pixels, 4, 0, 3);
   float lowest = 0;
@@ -117,11 +138,11 @@ int main(int argc, char** argv) {
       "before rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
       "after  rms_abs %.4g max_abs %.4g rms_rel %.4g max_rel %.4g\n"
       "cg iterations %d, find %.3f s, stitch %.3f s CPU (3 channels), lowest %.4g, negative %zu\n"
-      "edges left alone: %zu short, %zu of narrow charts\n",
+      "edges left alone: %zu short, %zu of narrow charts; points left out as structure: %zu\n",
       edges.size(), seams.hard_edges, seams.non_manifold, seams.cross_page, st.points(),
       st.unknowns(), before.rms_abs, before.max_abs, before.rms_rel, before.max_rel, after.rms_abs,
       after.max_abs, after.rms_rel, after.max_rel, it, find_s, stitch_s, lowest, negative,
-      st.short_edges(), st.narrow_chart_edges());
+      st.short_edges(), st.narrow_chart_edges(), structural);
   if (!write_path.empty()) {
     const Status w = output::write_exr(write_path, im, {"R", "G", "B", "A"});
     if (!w.ok()) return std::fprintf(stderr, "%s\n", w.to_string().c_str()), 1;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <thread>
 
 namespace luxel::output {
@@ -35,9 +36,11 @@ SeamStitcher::SeamStitcher(int width, int height, const std::vector<StitchEdge>&
   unknown_index_.clear();
   split_components();
   data_weight_.resize(texels_.size());
+  covered_.resize(texels_.size());
   diagonal_.resize(texels_.size());
   for (size_t u = 0; u < texels_.size(); ++u) {
-    data_weight_[u] = coverage[texels_[u]] > 0.0f ? 1.0 : options_.padding_weight;
+    covered_[u] = coverage[texels_[u]] > 0.0f;
+    data_weight_[u] = covered_[u] ? 1.0 : options_.padding_weight;
     diagonal_[u] = data_weight_[u];
   }
   for (const Row& r : rows_)
@@ -144,37 +147,139 @@ void SeamStitcher::apply(const Component& c, const Weights& w, const std::vector
                          std::vector<double>& y) const {
   for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u) y[u] = w.data[u] * x[u];
   for (uint32_t i = c.row_begin; i < c.row_end; ++i) {
+    if (!w.on(i)) continue;
     const Row& r = rows_[i];
     const double v = options_.seam_weight * row_value(r, x);
     for (int k = 0; k < r.n; ++k) y[r.unknown[k]] += r.weight[k] * v;
   }
 }
 
+// A sample point's gap against its noise: the standard deviation of
+// bilerp_A - bilerp_B is sqrt(sum_k w_k^2 sigma_k^2) over its texels, sigma_k
+// = rel_error_k times the texel's RMS over the channels (rel_error is that of
+// the texel mean's luminance). Padding has no estimate of its own (dilation
+// averages neighbours, possibly of another chart); it is given the largest
+// sigma of the row's covered texels, which errs towards stitching.
+std::vector<uint8_t> SeamStitcher::noise_rows(const std::vector<float>& pixels, int stride,
+                                              int first, int count,
+                                              const std::vector<float>& rel_error,
+                                              size_t& structural) const {
+  std::vector<uint8_t> on(rows_.size(), 1);
+  if (rel_error.empty()) return on;
+  auto rms = [&](uint32_t u) {
+    double sq = 0;
+    for (int ch = first; ch < first + count; ++ch) {
+      const double v = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+      sq += v * v;
+    }
+    return std::sqrt(sq / count);
+  };
+  for (size_t i = 0; i < rows_.size(); ++i) {
+    const Row& row = rows_[i];
+    double sigma[8] = {}, pad_sigma = 0;
+    for (int k = 0; k < row.n; ++k) {
+      const uint32_t u = row.unknown[k];
+      const double rel = rel_error[texels_[u]];
+      if (!covered_[u]) continue;
+      sigma[k] = std::isfinite(rel) ? std::max(0.0, rel) * rms(u)
+                                    : std::numeric_limits<double>::infinity();
+      pad_sigma = std::max(pad_sigma, sigma[k]);
+    }
+    double var = 0, gap = 0, mean = 0;
+    for (int k = 0; k < row.n; ++k) {
+      const double s = covered_[row.unknown[k]] ? sigma[k] : pad_sigma;
+      var += row.weight[k] * row.weight[k] * s * s;
+    }
+    for (int ch = first; ch < first + count; ++ch) {
+      double g = 0, m = 0;
+      for (int k = 0; k < row.n; ++k) {
+        const double x = pixels[size_t(texels_[row.unknown[k]]) * size_t(stride) + ch];
+        g += row.weight[k] * x;
+        m += 0.5 * std::abs(row.weight[k]) * x;
+      }
+      gap += g * g;
+      mean += m * m;
+    }
+    gap = std::sqrt(gap / count);
+    mean = std::sqrt(mean / count);
+    if (gap > options_.structure_sigmas * std::sqrt(var) &&
+        gap > options_.structure_rel_gap * mean) {
+      on[i] = 0;
+      ++structural;
+    }
+  }
+  return on;
+}
+
 int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int count,
-                         bool clamp_negative) const {
+                         bool clamp_negative, const std::vector<float>& rel_error,
+                         size_t* structural) const {
   const size_t n = texels_.size();
   if (n == 0 || count <= 0) return 0;
+  // The rows the solve keeps, and the normal matrix's diagonal without the
+  // others.
+  size_t left_out = 0;
+  Weights plain{data_weight_, diagonal_, {}, noise_rows(pixels, stride, first, count, rel_error,
+                                                        left_out)};
+  if (structural) *structural += left_out;
+  if (left_out > 0) {
+    plain.diagonal = data_weight_;
+    for (size_t i = 0; i < rows_.size(); ++i)
+      if (plain.row_on[i])
+        for (int k = 0; k < rows_[i].n; ++k)
+          plain.diagonal[rows_[i].unknown[k]] +=
+              options_.seam_weight * rows_[i].weight[k] * rows_[i].weight[k];
+  } else {
+    plain.row_on.clear();
+  }
   // Channels are independent solves of the same matrix: one thread per
   // group of channels. Each writes only its own channels, and a channel's
   // arithmetic does not depend on the split, so the result is the same
   // for any thread count.
   const int threads =
       std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(count, 16));
+  // How far each unknown may move (the same for every channel): covered
+  // texels by max_move_sigmas standard errors of their mean (sigma =
+  // rel_error times the texel's RMS over the stitched channels), padding
+  // freely but for the range below.
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> reach(n, kInf);
+  if (!rel_error.empty())
+    for (size_t u = 0; u < n; ++u) {
+      const double rel = rel_error[texels_[u]];
+      if (!covered_[u] || !std::isfinite(rel)) continue;
+      double sq = 0;
+      for (int ch = first; ch < first + count; ++ch) {
+        const double v = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+        sq += v * v;
+      }
+      const double m = options_.max_move_sigmas * std::max(0.0, rel) * std::sqrt(sq / count);
+      if (std::isfinite(m)) reach[u] = m;
+    }
   std::vector<int> most(threads, 0);
   auto work = [&](int t) {
-    std::vector<double> x0(n), delta(n), r(n), z(n), p(n), q(n);
-    const Weights plain{data_weight_, diagonal_, {}};
+    std::vector<double> x0(n), lo(n), hi(n), delta(n), r(n), z(n), p(n), q(n);
     for (int ch = first + t; ch < first + count; ch += threads) {
-      for (size_t u = 0; u < n; ++u) x0[u] = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+      for (size_t u = 0; u < n; ++u) {
+        x0[u] = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+        lo[u] = x0[u] - reach[u];
+        hi[u] = x0[u] + reach[u];
+      }
+      if (!rel_error.empty()) padding_range(x0, lo, hi);
+      bool bounded = false;
+      for (size_t u = 0; u < n; ++u) {
+        if (clamp_negative) lo[u] = std::max(lo[u], 0.0);
+        hi[u] = std::max(hi[u], lo[u]);  // a negative baked value is raised to 0
+        bounded = bounded || lo[u] > -kInf || hi[u] < kInf;
+      }
       std::fill(delta.begin(), delta.end(), 0.0);
       for (const Component& c : components_)
         most[t] = std::max(most[t], solve(c, plain, x0, delta, r, z, p, q));
-      if (clamp_negative) most[t] = std::max(most[t], pin_negatives(x0, delta, r, z, p, q));
-      for (size_t u = 0; u < n; ++u) {
-        const double v = x0[u] + delta[u];
+      if (bounded)
+        most[t] = std::max(most[t], pin_to_bounds(plain, x0, lo, hi, delta, r, z, p, q));
+      for (size_t u = 0; u < n; ++u)
         pixels[size_t(texels_[u]) * size_t(stride) + ch] =
-            static_cast<float>(clamp_negative ? std::max(0.0, v) : v);
-      }
+            static_cast<float>(std::clamp(x0[u] + delta[u], lo[u], hi[u]));
     }
   };
   std::vector<std::thread> pool;
@@ -184,27 +289,59 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
   return *std::max_element(most.begin(), most.end());
 }
 
-// A small active-set step towards the non-negative least-squares solution:
-// texels the solve took below 0 are pinned to 0 (a data weight of 1e6
-// towards 0) and their components solved again, up to 3 rounds; what is
-// still negative after that is clamped by the caller.
-int SeamStitcher::pin_negatives(const std::vector<double>& x0, std::vector<double>& delta,
-                                std::vector<double>& r, std::vector<double>& z,
-                                std::vector<double>& p, std::vector<double>& q) const {
+// Padding stays within the range of the baked texels its (kept) sample
+// points read on either side: with the covered texels held near their
+// values, the solve would otherwise swing padding far past both sides to
+// close a gap (and charts one texel apart share that padding).
+void SeamStitcher::padding_range(const std::vector<double>& x0, std::vector<double>& lo,
+                                 std::vector<double>& hi) const {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> pad_lo(x0), pad_hi(x0);
+  for (const Row& row : rows_) {
+    double rlo = kInf, rhi = -kInf;
+    for (int k = 0; k < row.n; ++k)
+      if (covered_[row.unknown[k]]) {
+        rlo = std::min(rlo, x0[row.unknown[k]]);
+        rhi = std::max(rhi, x0[row.unknown[k]]);
+      }
+    for (int k = 0; k < row.n; ++k) {
+      const uint32_t u = row.unknown[k];
+      pad_lo[u] = std::min(pad_lo[u], rlo);
+      pad_hi[u] = std::max(pad_hi[u], rhi);
+    }
+  }
+  for (size_t u = 0; u < x0.size(); ++u)
+    if (!covered_[u]) {
+      lo[u] = std::max(lo[u], pad_lo[u]);
+      hi[u] = std::min(hi[u], pad_hi[u]);
+    }
+}
+
+// A small active-set step towards the bounded least-squares solution:
+// texels the solve took outside [lo, hi] (below 0, or further from their
+// baked value than their noise allows) are pinned to the bound they crossed
+// (a data weight of 1e6 towards it) and their components solved again, up
+// to 3 rounds; what is still outside after that is clamped by the caller.
+int SeamStitcher::pin_to_bounds(const Weights& base, const std::vector<double>& x0,
+                                const std::vector<double>& lo, const std::vector<double>& hi,
+                                std::vector<double>& delta, std::vector<double>& r,
+                                std::vector<double>& z, std::vector<double>& p,
+                                std::vector<double>& q) const {
   constexpr double kPin = 1e6;
-  Weights w{data_weight_, diagonal_, std::vector<double>(texels_.size(), 0.0)};
+  Weights w{base.data, base.diagonal, std::vector<double>(texels_.size(), 0.0), base.row_on};
   int most = 0;
   for (int round = 0; round < 3; ++round) {
     bool any = false;
     for (const Component& c : components_) {
       bool pinned = false;
-      for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u)
-        if (x0[u] + delta[u] < 0 && w.data[u] < kPin) {
-          w.diagonal[u] += kPin - w.data[u];
-          w.data[u] = kPin;
-          w.target_shift[u] = -x0[u];  // t - x0 with t = 0
-          pinned = true;
-        }
+      for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u) {
+        const double v = x0[u] + delta[u];
+        if (w.data[u] >= kPin || (v >= lo[u] && v <= hi[u])) continue;
+        w.diagonal[u] += kPin - w.data[u];
+        w.data[u] = kPin;
+        w.target_shift[u] = (v < lo[u] ? lo[u] : hi[u]) - x0[u];  // t - x0, t the bound
+        pinned = true;
+      }
       if (!pinned) continue;
       any = true;
       for (uint32_t u = c.unknown_begin; u < c.unknown_end; ++u) delta[u] = 0;
@@ -225,6 +362,7 @@ int SeamStitcher::solve(const Component& c, const Weights& w, const std::vector<
   for (uint32_t u = u0; u < u1; ++u)
     r[u] = w.target_shift.empty() ? 0 : w.data[u] * w.target_shift[u];
   for (uint32_t i = c.row_begin; i < c.row_end; ++i) {
+    if (!w.on(i)) continue;
     const Row& row = rows_[i];
     const double v = -options_.seam_weight * row_value(row, x0);
     for (int k = 0; k < row.n; ++k) r[row.unknown[k]] += row.weight[k] * v;

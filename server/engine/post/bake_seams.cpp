@@ -30,6 +30,13 @@ std::vector<output::StitchEdge> BakeSeamStitch::page_edges(int page) const {
   return edges;
 }
 
+std::vector<float> BakeSeamStitch::page_rel_error(int page, size_t texels) const {
+  const size_t first = size_t(page) * texels;
+  if (result_.rel_error.size() < first + texels) return {};  // every gap is stitched
+  return {result_.rel_error.begin() + ptrdiff_t(first),
+          result_.rel_error.begin() + ptrdiff_t(first + texels)};
+}
+
 void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const output::Image& coverage,
                                  const std::vector<output::Image*>& encodings) {
   if (!enabled()) return;
@@ -41,12 +48,14 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
   edges_ += edges.size() - stitcher.narrow_chart_edges();
   unknowns_ += stitcher.unknowns();
   before_.add(stitcher.measure(irradiance.pixels, 4, 0, 3));
-  int it = stitcher.stitch(irradiance.pixels, 4, 0, 3, true);  // irradiance >= 0
+  const std::vector<float> rel = page_rel_error(page, irradiance.texel_count());
+  int it = stitcher.stitch(irradiance.pixels, 4, 0, 3, true, rel,  // irradiance >= 0
+                           &structural_points_);
   after_.add(stitcher.measure(irradiance.pixels, 4, 0, 3));
   for (size_t k = 0; k < encodings.size() && k < encodings_before_.size(); ++k) {
     output::Image& img = *encodings[k];
     encodings_before_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
-    it = std::max(it, stitcher.stitch(img.pixels, img.channels, 0, img.channels));
+    it = std::max(it, stitcher.stitch(img.pixels, img.channels, 0, img.channels, false, rel));
     encodings_after_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
   }
   most_iterations_ = std::max(most_iterations_, it);
@@ -61,8 +70,11 @@ void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
   if (edges.empty()) return;
   const output::SeamStitcher stitcher(denoised.width, denoised.height, edges, coverage.pixels);
   denoised_before_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
-  most_iterations_ =
-      std::max(most_iterations_, stitcher.stitch(denoised.pixels, 4, 0, 3, true));  // >= 0
+  // The raw map's noise decides which gaps are structure here too (the
+  // denoised map's own is smaller, so this errs towards stitching).
+  const std::vector<float> rel = page_rel_error(page, denoised.texel_count());
+  most_iterations_ = std::max(most_iterations_,
+                              stitcher.stitch(denoised.pixels, 4, 0, 3, true, rel));  // >= 0
   denoised_after_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
   seconds_ += seconds_since(t0);
 }
@@ -94,6 +106,10 @@ std::string BakeSeamStitch::manifest_json() const {
                       {"degenerate_edges_skipped", s.degenerate},
                       {"narrow_chart_edges_skipped", narrow_chart_edges_},
                       {"min_chart_texels", o.min_chart_texels},
+                      {"max_move_sigmas", o.max_move_sigmas},
+                      {"structure_sigmas", o.structure_sigmas},
+                      {"structure_rel_gap", o.structure_rel_gap},
+                      {"structural_points_skipped", structural_points_},
                       {"sample_points", before_.points},
                       {"texels_solved", unknowns_},
                       {"seam_weight", o.seam_weight},

@@ -5,6 +5,11 @@
 // solve (with a small data weight) and are written as stitched. Dilation
 // cannot undo it afterwards, because it runs first.
 //
+// Sample points whose two sides differ by more than the bake's own noise
+// (BakeResult::rel_error) explains, and by more than half their mean, are
+// discontinuities of the lighting and are not stitched
+// (output::SeamStitchOptions::structure_sigmas).
+//
 // Seams whose two sides lie on different pages are left alone (counted in
 // the manifest). The discontinuity figures are those of
 // output::SeamDiscontinuity, over all pages' sample points.
@@ -47,9 +52,14 @@ class BakeSeamStitch {
     void add(const output::SeamDiscontinuity& d);
   };
   std::vector<output::StitchEdge> page_edges(int page) const;
+  // The page's rows of the bake's relative standard error (the stitch's
+  // noise, output::SeamStitchOptions::structure_sigmas); empty if the
+  // result has none.
+  std::vector<float> page_rel_error(int page, size_t texels) const;
 
   const BakeResult& result_;
   size_t edges_ = 0, narrow_chart_edges_ = 0, unknowns_ = 0;
+  size_t structural_points_ = 0;  // irradiance sample points left out as structure
   int most_iterations_ = 0;
   double seconds_ = 0;
   Totals before_, after_, denoised_before_, denoised_after_;

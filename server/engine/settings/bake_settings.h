@@ -153,7 +153,7 @@ struct BakeSettings {
   double progress_interval_s = 1.0;  // progress callback period
   int dilation_texels = 2;           // output: fill uncovered texels this far
   Denoise denoise = Denoise::kAuto;  // output: irradiance_denoised.exr besides irradiance.exr
-  bool seam_stitch = false;          // output: make texels agree across UV seams (seam_stitch.h)
+  bool seam_stitch = true;           // output: make texels agree across UV seams (seam_stitch.h)
   JobSettings job;                   // daemon only
 
   // Light probes (server/engine/probes/): "" = none, else the placement of

