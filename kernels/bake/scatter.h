@@ -102,8 +102,12 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
       *analytic_e += e;
       w_sum += w;
       /* Weighted reservoir sampling (one independent number per candidate):
-       * light i is kept with probability w_i / sum of all w. */
-      if (lux_independent_1d(index, 0x40000000u + i, seed) * w_sum < w) {
+       * light i is kept with probability w_i / sum of all w. The first
+       * candidate is always kept (u w < w for u < 1, so this changes nothing
+       * for finite weights); an overflowing irradiance (w = inf, where
+       * u * inf < inf fails) then still gives a sample, whose non-finite
+       * value the accumulation counts and drops instead of losing the light. */
+      if (chosen < 0 || lux_independent_1d(index, 0x40000000u + i, seed) * w_sum < w) {
         chosen = (int)i;
         w_chosen = w;
       }
@@ -112,7 +116,10 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
       *analytic_sample = 1;
       if (chosen < 0) return; /* no analytic light reaches p: nothing to shadow */
       light = (uint)chosen;
-      select = p_a * (w_chosen / w_sum);
+      /* inf / inf when the irradiance overflowed: keep the pdf finite so
+       * the sample's own non-finite value reaches the accumulation. */
+      const float share = w_chosen / w_sum;
+      select = p_a * (isfinite(share) ? share : 1.0f);
     }
   }
 #endif

@@ -36,11 +36,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <utility>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "atlas/sample_info.h"

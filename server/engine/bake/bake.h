@@ -68,9 +68,9 @@ struct EncodedLightmap {
   // encodings when the bake denoises with OIDN, post/oidn.h run_sh); empty
   // otherwise (the manifest's denoise.directional says why).
   std::vector<float> coefficients_denoised;
-  std::string manifest_json;        // basis, frame, solver (without the file entry)
-  double residual_rms = -1;         // progressive solvers: mean over covered texels of the running
-                                    // residual RMS (luminance); -1 for projection
+  std::string manifest_json;  // basis, frame, solver (without the file entry)
+  double residual_rms = -1;   // progressive solvers: mean over covered texels of the running
+                              // residual RMS (luminance); -1 for projection
 };
 
 struct BakeResult {

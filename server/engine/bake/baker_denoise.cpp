@@ -42,9 +42,10 @@ Denoise Baker::denoise_method() const {
 std::string Baker::auto_off_json() const {
   auto lib = load_oidn();
   nlohmann::json j = {{"method", "off"},
-                      {"auto", "Open Image Denoise not found, so the map stays raw (auto never "
-                               "picks the a-trous filter: docs/accuracy.md \"Denoiser: the "
-                               "default\")"},
+                      {"auto",
+                       "Open Image Denoise not found, so the map stays raw (auto never "
+                       "picks the a-trous filter: docs/accuracy.md \"Denoiser: the "
+                       "default\")"},
                       {"oidn", lib ? std::string() : "not found: " + lib.status().message()}};
   return j.dump();
 }
@@ -95,7 +96,8 @@ std::vector<float> sh_band_bounds(const encode::SphericalBasis& basis) {
     const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
     const double phi = d * 2.399963229728653;  // golden angle
     basis.evaluate(Vec3{float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)}, y.data());
-    for (int i = 0; i < n; ++i) bound[size_t(i)] = std::max(bound[size_t(i)], std::abs(y[size_t(i)]));
+    for (int i = 0; i < n; ++i)
+      bound[size_t(i)] = std::max(bound[size_t(i)], std::abs(y[size_t(i)]));
   }
   for (int i = n - 1; i >= 0; --i) bound[size_t(i)] /= bound[0];
   return bound;

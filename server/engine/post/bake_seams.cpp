@@ -73,8 +73,8 @@ void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
   // The raw map's noise decides which gaps are structure here too (the
   // denoised map's own is smaller, so this errs towards stitching).
   const std::vector<float> rel = page_rel_error(page, denoised.texel_count());
-  most_iterations_ = std::max(most_iterations_,
-                              stitcher.stitch(denoised.pixels, 4, 0, 3, true, rel));  // >= 0
+  most_iterations_ =
+      std::max(most_iterations_, stitcher.stitch(denoised.pixels, 4, 0, 3, true, rel));  // >= 0
   denoised_after_.add(stitcher.measure(denoised.pixels, 4, 0, 3));
   seconds_ += seconds_since(t0);
 }

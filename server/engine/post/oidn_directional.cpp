@@ -71,8 +71,8 @@ Result<std::vector<float>> OidnDenoiser::run_sh(const std::vector<float>& coeffi
   for (size_t t = 0; t < texels; ++t) {
     for (size_t k = 0; k < 3; ++k) l0_raw[t * 4 + k] = coefficients[at(t, 0, k)];
     l0_raw[t * 4 + 3] = rgba[t * 4 + 3];
-    const double lum = 0.2126 * l0_raw[t * 4] + 0.7152 * l0_raw[t * 4 + 1] +
-                       0.0722 * l0_raw[t * 4 + 2];
+    const double lum =
+        0.2126 * l0_raw[t * 4] + 0.7152 * l0_raw[t * 4 + 1] + 0.0722 * l0_raw[t * 4 + 2];
     const double se = double(rel_error[t]) * lum;
     l0_variance[t] = std::isfinite(se) ? float(se * se) : 0.0f;
   }

@@ -206,8 +206,8 @@ TEST_F(OidnTest, ConvergedInputUnchanged) {
 double triangle_solid_angle(Vec3 a, Vec3 b, Vec3 c) {
   const double la = length(a), lb = length(b), lc = length(c);
   const double num = std::fabs(double(dot(a, cross(b, c))));
-  const double den = la * lb * lc + double(dot(a, b)) * lc + double(dot(a, c)) * lb +
-                     double(dot(b, c)) * la;
+  const double den =
+      la * lb * lc + double(dot(a, b)) * lc + double(dot(a, c)) * lb + double(dot(b, c)) * la;
   return 2.0 * std::atan2(num, den);
 }
 
@@ -220,7 +220,8 @@ double triangle_solid_angle(Vec3 a, Vec3 b, Vec3 c) {
 std::array<double, 4> sh1_closed_form(const testing::LitQuad& q, Vec3 x) {
   Vec3 r[4];
   for (int i = 0; i < 4; ++i) r[i] = q.emitter[i] - x;
-  const double omega = triangle_solid_angle(r[0], r[1], r[2]) + triangle_solid_angle(r[0], r[2], r[3]);
+  const double omega =
+      triangle_solid_angle(r[0], r[1], r[2]) + triangle_solid_angle(r[0], r[2], r[3]);
   Vec3 phi{0, 0, 0};
   for (int i = 0; i < 4; ++i) {
     const Vec3 a = normalize(r[i]), b = normalize(r[(i + 1) % 4]);
@@ -297,9 +298,10 @@ TEST_F(OidnTest, ShBandsCloserToClosedFormInDirectionalMode) {
     const Cmp raw = compare(e.coefficients, i, 1.0);
     const Cmp dn = compare(e.coefficients_denoised, i, 1.0);
     const Cmp injected = compare(e.coefficients_denoised, i, 1.5);
-    std::printf("  sh1 c%d: %zu texels, RMSE raw %.4f oidn %.4f (bands x1.5: %.4f), bias raw "
-                "%+.4f oidn %+.4f (x1.5: %+.4f)\n",
-                i, raw.n, raw.rmse, dn.rmse, injected.rmse, raw.bias, dn.bias, injected.bias);
+    std::printf(
+        "  sh1 c%d: %zu texels, RMSE raw %.4f oidn %.4f (bands x1.5: %.4f), bias raw "
+        "%+.4f oidn %+.4f (x1.5: %+.4f)\n",
+        i, raw.n, raw.rmse, dn.rmse, injected.rmse, raw.bias, dn.bias, injected.bias);
     ASSERT_GT(raw.n, 1500u);
     EXPECT_LT(std::fabs(raw.bias), 0.03) << "the raw bake itself must match the closed form";
     EXPECT_LT(dn.rmse, 0.8 * raw.rmse) << "coefficient " << i;

@@ -158,7 +158,7 @@ TEST(SettingsSchema, ChoicesKeepTheirNamesAndOrderAndRoundTrip) {
       {"uv", {"auto", "generate", "existing"}},
       {"sky.kind", {"none", "constant", "equirect"}},
       {"solver", {"auto", "projection", "progressive", "progressive-nn"}},
-      {"denoise", {"off", "atrous", "oidn"}},
+      {"denoise", {"off", "atrous", "oidn", "auto"}},
       {"snapshot_format", {"png", "exr", "none"}},
   };
   std::map<std::string, std::vector<std::string>> got;
