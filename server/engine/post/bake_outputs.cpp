@@ -17,6 +17,16 @@
 namespace luxel::pipeline {
 namespace {
 
+// The denoiser's manifest object without its timings, for the EXR attribute:
+// the same bake gives the same file bytes (the manifest keeps the seconds).
+std::string denoise_attribute(const std::string& denoise_json) {
+  nlohmann::json j = nlohmann::json::parse(denoise_json, nullptr, /*allow_exceptions=*/false);
+  if (!j.is_object()) return denoise_json;
+  for (auto it = j.begin(); it != j.end();)
+    it = it.key().find("seconds") != std::string::npos ? j.erase(it) : std::next(it);
+  return j.dump();
+}
+
 // The manifest's "uv_layout" object for generated UVs.
 std::string uv_layout_json(const GeneratedUvLayout& g) {
   const uv::UvReport& r = g.report;
@@ -246,7 +256,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       LUXEL_RETURN_IF_ERROR(output::dilate(denoised, settings.dilation_texels));
       seams.stitch_denoised_page(page, denoised, coverage);
       std::map<std::string, std::string> denoised_meta = meta;
-      denoised_meta["luxel/denoise"] = result.denoise_json;
+      denoised_meta["luxel/denoise"] = denoise_attribute(result.denoise_json);
       const std::string file = name("irradiance_denoised", ".exr", page);
       LUXEL_RETURN_IF_ERROR(
           output::write_exr(at(file.c_str()), denoised, {"R", "G", "B", "A"}, denoised_meta));
@@ -292,7 +302,7 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
                                               {{"luxel/encoding", e.name},
                                                {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
                                                {"luxel/scene", shown_name},
-                                               {"luxel/denoise", result.denoise_json}}));
+                                               {"luxel/denoise", denoise_attribute(result.denoise_json)}}));
       add_file(e.name + "_denoised", dfile, "exr",
                strprintf("float32, %s.exr's coefficients filtered by the denoiser (see denoise in "
                          "this manifest)",
