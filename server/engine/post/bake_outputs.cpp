@@ -298,11 +298,12 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
                                         rows(e.coefficients_denoised, e.count * 3, page));
       LUXEL_RETURN_IF_ERROR(output::dilate(denoised, coverage, settings.dilation_texels));
       const std::string dfile = name(e.name + "_denoised", ".exr", page);
-      LUXEL_RETURN_IF_ERROR(output::write_exr(at(dfile.c_str()), denoised, names,
-                                              {{"luxel/encoding", e.name},
-                                               {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
-                                               {"luxel/scene", shown_name},
-                                               {"luxel/denoise", denoise_attribute(result.denoise_json)}}));
+      LUXEL_RETURN_IF_ERROR(
+          output::write_exr(at(dfile.c_str()), denoised, names,
+                            {{"luxel/encoding", e.name},
+                             {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
+                             {"luxel/scene", shown_name},
+                             {"luxel/denoise", denoise_attribute(result.denoise_json)}}));
       add_file(e.name + "_denoised", dfile, "exr",
                strprintf("float32, %s.exr's coefficients filtered by the denoiser (see denoise in "
                          "this manifest)",
