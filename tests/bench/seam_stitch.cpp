@@ -96,8 +96,7 @@ int main(int argc, char** argv) {
     for (const auto& e : edges)
       if (e.chart_texels >= o.min_chart_texels)
         std::printf("stitched: chart %.2f A (%.2f,%.2f)-(%.2f,%.2f) | B (%.2f,%.2f)-(%.2f,%.2f)\n",
-                    e.chart_texels, e.a0.x, e.a0.y, e.a1.x, e.a1.y, e.b0.x, e.b0.y, e.b1.x,
-                    e.b1.y);
+                    e.chart_texels, e.a0.x, e.a0.y, e.a1.x, e.a1.y, e.b0.x, e.b0.y, e.b1.x, e.b1.y);
   }
   const std::clock_t c1 = std::clock();
   const output::SeamStitcher st(im.width, im.height, edges, coverage, o);

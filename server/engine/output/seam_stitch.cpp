@@ -219,8 +219,8 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
   // The rows the solve keeps, and the normal matrix's diagonal without the
   // others.
   size_t left_out = 0;
-  Weights plain{data_weight_, diagonal_, {}, noise_rows(pixels, stride, first, count, rel_error,
-                                                        left_out)};
+  Weights plain{
+      data_weight_, diagonal_, {}, noise_rows(pixels, stride, first, count, rel_error, left_out)};
   if (structural) *structural += left_out;
   if (left_out > 0) {
     plain.diagonal = data_weight_;
@@ -275,8 +275,7 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
       std::fill(delta.begin(), delta.end(), 0.0);
       for (const Component& c : components_)
         most[t] = std::max(most[t], solve(c, plain, x0, delta, r, z, p, q));
-      if (bounded)
-        most[t] = std::max(most[t], pin_to_bounds(plain, x0, lo, hi, delta, r, z, p, q));
+      if (bounded) most[t] = std::max(most[t], pin_to_bounds(plain, x0, lo, hi, delta, r, z, p, q));
       for (size_t u = 0; u < n; ++u)
         pixels[size_t(texels_[u]) * size_t(stride) + ch] =
             static_cast<float>(std::clamp(x0[u] + delta[u], lo[u], hi[u]));

@@ -83,13 +83,12 @@ scene::Scene make_scene(const Case& c) {
   emitter.emissive_factor = {4.0f, 2.0f, 0.8f};
   s.materials.push_back(emitter);
   testing::add_quad(s, {-1, 0, -1}, {0, 0, 2}, {2, 0, 0}, 0, 0, 0.5f, 1, 0);
-  testing::add_quad(s, {float(kOccX0), float(kOccY), float(kOccZ0)},
-                    {float(kOccX1 - kOccX0), 0, 0}, {0, 0, float(kOccZ1 - kOccZ0)}, 0.55f, 0.55f,
-                    0.95f, 0.95f, 1);
+  testing::add_quad(s, {float(kOccX0), float(kOccY), float(kOccZ0)}, {float(kOccX1 - kOccX0), 0, 0},
+                    {0, 0, float(kOccZ1 - kOccZ0)}, 0.55f, 0.55f, 0.95f, 0.95f, 1);
   if (c.area)
     testing::add_quad(s, {float(kLightX0), float(kLightY), float(kLightZ0)},
-                      {float(kLightX1 - kLightX0), 0, 0}, {0, 0, float(kLightZ1 - kLightZ0)},
-                      0.55f, 0.05f, 0.95f, 0.45f, 2);
+                      {float(kLightX1 - kLightX0), 0, 0}, {0, 0, float(kLightZ1 - kLightZ0)}, 0.55f,
+                      0.05f, 0.95f, 0.45f, 2);
   s.lights = c.lights;
   return s;
 }
@@ -148,8 +147,7 @@ double lambert_rect(double px, double pz, double x0, double x1, double z0, doubl
 }
 
 // Exact irradiance (RGB) at (px, 0, pz) for the punctual-light cases.
-std::array<double, 3> exact_irradiance(const Case& c, double px, double pz,
-                                       bool occluder = true) {
+std::array<double, 3> exact_irradiance(const Case& c, double px, double pz, bool occluder = true) {
   std::array<double, 3> e{0, 0, 0};
   if (c.sky) {
     const double sky = kSky * (kPi - lambert_rect(px, pz, kOccX0, kOccX1, kOccZ0, kOccZ1, kOccY));
@@ -165,8 +163,7 @@ std::array<double, 3> exact_irradiance(const Case& c, double px, double pz,
       const double d2 = dx * dx + dy * dy + dz * dz, d = std::sqrt(d2);
       scale = l.intensity * (dy / d) / d2;
       if (l.type == scene::LightType::kSpot) {
-        const double cd =
-            -(l.direction.x * dx + l.direction.y * dy + l.direction.z * dz) / d;
+        const double cd = -(l.direction.x * dx + l.direction.y * dy + l.direction.z * dz) / d;
         const double ci = std::cos(double(l.inner_cone_angle)),
                      co = std::cos(double(l.outer_cone_angle));
         const double att = std::clamp((cd - co) / std::max(ci - co, 1e-4), 0.0, 1.0);
@@ -290,8 +287,8 @@ TEST_F(AnalyticNonNegativeTest, MeansMatchClosedForms) {
     std::vector<double> zs;
     for (size_t t = 0; t < expected.size(); ++t) {
       if (std::isnan(expected[t]) || r.samples[t] < 2) continue;
-      const double y = luminance(r.irradiance[t * 4], r.irradiance[t * 4 + 1],
-                                 r.irradiance[t * 4 + 2]);
+      const double y =
+          luminance(r.irradiance[t * 4], r.irradiance[t * 4 + 1], r.irradiance[t * 4 + 2]);
       const double se = std::hypot(r.rel_error[t] * std::fabs(y), 1e-5 * expected[t]);
       if (!(se > 0)) {
         EXPECT_NEAR(y, expected[t], 1e-5 * expected[t] + 1e-6) << c.name << " texel " << t;
@@ -302,7 +299,8 @@ TEST_F(AnalyticNonNegativeTest, MeansMatchClosedForms) {
     double max_z = 0, pooled = 0;
     for (double z : zs) max_z = std::max(max_z, std::fabs(z)), pooled += z;
     pooled /= std::sqrt(double(std::max<size_t>(zs.size(), 1)));
-    const double per_test = 1.0 - std::pow(1.0 - 1e-3, 1.0 / double(std::max<size_t>(zs.size(), 1)));
+    const double per_test =
+        1.0 - std::pow(1.0 - 1e-3, 1.0 / double(std::max<size_t>(zs.size(), 1)));
     double lo = 0, hi = 40;
     for (int i = 0; i < 200; ++i) {
       const double mid = 0.5 * (lo + hi);
@@ -325,8 +323,8 @@ TEST_F(AnalyticNonNegativeTest, MeansMatchClosedForms) {
         double total = 0;
         for (size_t t = 0; t < expected.size(); ++t)
           if (!std::isnan(expected[t]))
-            total += luminance(b.irradiance[t * 4], b.irradiance[t * 4 + 1],
-                               b.irradiance[t * 4 + 2]);
+            total +=
+                luminance(b.irradiance[t * 4], b.irradiance[t * 4 + 1], b.irradiance[t * 4 + 2]);
         rel.push_back(total / total_expected - 1);
       }
       double mean = 0, var = 0;

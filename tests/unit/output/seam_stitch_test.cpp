@@ -162,7 +162,7 @@ TEST(SeamStitch, ConvergedMapMovesNoMoreThanItsNoise) {
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const size_t t = size_t(y) * w + x;
-      if (x < 8) img.px[t] = y < 8 ? 6.0f : 0.0f;           // chart A, step at y = 8
+      if (x < 8) img.px[t] = y < 8 ? 6.0f : 0.0f;                    // chart A, step at y = 8
       if (x >= 24) img.px[t] = y < 8 ? 6.0f : y == 8 ? 3.0f : 0.0f;  // chart B, at 8.5
       coverage[t] = (x < 8 || x >= 24) ? 1.0f : 0.0f;
       if (x == 8 || x == 23) img.px[t] = y < 8 ? 6.0f : 0.0f;  // dilated padding
@@ -178,7 +178,8 @@ TEST(SeamStitch, ConvergedMapMovesNoMoreThanItsNoise) {
   stitcher.stitch(img.px, 1, 0, 1, true, rel_error, &structural);
   for (size_t t = 0; t < img.px.size(); ++t) {
     if (!(coverage[t] > 0)) continue;
-    largest_unbounded = std::max(largest_unbounded, double(std::abs(unbounded.px[t] - baked.px[t])));
+    largest_unbounded =
+        std::max(largest_unbounded, double(std::abs(unbounded.px[t] - baked.px[t])));
     largest = std::max(largest, double(std::abs(img.px[t] - baked.px[t])));
     // One standard error (SeamStitchOptions::max_move_sigmas) of 1e-3 x 6.
     EXPECT_LE(std::abs(img.px[t] - baked.px[t]), 1e-3 * baked.px[t] + 1e-6) << t;

@@ -154,7 +154,8 @@ TEST(SeamStitchBake, BothSidesOfTheSeamAgreeInTheWrittenLightmap) {
   for (size_t t = 0; t < images[0].texel_count(); ++t) {
     if (!(images[0].pixels[t * 4 + 3] > 0)) continue;
     double sq = 0;
-    for (int c = 0; c < 3; ++c) sq += double(images[0].pixels[t * 4 + c]) * images[0].pixels[t * 4 + c];
+    for (int c = 0; c < 3; ++c)
+      sq += double(images[0].pixels[t * 4 + c]) * images[0].pixels[t * 4 + c];
     const double sigma = rel.value().pixels[t] * std::sqrt(sq / 3);
     for (int c = 0; c < 3; ++c)
       EXPECT_LE(std::abs(images[1].pixels[t * 4 + c] - images[0].pixels[t * 4 + c]),
