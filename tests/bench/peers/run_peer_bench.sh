@@ -17,6 +17,14 @@
 # triangles; about 2.5 minutes more). PEER_ONLY=a,b: only those scenes.
 # PEER_QUICK=1: tiny sample counts (a smoke run, ~1 min; its numbers mean
 # nothing). On a shared machine prefix with `flock /tmp/luxel-cpu.lock`.
+#
+# Luxel runs two ladders: its default (luxel/: irradiance_denoised.exr where
+# the manifest lists it, the denoiser's seconds charged to it) and
+# `--denoise off` (luxel_raw/). The reference and the filter check are raw
+# (`--denoise off`). Cycles versions with Open Image Denoise (5.0.1's bpy;
+# Debian's 3.4.1 has none) also write each bake denoised (`--denoise oidn`),
+# the "Cycles + OIDN" series; every Cycles ladder gets a 64-spp rung (the
+# goal figure's target).
 set -euo pipefail
 
 HERE=$(cd "$(dirname "$0")" && pwd)
@@ -58,6 +66,19 @@ blender_bake() {
     "$BPY_PY" "$HERE/blender_bake.py" "$@"
   fi
 }
+# cycles_has_oidn VERSION: whether that Blender is built with Open Image
+# Denoise (Cycles' _cycles.with_openimagedenoise); blender_bake.py --denoise
+# oidn then denoises each bake with Blender's own library
+cycles_has_oidn() {
+  local v="$1" expr='import bpy, _cycles; print("OIDN", _cycles.with_openimagedenoise)'
+  local got
+  if [ "$v" = "$BIN_VERSION" ]; then
+    got=$("$BLENDER" -b --factory-startup --python-expr "$expr" 2>/dev/null || true)
+  else
+    got=$("$BPY_PY" -c "$expr" 2>/dev/null || true)
+  fi
+  [[ "$got" == *"OIDN True"* ]]
+}
 [ -x "$LUXEL" ] || { echo "run_peer_bench: no luxel at $LUXEL (build first, or set LUXEL)" >&2; exit 2; }
 "$PY" -c "import numpy, OpenImageIO" 2>/dev/null || { echo "run_peer_bench: $PY lacks numpy/OpenImageIO; run $HERE/install-blender.sh" >&2; exit 2; }
 
@@ -81,9 +102,9 @@ else
   SCENES=(
     "sky_plane|@/sky_plane.gltf|$RES|$SKY|||256|||256|0"
     "lights_plane|@/lights_plane.gltf|$RES|||0.27|4096|||1024|0"
-    "cornell_box|$ROOT/scenes/cornell_box.gltf|$RES|||0|8192|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
-    "sky_courtyard|@/sky_courtyard.gltf|$RES|$SKY|||32768|4,8,16,32,64,128,256,512,1024,2048|1,2,4,8,16,32,64,128,256,512,1024,2048|8192|256"
-    "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|16384|4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
+    "cornell_box|$ROOT/scenes/cornell_box.gltf|$RES|||0|8192|1,2,4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
+    "sky_courtyard|@/sky_courtyard.gltf|$RES|$SKY|||32768|1,2,4,8,16,32,64,128,256,512,1024,2048|1,2,4,8,16,32,64,128,256,512,1024,2048|8192|256"
+    "lights_courtyard|@/lights_courtyard.gltf|$RES|||0.27|16384|1,2,4,8,16,32,64,128,256,512,1024|1,2,4,8,16,32,64,128,256,512,1024|4096|0"
   )
   # 512^2, 99k triangles, 1102 meshes, 95 GGX materials: PEER_HEAVY=1 (about 2.5 more minutes)
   HEAVY=("gas_station|$GAS|512|$SKY_GAS|$SUN_GAS||512|4,8,16,32|1,2,4,8,16,32|128|0")
@@ -122,6 +143,16 @@ wait_quiet() {
 elapsed() { "$PY" -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.4f}')" "$1" "$2"; }
 json_list() { [ -z "$1" ] && echo "[]" || echo "[$1]"; }
 
+declare -A CYCLES_DENOISE   # per version: "oidn" or why not
+for v in "${PEERS[@]}"; do
+  if cycles_has_oidn "$v"; then
+    CYCLES_DENOISE[$v]=oidn
+  else
+    CYCLES_DENOISE[$v]="none (built without Open Image Denoise: no Cycles + OIDN series)"
+    echo "run_peer_bench: Cycles $v has no Open Image Denoise: its ladder is raw only (no Cycles + OIDN series)"
+  fi
+done
+
 rm -rf "$OUT"
 mkdir -p "$OUT/scenes"
 "$PY" "$HERE/make_scenes.py" "$OUT/scenes"
@@ -136,6 +167,9 @@ mkdir -p "$OUT/scenes"
       echo "blender $v: $BPY_PY (bpy module)"
     fi
   done
+  for v in "${PEERS[@]}"; do
+    echo "cycles $v denoise: ${CYCLES_DENOISE[$v]}"
+  done
   echo "resolution: $RES (unless a scene sets its own), bounces: $BOUNCES"
   echo "opencl: $(clinfo -l 2>/dev/null | tr '\n' ' ' || true)"
   lscpu | head -20
@@ -147,7 +181,12 @@ for spec in "${SCENES[@]}"; do
   IFS='|' read -r name scene res sky sun dirrad ref_spp lux_ladder bl_ladder bl_hi hires_spp <<< "$spec"
   scene=${scene/#@/$OUT/scenes}
   d="$OUT/$name"
-  mkdir -p "$d/luxel"
+  # the goal figure's target is Cycles' raw error at 64 spp: every Cycles
+  # ladder has that rung
+  if [ -n "$bl_ladder" ] && [[ ",$bl_ladder," != *",64,"* ]]; then
+    bl_ladder=$(tr ',' '\n' <<< "$bl_ladder,64" | sort -n | paste -sd,)
+  fi
+  mkdir -p "$d/luxel" "$d/luxel_raw"
   # the same lighting for both: skyarg goes to Luxel, blarg to blender_bake.py
   skyarg=()
   blarg=()
@@ -167,17 +206,24 @@ for spec in "${SCENES[@]}"; do
 {"name": "$name", "scene": "$scene", "sky": "$sky", "sun": "$sun", "directional_radius": "$dirrad",
  "resolution": $res, "bounces": $BOUNCES,
  "ref_spp": $ref_spp, "luxel_ladder": $(json_list "$lux_ladder"),
- "blender_ladder": $(json_list "$bl_ladder"), "blender_hi": $bl_hi, "cpu_busy_before": $busy}
+ "blender_ladder": $(json_list "$bl_ladder"), "blender_hi": $bl_hi, "cpu_busy_before": $busy,
+ "luxel_denoise": "default", "luxel_raw_ladder": "--denoise off"}
 EOF
-  echo "== $name: Luxel reference ($ref_spp spp, seed 1)"
+  echo "== $name: Luxel reference ($ref_spp spp, seed 1, --denoise off)"
   "$LUXEL" bake "$scene" --local --out "$d/luxel_ref" --resolution "$res" --samples "$ref_spp" \
-      --bounces "$BOUNCES" --seed 1 "${skyarg[@]}" --quiet | grep -E '^(lightmap|baked)' || true
-  for spp in ${lux_ladder//,/ }; do
-    t0=$(now)
-    "$LUXEL" bake "$scene" --local --out "$d/luxel/s$spp" --resolution "$res" --samples "$spp" \
-        --bounces "$BOUNCES" --seed 2 "${skyarg[@]}" --quiet > "$d/luxel/s$spp.log"
-    elapsed "$t0" "$(now)" > "$d/luxel/s$spp/wall_s.txt"
-    echo "   luxel $spp spp: $(grep '^baked' "$d/luxel/s$spp.log" | cut -c12-60) (process $(cat "$d/luxel/s$spp/wall_s.txt") s)"
+      --bounces "$BOUNCES" --seed 1 --denoise off "${skyarg[@]}" --quiet | grep -E '^(lightmap|baked)' || true
+  # two ladders, seed 2: Luxel as it ships (luxel/: its default denoiser) and
+  # raw (luxel_raw/: --denoise off)
+  for ladder in luxel luxel_raw; do
+    dnarg=()
+    [ "$ladder" = luxel_raw ] && dnarg=(--denoise off)
+    for spp in ${lux_ladder//,/ }; do
+      t0=$(now)
+      "$LUXEL" bake "$scene" --local --out "$d/$ladder/s$spp" --resolution "$res" --samples "$spp" \
+          --bounces "$BOUNCES" --seed 2 "${dnarg[@]}" "${skyarg[@]}" --quiet > "$d/$ladder/s$spp.log"
+      elapsed "$t0" "$(now)" > "$d/$ladder/s$spp/wall_s.txt"
+      echo "   $ladder $spp spp: $(grep '^baked' "$d/$ladder/s$spp.log" | cut -c12-60)$(grep -o 'denoised, [0-9.]* s' "$d/$ladder/s$spp.log" | sed 's/^/ + /') (process $(cat "$d/$ladder/s$spp/wall_s.txt") s)"
+    done
   done
   # Cycles: one Blender process per scene and version; the ladder (seed 3)
   # and the converged map (seeds 1 and 2) after a timed warm-up bake.
@@ -186,10 +232,13 @@ EOF
   runs="${runs#,},$bl_hi@1,$bl_hi@2"
   runs=${runs#,}
   for v in "${PEERS[@]}"; do
-    echo "== $name: Cycles $v ($runs)"
+    # Cycles + OIDN: each bake also denoised, its seconds apart (versions with OIDN)
+    dnarg=()
+    [ "${CYCLES_DENOISE[$v]}" = oidn ] && [ -n "$bl_ladder" ] && dnarg=(--denoise oidn)
+    echo "== $name: Cycles $v ($runs)${dnarg[*]:+ + OIDN}"
     blender_bake "$v" --scene "$scene" \
         --out "$d/blender-$v" --resolution "$res" --bounces "$BOUNCES" --runs "$runs" --warmup \
-        "${blarg[@]}" --t0 "$(now)" > "$d/blender-$v.log" 2>&1 \
+        "${dnarg[@]}" "${blarg[@]}" --t0 "$(now)" > "$d/blender-$v.log" 2>&1 \
       || { tail -30 "$d/blender-$v.log" >&2; exit 1; }
     grep '^blender_bake' "$d/blender-$v.log" | sed 's/^/   /'
   done
@@ -201,7 +250,7 @@ EOF
     mkdir -p "$d/hires"
     echo "{\"resolution\": $hr, \"luxel_spp\": $hires_spp, \"blender_spp\": $hires_spp}" > "$d/hires/settings.json"
     "$LUXEL" bake "$scene" --local --out "$d/hires/luxel" --resolution "$hr" --samples "$hires_spp" \
-        --bounces "$BOUNCES" --seed 1 "${skyarg[@]}" --quiet > "$d/hires/luxel.log"
+        --bounces "$BOUNCES" --seed 1 --denoise off "${skyarg[@]}" --quiet > "$d/hires/luxel.log"
     for v in "${PEERS[@]}"; do
       blender_bake "$v" --scene "$scene" \
           --out "$d/hires/blender-$v" --resolution "$hr" --bounces "$BOUNCES" --runs "$hires_spp@1" \
