@@ -639,6 +639,29 @@ TEST(SceneImportErrors, StrideSmallerThanElement) {
                 "size 12"});
 }
 
+TEST(SceneImportErrors, StrideOutsideTheSchemaRange) {
+  // tinygltf reads byteStride 0 as "tightly packed"; the schema allows 4-252.
+  for (const json& bad : {json(0), json(2), json(6), json(256), json(-12)}) {
+    GltfBuilder b = quad_scene();
+    b.doc["bufferViews"][0]["byteStride"] = bad;
+    expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+                 {"test.gltf", "accessor 0", "bufferView 0", "byteStride"});
+  }
+  // A view no accessor reads is named by itself.
+  GltfBuilder b = quad_scene();
+  const std::string unread = "bufferView " + std::to_string(b.doc["bufferViews"].size());
+  b.doc["bufferViews"].push_back({{"buffer", 0}, {"byteLength", 4}, {"byteStride", 0}});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"test.gltf", unread.c_str(), "byteStride 0"});
+}
+
+TEST(SceneImportErrors, NegativeMaterialIndex) {
+  GltfBuilder b = quad_scene();
+  b.doc["meshes"][0]["primitives"][0]["material"] = -5;
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"test.gltf", "mesh 'quad' (mesh[0]) primitive 0", "material -5"});
+}
+
 TEST(SceneImportErrors, StrideOverrunsView) {
   GltfBuilder b = quad_scene();
   b.doc["bufferViews"][0]["byteStride"] = 16;  // 3 * 16 + 12 = 60 > 48
