@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <thread>
 
 #include "daemon_harness.h"
 
@@ -324,6 +325,38 @@ TEST_F(ServiceErrors, MissingOrWrongTokenIsUnauthenticated) {
   EXPECT_EQ(writer->Finish().error_code(), grpc::StatusCode::UNAUTHENTICATED);
   auto ctx = daemon_->context();
   EXPECT_TRUE(stub_->ListScenes(ctx.get(), {}, &list).ok());
+}
+
+// A client can make unauthenticated calls as fast as it likes; the log gets
+// one line a second, which counts the ones held back.
+TEST(ServiceAuthLog, UnauthenticatedCallsAreLoggedAtMostOncePerSecond) {
+  TempDir dir;
+  Daemon d(dir.path() + "/data", {}, "flood-token");
+  auto stub = d.stub();
+  v1::ListScenesResponse list;
+  auto count_lines = [&] {
+    const std::string log = d.log();
+    size_t n = 0;
+    for (size_t at = log.find("event=unauthenticated"); at != std::string::npos;
+         at = log.find("event=unauthenticated", at + 1))
+      ++n;
+    return n;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 200; ++i) {
+    grpc::ClientContext none;
+    ASSERT_EQ(stub->ListScenes(&none, {}, &list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // One line per started second of the flood, not 200.
+  EXPECT_LE(count_lines(), static_cast<size_t>(elapsed_s) + 1) << d.log();
+  EXPECT_GE(count_lines(), 1u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  grpc::ClientContext none;
+  EXPECT_EQ(stub->ListScenes(&none, {}, &list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_NE(d.log().find("suppressed_since_last="), std::string::npos) << d.log();
+  EXPECT_EQ(d.stop(SIGTERM), 0);
 }
 
 TEST_F(ServiceErrors, MalformedProtobufIsRefusedAndTheDaemonLivesOn) {
