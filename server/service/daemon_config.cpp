@@ -200,10 +200,10 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     // read lets them call every rpc.
     struct stat st {};
     if (::stat(token_file.c_str(), &st) == 0 && (st.st_mode & (S_IRGRP | S_IROTH)) != 0) {
-      const std::string what = strprintf(
-          "--token-file: %s has mode %04o: readable by %s", token_file.c_str(),
-          static_cast<unsigned>(st.st_mode & 07777),
-          (st.st_mode & S_IROTH) != 0 ? "every user" : "its group");
+      const std::string what =
+          strprintf("--token-file: %s has mode %04o: readable by %s", token_file.c_str(),
+                    static_cast<unsigned>(st.st_mode & 07777),
+                    (st.st_mode & S_IROTH) != 0 ? "every user" : "its group");
       if (!c.allow_readable_token_file)
         return invalid_argument(what + "; chmod 600 it, or pass --allow-readable-token-file");
       c.warnings.push_back(what + " (allowed by --allow-readable-token-file)");

@@ -148,8 +148,9 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
     // Whatever the importer says, the upload is what is wrong.
     const StatusCode code =
         st.code() == StatusCode::kResourceExhausted ? st.code() : StatusCode::kInvalidArgument;
-    return Status(code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
-                                  without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
+    return Status(
+        code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
+                        without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
   }
   const scene::SceneStats stats = scene::compute_stats(imported.value());
 

@@ -118,8 +118,7 @@ TEST_F(ServiceErrors, GltfFailingValidationIsInvalidArgument) {
   EXPECT_NE(st.error_message().find("broken.gltf"), std::string::npos) << st.error_message();
   // The upload's own file name, not where the daemon staged it.
   EXPECT_NE(st.error_message().find(": 'broken.gltf': "), std::string::npos) << st.error_message();
-  EXPECT_EQ(st.error_message().find(daemon_->data_dir()), std::string::npos)
-      << st.error_message();
+  EXPECT_EQ(st.error_message().find(daemon_->data_dir()), std::string::npos) << st.error_message();
   EXPECT_EQ(st.error_message().find("staging"), std::string::npos) << st.error_message();
   // The main file without its buffer fails too: nothing is fetched from elsewhere.
   st = upload_scene(*daemon_, "nobuffer.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {}, &info);

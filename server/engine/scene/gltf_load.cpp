@@ -456,9 +456,8 @@ Status check_meshes(const json& doc) {
       auto mat = prim.find("material");
       if (mat == prim.end() || mat->is_number_unsigned()) continue;
       const std::string name = get_string(mesh, "name");
-      const std::string what = name.empty()
-                                   ? strprintf("mesh[%zu]", m)
-                                   : strprintf("mesh '%s' (mesh[%zu])", name.c_str(), m);
+      const std::string what = name.empty() ? strprintf("mesh[%zu]", m)
+                                            : strprintf("mesh '%s' (mesh[%zu])", name.c_str(), m);
       return invalid_argument(
           strprintf("%s primitive %zu: material %s is not a material index (a non-negative "
                     "integer)",

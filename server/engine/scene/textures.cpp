@@ -57,8 +57,8 @@ bool header_size(const uint8_t* p, size_t n, uint64_t* w, uint64_t* h) {
       continue;
     }
     const size_t length = be16(p + at + 2);
-    const bool sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
-                     marker != 0xCC;
+    const bool sof =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
     if (sof) {
       if (at + 9 > n) return false;
       *h = be16(p + at + 5);

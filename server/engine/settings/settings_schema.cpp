@@ -136,8 +136,7 @@ Status check_setting(const Setting& st, const SettingValue& v) {
       // The bake normalizes the vector (common/math.h length), and refuses
       // one whose squared length underflows.
       if (st.nonzero && !(length(c) > 0))
-        return bad("must not be zero: its length underflows to 0 in single precision, got " +
-                   got);
+        return bad("must not be zero: its length underflows to 0 in single precision, got " + got);
       return Status::ok();
     }
   }

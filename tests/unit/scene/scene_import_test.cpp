@@ -810,9 +810,10 @@ TEST(SceneImportErrors, HugeImageHeaderIsTooLargeNotUnknown) {
   std::string png = test::encode_png(1, 1, 4, std::vector<uint8_t>(4, 7));
   for (size_t i = 16; i < 24; ++i) png[i] = static_cast<char>(i % 4 < 2 ? 0x00 : 0xFF);
   // Baseline JPEG, SOF0 claiming 65535 x 65535 with three components.
-  const std::string jpeg("\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08\xFF\xFF\xFF\xFF"
-                         "\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01",
-                         27);
+  const std::string jpeg(
+      "\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08\xFF\xFF\xFF\xFF"
+      "\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01",
+      27);
   for (const auto& [encoded, mime] : {std::pair{png, "image/png"}, std::pair{jpeg, "image/jpeg"}}) {
     GltfBuilder b = quad_scene();
     b.doc["images"] =

@@ -1,5 +1,7 @@
 // luxeld's start-up checks on the files it trusts: the token file's mode and
 // the data dir it creates (no server).
+#include "service/daemon_config.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -7,7 +9,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "service/daemon_config.h"
 #include "service/data_dir_lock.h"
 
 namespace luxel::service {
@@ -16,8 +17,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path temp_dir(const char* name) {
-  const fs::path d = fs::temp_directory_path() /
-                     (std::string(name) + "-" + std::to_string(::getpid()));
+  const fs::path d =
+      fs::temp_directory_path() / (std::string(name) + "-" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
