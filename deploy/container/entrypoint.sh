@@ -38,6 +38,12 @@ if [ -n "$token_file" ]; then
     exit 2
   fi
   set -- "$@" --token-file "$token_file"
+  # luxeld refuses a token file its group or others can read; a secret
+  # mounted root-owned and group-readable (Kubernetes defaultMode 0440 with
+  # fsGroup) needs this.
+  if [ "${LUXELD_ALLOW_READABLE_TOKEN_FILE:-0}" = 1 ]; then
+    set -- "$@" --allow-readable-token-file
+  fi
 elif [ -z "${LUXELD_TOKEN:-}" ] && [ "${LUXELD_ALLOW_NO_TOKEN:-0}" != 1 ]; then
   say "no token: mount one at /run/secrets/luxel-token, set LUXELD_TOKEN_FILE or" \
     "LUXELD_TOKEN, or set LUXELD_ALLOW_NO_TOKEN=1 to serve without authentication"

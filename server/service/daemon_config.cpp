@@ -1,5 +1,7 @@
 #include "service/daemon_config.h"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -35,7 +37,9 @@ const char* kDaemonUsage =
     "  --token-file FILE         require \"authorization: Bearer TOKEN\" on every call, TOKEN\n"
     "                            read from FILE (trailing newline ignored); or set the\n"
     "                            LUXELD_TOKEN environment variable. Never on the command\n"
-    "                            line, where every user sees it in ps\n"
+    "                            line, where every user sees it in ps. FILE must not be\n"
+    "                            readable by its group or others (chmod 600)\n"
+    "  --allow-readable-token-file  start anyway when it is (with a warning)\n"
     "  --tls-cert PEM --tls-key PEM   serve TLS instead of plaintext\n"
     "  --max-upload-bytes N      largest scene upload, main file + resources (default 1 GiB)\n"
     "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
@@ -114,6 +118,8 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--token-file") {
       LUXEL_RETURN_IF_ERROR(value());
       token_file = v;
+    } else if (k == "--allow-readable-token-file") {
+      c.allow_readable_token_file = true;
     } else if (k == "--tls-cert") {
       LUXEL_RETURN_IF_ERROR(value());
       c.tls_cert = v;
@@ -190,6 +196,18 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
           "LUXELD_TOKEN is set but empty; unset it to run without auth, or give a token");
   }
   if (!token_file.empty()) {
+    // The token is the daemon's only secret: a copy other local users can
+    // read lets them call every rpc.
+    struct stat st {};
+    if (::stat(token_file.c_str(), &st) == 0 && (st.st_mode & (S_IRGRP | S_IROTH)) != 0) {
+      const std::string what =
+          strprintf("--token-file: %s has mode %04o: readable by %s", token_file.c_str(),
+                    static_cast<unsigned>(st.st_mode & 07777),
+                    (st.st_mode & S_IROTH) != 0 ? "every user" : "its group");
+      if (!c.allow_readable_token_file)
+        return invalid_argument(what + "; chmod 600 it, or pass --allow-readable-token-file");
+      c.warnings.push_back(what + " (allowed by --allow-readable-token-file)");
+    }
     auto t = read_whole_file(token_file);
     if (!t) return invalid_argument("--token-file: " + t.status().message());
     c.token = t.value();

@@ -19,8 +19,12 @@ struct DaemonConfig {
   // What settings.intersector = auto means on this daemon: "auto" (Embree on
   // CPU devices, the OpenCL kernels on GPUs), "embree" or "opencl".
   std::string intersector = "auto";
-  std::string token;              // bearer token ("" = no authentication)
-  std::string tls_cert, tls_key;  // PEM files; both or neither
+  std::string token;  // bearer token ("" = no authentication)
+  // --allow-readable-token-file: start although the token file's mode lets
+  // its group or everyone read it (with a warning instead of a refusal).
+  bool allow_readable_token_file = false;
+  std::vector<std::string> warnings;  // for main() to log once logging is set up
+  std::string tls_cert, tls_key;      // PEM files; both or neither
   uint64_t max_upload_bytes = uint64_t{1} << 30;
   int max_resolution = 4096;
   size_t max_queued = 256;

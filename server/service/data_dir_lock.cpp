@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -12,12 +13,18 @@ namespace luxel::service {
 
 Result<DataDirLock> DataDirLock::acquire(const std::string& data_dir) {
   std::error_code ec;
-  std::filesystem::create_directories(data_dir, ec);
+  const bool created = std::filesystem::create_directories(data_dir, ec);
   if (ec)
     return unavailable(
         strprintf("--data-dir %s: cannot create it: %s", data_dir.c_str(), ec.message().c_str()));
+  // Uploaded scenes and results are the clients' data: private to the
+  // daemon's user whatever umask it was started with. A directory that
+  // already existed keeps the mode its owner gave it.
+  if (created && ::chmod(data_dir.c_str(), 0700) != 0)
+    return unavailable(strprintf("--data-dir %s: cannot chmod it to 0700: %s", data_dir.c_str(),
+                                 std::strerror(errno)));
   const std::string path = data_dir + "/luxeld.lock";
-  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
   if (fd < 0)
     return unavailable(strprintf("--data-dir %s: cannot open %s: %s", data_dir.c_str(),
                                  path.c_str(), std::strerror(errno)));

@@ -201,4 +201,17 @@ void log_event(LogLevel level, const char* event, std::initializer_list<LogField
   std::fflush(stderr);
 }
 
+bool LogThrottle::admit(Clock::time_point now, uint64_t* suppressed) {
+  std::lock_guard<std::mutex> lock(mu_);
+  if (any_ && now - last_ < period_) {
+    ++held_;
+    return false;
+  }
+  any_ = true;
+  last_ = now;
+  *suppressed = held_;
+  held_ = 0;
+  return true;
+}
+
 }  // namespace luxel::service

@@ -14,7 +14,10 @@
 // (set_thread_request_id, called where the handler starts).
 #pragma once
 
+#include <chrono>
+#include <cstdint>
 #include <initializer_list>
+#include <mutex>
 #include <string>
 #include <utility>
 
@@ -37,6 +40,24 @@ void set_thread_request_id(std::string id);
 // unauthenticated, ... are warnings or errors; the rest info).
 void log_event(const char* event, std::initializer_list<LogField> fields = {});
 void log_event(LogLevel level, const char* event, std::initializer_list<LogField> fields = {});
+
+// At most one line per `period` for an event a client can trigger at will
+// (a flood of unauthenticated calls must not flood the log). Thread-safe.
+class LogThrottle {
+ public:
+  using Clock = std::chrono::steady_clock;
+  explicit LogThrottle(Clock::duration period) : period_(period) {}
+  // True when the line at `now` is to be written; `suppressed` then receives
+  // how many were held back since the last line written.
+  bool admit(Clock::time_point now, uint64_t* suppressed);
+
+ private:
+  std::mutex mu_;
+  const Clock::duration period_;
+  bool any_ = false;
+  Clock::time_point last_{};
+  uint64_t held_ = 0;
+};
 
 // JSON string literal (with the quotes) of any byte string: valid UTF-8 is
 // kept, control characters become \u00XX, invalid sequences U+FFFD.

@@ -82,7 +82,15 @@ grpc::Status LuxelService::authenticate(grpc::ServerContextBase* ctx, const char
   if (it != md.end() && it->second.size() == expected.size() &&
       CRYPTO_memcmp(it->second.data(), expected.data(), expected.size()) == 0)
     return grpc::Status::OK;
-  log_event("unauthenticated", {{"rpc", rpc}, {"peer", ctx->peer()}});
+  uint64_t suppressed = 0;
+  if (unauthenticated_log_.admit(LogThrottle::Clock::now(), &suppressed)) {
+    if (suppressed == 0)
+      log_event("unauthenticated", {{"rpc", rpc}, {"peer", ctx->peer()}});
+    else
+      log_event("unauthenticated", {{"rpc", rpc},
+                                    {"peer", ctx->peer()},
+                                    {"suppressed_since_last", std::to_string(suppressed)}});
+  }
   return {
       grpc::StatusCode::UNAUTHENTICATED,
       it == md.end() ? "missing \"authorization: Bearer <token>\" metadata" : "wrong bearer token"};

@@ -19,6 +19,7 @@
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
 #include "service/job_queue.h"
+#include "service/log.h"
 #include "service/scene_store.h"
 #include "service/scene_upload.h"
 #include "service/stream_limits.h"
@@ -112,6 +113,8 @@ class LuxelService final : public LuxelServiceBase {
   // Serialises SubmitBake against DeleteScene (a bake never lands on a
   // scene being deleted) and the queue-limit check against the push.
   std::mutex submit_mu_;
+  // One "unauthenticated" line per second, with the count held back.
+  mutable LogThrottle unauthenticated_log_{std::chrono::seconds(1)};
 };
 
 }  // namespace luxel::service

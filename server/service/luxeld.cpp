@@ -11,6 +11,7 @@
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <sys/stat.h>
 
 #include <csignal>
 #include <cstdio>
@@ -58,6 +59,7 @@ bool is_loopback(const std::string& address) {
 
 int run(const DaemonConfig& config) {
   set_log_format(config.log_json ? LogFormat::kJson : LogFormat::kText);
+  for (const std::string& w : config.warnings) log_event("warning", {{"message", w}});
   // Before the stores open: they clean up what they take for this daemon's
   // own leftovers (staged uploads, RUNNING bakes to resume).
   auto lock = DataDirLock::acquire(config.data_dir);
@@ -252,6 +254,10 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
 
+  // Everything the daemon writes (the data dir's scenes, records, results)
+  // is private to its user, whatever umask it inherited: directories 0700,
+  // files 0600.
+  ::umask(077);
   auto config = parse_daemon_args(std::vector<std::string>(argv + 1, argv + argc),
                                   std::getenv("LUXELD_TOKEN"));
   if (!config) {

@@ -107,6 +107,25 @@ std::string SceneStore::main_file_path(const v1::SceneInfo& info) const {
   return scene_dir(info.scene_id()) + "/" + main_file_name(info.format());
 }
 
+namespace {
+
+// `text` with `dir`'s path taken out: the importer names files by their
+// path on this machine, the client knows them by the upload's own names
+// (the main file by the upload's name, `main_name`).
+std::string without_dir(std::string text, const std::string& dir, const std::string& main_path,
+                        const std::string& main_name) {
+  for (size_t at = text.find(main_path); at != std::string::npos;
+       at = text.find(main_path, at + main_name.size()))
+    text.replace(at, main_path.size(), main_name);
+  for (const std::string& prefix : {dir + "/", dir}) {
+    for (size_t at = text.find(prefix); at != std::string::npos; at = text.find(prefix, at))
+      text.replace(at, prefix.size(), prefix == dir ? "." : "");
+  }
+  return text;
+}
+
+}  // namespace
+
 Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
                                          const v1::SceneUploadHeader& header,
                                          uint64_t stored_bytes) {
@@ -129,8 +148,9 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
     // Whatever the importer says, the upload is what is wrong.
     const StatusCode code =
         st.code() == StatusCode::kResourceExhausted ? st.code() : StatusCode::kInvalidArgument;
-    return Status(code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
-                                  st.message().c_str()));
+    return Status(
+        code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
+                        without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
   }
   const scene::SceneStats stats = scene::compute_stats(imported.value());
 
@@ -141,7 +161,8 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   info.set_size(stored_bytes);
   info.set_uploaded_at(unix_now());
   fill_statistics(stats, info.mutable_statistics());
-  for (const auto& w : imported->import_stats.warnings) info.add_warnings(w);
+  for (const auto& w : imported->import_stats.warnings)
+    info.add_warnings(without_dir(w, staging_dir, main_path, header.name()));
 
   std::string json;
   pbu::JsonPrintOptions options;

@@ -374,6 +374,7 @@ class BlenderAddonTest(unittest.TestCase):
         daemon and UNAUTHENTICATED."""
         token = self.work / "token"
         token.write_text("s3cret-blender-token\n")
+        token.chmod(0o600)  # luxeld refuses a token file others can read
         daemon = Daemon(self.work, "luxeld-token", ["--token-file", str(token)])
         prefs = bpy.context.preferences.addons["luxel_blender"].preferences
         saved = prefs.server, prefs.token_file

@@ -214,6 +214,7 @@ class EntrypointRun(unittest.TestCase):
         self.token_file = os.path.join(self.tmp, "token")
         with open(self.token_file, "w") as f:
             f.write(self.token + "\n")
+        os.chmod(self.token_file, 0o600)  # luxeld refuses a token file others can read
         bin_dir = os.path.join(self.tmp, "bin")
         os.mkdir(bin_dir)  # luxeld and luxel on PATH, as in the image
         os.symlink(os.path.abspath(ARGS.luxeld), os.path.join(bin_dir, "luxeld"))

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <thread>
 
 #include "daemon_harness.h"
 
@@ -115,6 +116,10 @@ TEST_F(ServiceErrors, GltfFailingValidationIsInvalidArgument) {
   auto st = upload_scene(*daemon_, "broken.gltf", v1::SCENE_FORMAT_GLTF, bad, {}, &info);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
   EXPECT_NE(st.error_message().find("broken.gltf"), std::string::npos) << st.error_message();
+  // The upload's own file name, not where the daemon staged it.
+  EXPECT_NE(st.error_message().find(": 'broken.gltf': "), std::string::npos) << st.error_message();
+  EXPECT_EQ(st.error_message().find(daemon_->data_dir()), std::string::npos) << st.error_message();
+  EXPECT_EQ(st.error_message().find("staging"), std::string::npos) << st.error_message();
   // The main file without its buffer fails too: nothing is fetched from elsewhere.
   st = upload_scene(*daemon_, "nobuffer.gltf", v1::SCENE_FORMAT_GLTF, kGltf, {}, &info);
   EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << st.error_message();
@@ -324,6 +329,38 @@ TEST_F(ServiceErrors, MissingOrWrongTokenIsUnauthenticated) {
   EXPECT_EQ(writer->Finish().error_code(), grpc::StatusCode::UNAUTHENTICATED);
   auto ctx = daemon_->context();
   EXPECT_TRUE(stub_->ListScenes(ctx.get(), {}, &list).ok());
+}
+
+// A client can make unauthenticated calls as fast as it likes; the log gets
+// one line a second, which counts the ones held back.
+TEST(ServiceAuthLog, UnauthenticatedCallsAreLoggedAtMostOncePerSecond) {
+  TempDir dir;
+  Daemon d(dir.path() + "/data", {}, "flood-token");
+  auto stub = d.stub();
+  v1::ListScenesResponse list;
+  auto count_lines = [&] {
+    const std::string log = d.log();
+    size_t n = 0;
+    for (size_t at = log.find("event=unauthenticated"); at != std::string::npos;
+         at = log.find("event=unauthenticated", at + 1))
+      ++n;
+    return n;
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < 200; ++i) {
+    grpc::ClientContext none;
+    ASSERT_EQ(stub->ListScenes(&none, {}, &list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // One line per started second of the flood, not 200.
+  EXPECT_LE(count_lines(), static_cast<size_t>(elapsed_s) + 1) << d.log();
+  EXPECT_GE(count_lines(), 1u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  grpc::ClientContext none;
+  EXPECT_EQ(stub->ListScenes(&none, {}, &list).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_NE(d.log().find("suppressed_since_last="), std::string::npos) << d.log();
+  EXPECT_EQ(d.stop(SIGTERM), 0);
 }
 
 TEST_F(ServiceErrors, MalformedProtobufIsRefusedAndTheDaemonLivesOn) {

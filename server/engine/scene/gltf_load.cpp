@@ -371,11 +371,26 @@ Status check_asset(const json& doc) {
   return Status::ok();
 }
 
+// False with the reason when `view` has a byteStride outside glTF 2.0 §5.11's
+// range (4 to 252, a multiple of 4); absent is valid (tightly packed).
+bool byte_stride_ok(const json& view, std::string* why) {
+  if (!view.is_object()) return true;
+  auto s = view.find("byteStride");
+  if (s == view.end()) return true;
+  if (s->is_number_unsigned()) {
+    const uint64_t v = s->get<uint64_t>();
+    if (v >= 4 && v <= 252 && v % 4 == 0) return true;
+  }
+  *why = "byteStride " + s->dump() + " is not valid (glTF allows 4 to 252, a multiple of 4)";
+  return false;
+}
+
 // What tinygltf would refuse with a message that names no object: accessor
 // componentType and type (glTF 2.0 §5.1).
 Status check_accessors(const json& doc) {
   auto it = doc.find("accessors");
   if (it == doc.end() || !it->is_array()) return Status::ok();
+  const auto views = doc.find("bufferViews");
   for (size_t i = 0; i < it->size(); ++i) {
     const json& a = (*it)[i];
     if (!a.is_object()) return invalid_argument(strprintf("accessor %zu is not a JSON object", i));
@@ -398,6 +413,56 @@ Status check_accessors(const json& doc) {
     }
     if (!get_uint(a, "count"))
       return invalid_argument(what + ": count is missing or not a non-negative integer");
+    // tinygltf reads an explicit byteStride 0 as "tightly packed", which the
+    // schema forbids; named here through the accessor that reads the view.
+    const auto view = get_uint(a, "bufferView");
+    if (view && views != doc.end() && views->is_array() && *view < views->size()) {
+      std::string why;
+      if (!byte_stride_ok((*views)[*view], &why))
+        return invalid_argument(strprintf("%s: bufferView %llu: %s", what.c_str(),
+                                          static_cast<unsigned long long>(*view), why.c_str()));
+    }
+  }
+  return Status::ok();
+}
+
+// glTF 2.0 §5.11 (bufferView.byteStride): when present, 4 to 252 and a
+// multiple of 4. Views no accessor reads are checked here.
+Status check_buffer_views(const json& doc) {
+  auto it = doc.find("bufferViews");
+  if (it == doc.end() || !it->is_array()) return Status::ok();
+  for (size_t i = 0; i < it->size(); ++i) {
+    std::string why;
+    if (!byte_stride_ok((*it)[i], &why))
+      return invalid_argument(describe("bufferView", i, (*it)[i]) + ": " + why);
+  }
+  return Status::ok();
+}
+
+// glTF 2.0 §5.24 (mesh.primitive.material): a non-negative index when
+// present. tinygltf keeps a negative value, which would otherwise read as
+// "no material".
+Status check_meshes(const json& doc) {
+  auto meshes = doc.find("meshes");
+  if (meshes == doc.end() || !meshes->is_array()) return Status::ok();
+  for (size_t m = 0; m < meshes->size(); ++m) {
+    const json& mesh = (*meshes)[m];
+    if (!mesh.is_object()) continue;
+    auto prims = mesh.find("primitives");
+    if (prims == mesh.end() || !prims->is_array()) continue;
+    for (size_t p = 0; p < prims->size(); ++p) {
+      const json& prim = (*prims)[p];
+      if (!prim.is_object()) continue;
+      auto mat = prim.find("material");
+      if (mat == prim.end() || mat->is_number_unsigned()) continue;
+      const std::string name = get_string(mesh, "name");
+      const std::string what = name.empty() ? strprintf("mesh[%zu]", m)
+                                            : strprintf("mesh '%s' (mesh[%zu])", name.c_str(), m);
+      return invalid_argument(
+          strprintf("%s primitive %zu: material %s is not a material index (a non-negative "
+                    "integer)",
+                    what.c_str(), p, mat->dump().c_str()));
+    }
   }
   return Status::ok();
 }
@@ -560,6 +625,8 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
   if (!doc) return doc.status();
   LUXEL_RETURN_IF_ERROR(check_asset(*doc));
   LUXEL_RETURN_IF_ERROR(check_accessors(*doc));
+  LUXEL_RETURN_IF_ERROR(check_buffer_views(*doc));
+  LUXEL_RETURN_IF_ERROR(check_meshes(*doc));
   std::vector<uint64_t> buffer_sizes;
   Rewrites rw;
   LUXEL_RETURN_IF_ERROR(check_buffers(*doc, c, base_dir, &buffer_sizes, &rw.uriless_buffers));

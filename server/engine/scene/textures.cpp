@@ -7,6 +7,7 @@
 #include <array>
 #include <climits>
 #include <cmath>
+#include <cstring>
 #include <memory>
 
 #include "common/half.h"
@@ -27,6 +28,47 @@ const std::array<float, 256>& srgb_lut() {
     return t;
   }();
   return lut;
+}
+
+uint32_t be16(const uint8_t* p) {
+  return (uint32_t{p[0]} << 8) | p[1];
+}
+
+uint32_t be32(const uint8_t* p) {
+  return (be16(p) << 16) | be16(p + 2);
+}
+
+// The size a PNG (IHDR) or JPEG (SOFn) header claims, read without stb_image:
+// stbi_info refuses a header whose image it would not decode (over 2^30
+// bytes) and then reports only "unknown image type".
+bool header_size(const uint8_t* p, size_t n, uint64_t* w, uint64_t* h) {
+  static const uint8_t kPng[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (n >= 24 && std::memcmp(p, kPng, 8) == 0 && std::memcmp(p + 12, "IHDR", 4) == 0) {
+    *w = be32(p + 16);
+    *h = be32(p + 20);
+    return true;
+  }
+  if (n < 4 || p[0] != 0xFF || p[1] != 0xD8) return false;
+  size_t at = 2;
+  while (at + 4 <= n && p[at] == 0xFF) {
+    const uint8_t marker = p[at + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    const size_t length = be16(p + at + 2);
+    const bool sof =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (sof) {
+      if (at + 9 > n) return false;
+      *h = be16(p + at + 5);
+      *w = be16(p + at + 7);
+      return true;
+    }
+    if (length < 2) return false;
+    at += 2 + length;
+  }
+  return false;
 }
 
 }  // namespace
@@ -70,17 +112,28 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   }
   const auto* data = reinterpret_cast<const stbi_uc*>(encoded.data());
   const int size = static_cast<int>(encoded.size());
+  const auto too_large = [&](uint64_t w, uint64_t h) {
+    return resource_exhausted(strprintf(
+        "%s: %llu x %llu pixels exceeds the limit (%d per side, %llu pixels)", label.c_str(),
+        static_cast<unsigned long long>(w), static_cast<unsigned long long>(h),
+        options.max_image_side, static_cast<unsigned long long>(options.max_image_pixels)));
+  };
   int w = 0, h = 0, channels = 0;
   if (!stbi_info_from_memory(data, size, &w, &h, &channels)) {
+    uint64_t hw = 0, hh = 0;
+    if (header_size(data, encoded.size(), &hw, &hh) &&
+        (hw > static_cast<uint64_t>(options.max_image_side) ||
+         hh > static_cast<uint64_t>(options.max_image_side) ||
+         hw * hh > options.max_image_pixels)) {
+      return too_large(hw, hh);
+    }
     return invalid_argument(
         strprintf("%s: cannot decode the image: %s", label.c_str(), stbi_failure_reason()));
   }
   const uint64_t pixels = static_cast<uint64_t>(w) * static_cast<uint64_t>(h);
   if (w <= 0 || h <= 0 || w > options.max_image_side || h > options.max_image_side ||
       pixels > options.max_image_pixels) {
-    return resource_exhausted(strprintf(
-        "%s: %d x %d pixels exceeds the limit (%d per side, %llu pixels)", label.c_str(), w, h,
-        options.max_image_side, static_cast<unsigned long long>(options.max_image_pixels)));
+    return too_large(static_cast<uint64_t>(w), static_cast<uint64_t>(h));
   }
   Texture tex;
   tex.name = !img.name.empty()                                     ? img.name

@@ -133,6 +133,10 @@ Status check_setting(const Setting& st, const SettingValue& v) {
           return bad(
               strprintf("each value must be %s, got %s", range_phrase(st).c_str(), got.c_str()));
       if (st.nonzero && c.x == 0 && c.y == 0 && c.z == 0) return bad("must not be zero");
+      // The bake normalizes the vector (common/math.h length), and refuses
+      // one whose squared length underflows.
+      if (st.nonzero && !(length(c) > 0))
+        return bad("must not be zero: its length underflows to 0 in single precision, got " + got);
       return Status::ok();
     }
   }

@@ -639,6 +639,29 @@ TEST(SceneImportErrors, StrideSmallerThanElement) {
                 "size 12"});
 }
 
+TEST(SceneImportErrors, StrideOutsideTheSchemaRange) {
+  // tinygltf reads byteStride 0 as "tightly packed"; the schema allows 4-252.
+  for (const json& bad : {json(0), json(2), json(6), json(256), json(-12)}) {
+    GltfBuilder b = quad_scene();
+    b.doc["bufferViews"][0]["byteStride"] = bad;
+    expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+                 {"test.gltf", "accessor 0", "bufferView 0", "byteStride"});
+  }
+  // A view no accessor reads is named by itself.
+  GltfBuilder b = quad_scene();
+  const std::string unread = "bufferView " + std::to_string(b.doc["bufferViews"].size());
+  b.doc["bufferViews"].push_back({{"buffer", 0}, {"byteLength", 4}, {"byteStride", 0}});
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"test.gltf", unread.c_str(), "byteStride 0"});
+}
+
+TEST(SceneImportErrors, NegativeMaterialIndex) {
+  GltfBuilder b = quad_scene();
+  b.doc["meshes"][0]["primitives"][0]["material"] = -5;
+  expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+               {"test.gltf", "mesh 'quad' (mesh[0]) primitive 0", "material -5"});
+}
+
 TEST(SceneImportErrors, StrideOverrunsView) {
   GltfBuilder b = quad_scene();
   b.doc["bufferViews"][0]["byteStride"] = 16;  // 3 * 16 + 12 = 60 > 48
@@ -779,6 +802,27 @@ TEST(SceneImportErrors, OversizedImageRejectedBeforeDecoding) {
   expect_error(load(b.gltf_embedded(), small), StatusCode::kResourceExhausted,
                {"image 0", "64 x 64"});
   EXPECT_TRUE(load(b.gltf_embedded()).is_ok());
+}
+
+// stb_image refuses to even describe an image it would not decode (over 2^30
+// bytes), so such a header is measured by the importer itself.
+TEST(SceneImportErrors, HugeImageHeaderIsTooLargeNotUnknown) {
+  std::string png = test::encode_png(1, 1, 4, std::vector<uint8_t>(4, 7));
+  for (size_t i = 16; i < 24; ++i) png[i] = static_cast<char>(i % 4 < 2 ? 0x00 : 0xFF);
+  // Baseline JPEG, SOF0 claiming 65535 x 65535 with three components.
+  const std::string jpeg(
+      "\xFF\xD8\xFF\xE0\x00\x04\x00\x00\xFF\xC0\x00\x11\x08\xFF\xFF\xFF\xFF"
+      "\x03\x01\x22\x00\x02\x11\x01\x03\x11\x01",
+      27);
+  for (const auto& [encoded, mime] : {std::pair{png, "image/png"}, std::pair{jpeg, "image/jpeg"}}) {
+    GltfBuilder b = quad_scene();
+    b.doc["images"] =
+        json::array({{{"uri", std::string("data:") + mime + ";base64," + test::base64(encoded)}}});
+    b.doc["textures"] = json::array({{{"source", 0}}});
+    b.add_material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
+    expect_error(load(b.gltf_embedded()), StatusCode::kResourceExhausted,
+                 {"image 0", "65535 x 65535", "exceeds the limit (16384 per side"});
+  }
 }
 
 }  // namespace

@@ -86,5 +86,20 @@ TEST(MetricsListen, AddressesAreChecked) {
   }
 }
 
+TEST(LogThrottle, OneLinePerPeriodWithTheCountHeldBack) {
+  LogThrottle throttle(std::chrono::seconds(1));
+  const auto t0 = LogThrottle::Clock::time_point() + std::chrono::hours(1);
+  uint64_t held = 99;
+  EXPECT_TRUE(throttle.admit(t0, &held));
+  EXPECT_EQ(held, 0u);
+  for (int i = 1; i <= 500; ++i)
+    EXPECT_FALSE(throttle.admit(t0 + std::chrono::microseconds(i), &held));
+  EXPECT_FALSE(throttle.admit(t0 + std::chrono::milliseconds(999), &held));
+  EXPECT_TRUE(throttle.admit(t0 + std::chrono::seconds(1), &held));
+  EXPECT_EQ(held, 501u);
+  EXPECT_TRUE(throttle.admit(t0 + std::chrono::seconds(5), &held));
+  EXPECT_EQ(held, 0u);
+}
+
 }  // namespace
 }  // namespace luxel::service

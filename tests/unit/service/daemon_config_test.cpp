@@ -1,0 +1,75 @@
+// luxeld's start-up checks on the files it trusts: the token file's mode and
+// the data dir it creates (no server).
+#include "service/daemon_config.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "service/data_dir_lock.h"
+
+namespace luxel::service {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path temp_dir(const char* name) {
+  const fs::path d =
+      fs::temp_directory_path() / (std::string(name) + "-" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+unsigned mode_of(const fs::path& p) {
+  struct stat st {};
+  EXPECT_EQ(::stat(p.c_str(), &st), 0) << p;
+  return st.st_mode & 07777;
+}
+
+TEST(DaemonConfig, TokenFileReadableByOthersIsRefused) {
+  const fs::path dir = temp_dir("luxel-token-mode");
+  const std::string token = (dir / "token").string();
+  std::ofstream(token) << "s3cret\n";
+  for (unsigned mode : {0644u, 0640u, 0604u}) {
+    ASSERT_EQ(::chmod(token.c_str(), mode), 0);
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--token-file", token});
+    ASSERT_FALSE(c.is_ok()) << std::oct << mode;
+    EXPECT_NE(c.status().message().find(token), std::string::npos) << c.status().message();
+    EXPECT_NE(c.status().message().find(strprintf("mode %04o", mode)), std::string::npos)
+        << c.status().message();
+    EXPECT_NE(c.status().message().find("--allow-readable-token-file"), std::string::npos);
+
+    auto allowed = parse_daemon_args(
+        {"--data-dir", "/tmp/x", "--token-file", token, "--allow-readable-token-file"});
+    ASSERT_TRUE(allowed.is_ok()) << allowed.status().to_string();
+    EXPECT_EQ(allowed->token, "s3cret");
+    ASSERT_EQ(allowed->warnings.size(), 1u);
+    EXPECT_NE(allowed->warnings[0].find(token), std::string::npos) << allowed->warnings[0];
+  }
+  for (unsigned mode : {0600u, 0400u}) {
+    ASSERT_EQ(::chmod(token.c_str(), mode), 0);
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--token-file", token});
+    ASSERT_TRUE(c.is_ok()) << c.status().to_string();
+    EXPECT_TRUE(c->warnings.empty());
+  }
+  fs::remove_all(dir);
+}
+
+TEST(DaemonConfig, DataDirIsCreatedPrivateWhateverTheUmask) {
+  const fs::path parent = temp_dir("luxel-data-mode");
+  const fs::path data = parent / "data";
+  const mode_t old = ::umask(0);
+  auto lock = DataDirLock::acquire(data.string());
+  ::umask(old);
+  ASSERT_TRUE(lock.is_ok()) << lock.status().to_string();
+  EXPECT_EQ(mode_of(data), 0700u);
+  EXPECT_EQ(mode_of(data / "luxeld.lock"), 0600u);
+  fs::remove_all(parent);
+}
+
+}  // namespace
+}  // namespace luxel::service
