@@ -16,6 +16,7 @@ Each configuration switches some of the features on over the configuration
   default_raw  the defaults with --denoise off (the raw map a default bake also writes)
   default_atrous  the defaults with --denoise atrous
   default_oidn    the defaults with --denoise oidn
+  previous        the defaults with --denoise off --no-seam-stitch (the release before them)
 
 Settings come from `luxel settings --json`, so the flags follow the schema; a
 configuration that needs a setting the binary lacks is reported as absent.
@@ -75,7 +76,10 @@ SHARED = ["cornell_box.glb", "breakfast_room.glb", "sponza.glb", "gas_station.gl
 VARIANTS = {"oidn": ({"denoise"}, {"denoise": "oidn"}),
             "default_raw": (None, {"denoise": "off"}),
             "default_oidn": (None, {"denoise": "oidn"}),
-            "default_atrous": (None, {"denoise": "atrous"})}
+            "default_atrous": (None, {"denoise": "atrous"}),
+            # The defaults of the release before denoise = auto and seam stitching
+            # (the analytic estimator for punctual lights is today's non-negative one).
+            "previous": (None, {"denoise": "off", "seam_stitch": False})}
 
 
 def configs(leave_one_out):
@@ -136,7 +140,10 @@ def options_for(features_on, sch, overrides=None):
     if features_on is None:
         opts = []
         for name, want in overrides.items():
-            if str(sch[name]["default"]) != str(want):
+            if sch[name]["type"] == "bool":
+                if bool(sch[name]["default"]) != bool(want):
+                    opts.append(sch[name]["flag"])  # the flag turns the default around
+            elif str(sch[name]["default"]) != str(want):
                 opts += [sch[name]["flag"], str(want)]
         return opts
     opts = []
