@@ -57,6 +57,8 @@ grpc::Status to_grpc(const Status& status) {
       return {grpc::StatusCode::UNAVAILABLE, status.message()};
     case StatusCode::kInternal:
       return {grpc::StatusCode::INTERNAL, status.message()};
+    case StatusCode::kUnauthenticated:
+      return {grpc::StatusCode::UNAUTHENTICATED, status.message()};
   }
   return {grpc::StatusCode::UNKNOWN, status.message()};
 }

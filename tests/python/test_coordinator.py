@@ -561,3 +561,37 @@ class MixedBackends(unittest.TestCase):
             for d in (coordinator, *workers):
                 d.cleanup()
             tmp.cleanup()
+
+
+class CoordinatorCredentials(unittest.TestCase):
+    """A coordinator without the workers' token: a configuration error, said
+    at once as UNAUTHENTICATED naming the worker, not retried as a lost
+    worker through grace periods."""
+
+    def test_missing_token_fails_unauthenticated_naming_the_worker(self):
+        binary = os.environ["LUXELD"]
+        worker = Luxeld(binary, [], env={"LUXELD_TOKEN": "worker-secret-0123456789"}).start()
+        # A grace far longer than the test's wait: only a refusal recognised
+        # as such ends the bake before it.
+        coordinator = Luxeld(binary, ["--workers", worker.address, "--worker-grace", "600"])
+        coordinator.env.pop("LUXELD_TOKEN", None)
+        coordinator.start()
+        try:
+            with Client(coordinator.address) as c:
+                scene = c.upload_scene(CORNELL)
+                info = c.submit_bake(scene.scene_id, **dict(SETTINGS, shards=2))
+                deadline = time.monotonic() + 120
+                while state_name(info.state) not in ("SUCCEEDED", "FAILED", "CANCELLED"):
+                    self.assertLess(time.monotonic(), deadline, f"still {info}")
+                    time.sleep(0.2)
+                    info = c.get_bake(info.bake_id)
+                self.assertEqual(state_name(info.state), "FAILED")
+                self.assertIn("UNAUTHENTICATED", info.error_message)
+                self.assertIn(worker.address, info.error_message)
+                self.assertNotIn("given up after", info.error_message)
+                notes = "\n".join(info.notes)
+                self.assertIn("refused the coordinator's credentials", notes)
+                self.assertNotIn("grace period", notes)
+        finally:
+            coordinator.cleanup()
+            worker.cleanup()

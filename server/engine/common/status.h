@@ -22,6 +22,7 @@ enum class StatusCode {
   kResourceExhausted,  // a limit was hit (memory, size)
   kUnavailable,        // no OpenCL device / driver failure
   kInternal,           // a bug or an unexpected driver error
+  kUnauthenticated,    // credentials refused (a coordinator's token at a worker)
 };
 
 const char* status_code_name(StatusCode code);

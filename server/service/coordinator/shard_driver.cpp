@@ -41,7 +41,19 @@ void Run::sleep_for(double s) {
                  [&] { return stop_.load(); });
 }
 
-bool Run::ensure_scene(const std::string& worker) {
+bool Run::refused_credentials(uint32_t k, const std::string& worker, const grpc::Status& st) {
+  if (st.error_code() != grpc::StatusCode::UNAUTHENTICATED &&
+      st.error_code() != grpc::StatusCode::PERMISSION_DENIED)
+    return false;
+  {
+    std::lock_guard<std::mutex> lock(mu_);
+    credential_refusals_[k].push_back(worker + ": " + grpc_text(st));
+  }
+  reassign(k, worker, "refused the coordinator's credentials (" + grpc_text(st) + ")");
+  return true;
+}
+
+grpc::Status Run::ensure_scene(const std::string& worker) {
   auto stub = pool_.stub(worker);
   const std::string scene_id = job_.info.scene_id();
   {
@@ -51,11 +63,11 @@ bool Run::ensure_scene(const std::string& worker) {
     req.set_scene_id(scene_id);
     v1::SceneInfo info;
     grpc::Status st = stub->GetScene(&ctx, req, &info);
-    if (st.ok()) return true;
+    if (st.ok()) return st;
     if (st.error_code() != grpc::StatusCode::NOT_FOUND) {
       log_event("worker_unreachable",
                 {{"bake", job_.bake_id}, {"worker", worker}, {"error", grpc_text(st)}});
-      return false;
+      return st;
     }
   }
   // Same files, same bytes: the worker's scene id is the coordinator's.
@@ -84,15 +96,16 @@ bool Run::ensure_scene(const std::string& worker) {
   }
   writer->WritesDone();
   grpc::Status st = writer->Finish();
-  if (!st.ok() || info.scene_id() != scene_id) {
-    log_event("worker_upload_failed", {{"bake", job_.bake_id},
-                                       {"worker", worker},
-                                       {"error", st.ok() ? "scene id differs" : grpc_text(st)}});
-    return false;
+  if (st.ok() && info.scene_id() != scene_id)
+    st = grpc::Status(grpc::StatusCode::INTERNAL, "the worker's scene id differs");
+  if (!st.ok()) {
+    log_event("worker_upload_failed",
+              {{"bake", job_.bake_id}, {"worker", worker}, {"error", grpc_text(st)}});
+    return st;
   }
   log_event("worker_scene_uploaded",
             {{"bake", job_.bake_id}, {"worker", worker}, {"bytes", std::to_string(bytes)}});
-  return true;
+  return st;
 }
 
 bool Run::assign(uint32_t k) {
@@ -134,12 +147,28 @@ bool Run::assign(uint32_t k) {
     attempt = rec.attempts;
   }
   if (give_up) {
-    fail(Status(
-        StatusCode::kUnavailable,
-        strprintf("shard %u: given up after %u attempts on workers (see notes)", k, give_up)));
+    std::vector<std::string> refusals;
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      refusals = credential_refusals_[k];
+    }
+    if (!refusals.empty()) {
+      // Configuration, not a fault: say so instead of a generic give-up.
+      std::string who;
+      for (const std::string& r : refusals) who += (who.empty() ? "" : "; ") + r;
+      fail(Status(StatusCode::kUnauthenticated,
+                  strprintf("shard %u: workers refused the coordinator's credentials (%s); give "
+                            "the coordinator the workers' token (--token-file or LUXELD_TOKEN)",
+                            k, who.c_str())));
+    } else {
+      fail(Status(
+          StatusCode::kUnavailable,
+          strprintf("shard %u: given up after %u attempts on workers (see notes)", k, give_up)));
+    }
     return false;
   }
-  if (!ensure_scene(worker)) return false;
+  if (grpc::Status scene = ensure_scene(worker); !scene.ok())
+    return refused_credentials(k, worker, scene);
   grpc::ClientContext ctx;
   pool_.prepare(ctx, 30);
   v1::SubmitBakeRequest req;
@@ -149,6 +178,7 @@ bool Run::assign(uint32_t k) {
   v1::BakeInfo info;
   grpc::Status st = pool_.stub(worker)->SubmitBake(&ctx, req, &info);
   if (!st.ok()) {
+    if (refused_credentials(k, worker, st)) return true;
     if (st.error_code() == grpc::StatusCode::INVALID_ARGUMENT ||
         st.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
       // The worker refuses these settings (another Luxel version, a smaller

@@ -70,7 +70,11 @@ class Run {
   // ---- one shard's thread
   void drive(uint32_t k);
   bool assign(uint32_t k);
-  bool ensure_scene(const std::string& worker);
+  grpc::Status ensure_scene(const std::string& worker);
+  // A worker that refuses the coordinator's credentials will not take the
+  // shard however long it is retried: reassigned at once, remembered for
+  // the failure's message. False for any other status.
+  bool refused_credentials(uint32_t k, const std::string& worker, const grpc::Status& st);
   WatchEnd watch(uint32_t k, const std::string& worker, const std::string& worker_bake,
                  v1::BakeInfo* terminal, grpc::Status* why);
   void lost(uint32_t k, const std::string& worker, const std::string& worker_bake,
@@ -114,6 +118,9 @@ class Run {
   double preview_s_ = 0;                             // seconds spent decoding and averaging them
   std::map<uint32_t, grpc::ClientContext*> active_;  // open WatchBake calls (TryCancel on stop)
   std::optional<Status> failure_;
+  // Per shard, the workers that answered UNAUTHENTICATED or
+  // PERMISSION_DENIED, with their message ("worker: CODE: message").
+  std::map<uint32_t, std::vector<std::string>> credential_refusals_;
   std::set<std::string> finish_sent_;  // worker bakes asked to finish (this process)
   bool stop_rules_ = false;            // the bake has a time budget or target error
   // The merge as a fold (pipeline::ShardMerger), in shard order, as shards
