@@ -19,7 +19,7 @@ The RSS figures are sampled every 5 ms from /proc/PID/status (VmRSS).
 """
 
 import argparse
-import base64
+import hashlib
 import json
 import os
 import pathlib
@@ -34,7 +34,7 @@ _REPO = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(_REPO / "client/python"))
 sys.path.insert(0, str(_REPO / "tests/python"))
 
-from luxel_client import Client, LuxelError, state_name  # noqa: E402
+from luxel_client import Client, LuxelError, luxel_pb2, state_name  # noqa: E402
 from luxeld_process import Luxeld  # noqa: E402
 
 CORNELL = _REPO / "scenes/cornell_box.gltf"
@@ -48,9 +48,13 @@ class Vitals:
     """RSS, threads and fds of one process; a sampler thread keeps the peak
     RSS since the last reset()."""
 
-    def __init__(self, pid):
+    def __init__(self, pid, kill_above):
         self.pid = pid
         self.peak = 0
+        self.base = 0
+        # A daemon that is not held is killed before it takes the machine.
+        self.kill_above = kill_above
+        self.killed = False
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._sample, daemon=True)
         self._thread.start()
@@ -63,6 +67,8 @@ class Vitals:
         return 0
 
     def snapshot(self):
+        if not os.path.exists(f"/proc/{self.pid}/status"):
+            return dict(rss_mib="killed", threads="-", fds="-")
         return dict(rss_mib=round(self.rss() / MIB, 1),
                     threads=len(os.listdir(f"/proc/{self.pid}/task")),
                     fds=len(os.listdir(f"/proc/{self.pid}/fd")))
@@ -71,6 +77,11 @@ class Vitals:
         while not self._stop.is_set():
             try:
                 self.peak = max(self.peak, self.rss())
+                if self.peak > self.kill_above and not self.killed:
+                    self.killed = True
+                    os.kill(self.pid, 9)
+                    print(f"hostile_suite: killed the daemon at {self.peak / MIB:.0f} MiB",
+                          file=sys.stderr, flush=True)
             except OSError:
                 return
             time.sleep(0.005)
@@ -182,9 +193,14 @@ class Suite:
         return Client(self.daemon.address, timeout=600)
 
     def alive(self):
-        with self.client() as c:
-            c.server_status()
-        return self.daemon.process.poll() is None
+        if self.daemon.process.poll() is not None:
+            return False
+        try:
+            with self.client() as c:
+                c.server_status()
+            return True
+        except LuxelError:
+            return False
 
     def case(self, klass, name, run):
         self.vitals.reset()
@@ -316,7 +332,7 @@ class Suite:
         path = write_scene(root, "png_header", *textured_doc(1, 65535, 65535, header_only=True))
         self.case("memory", "PNG header claiming 65535x65535",
                   lambda: self.refused(path, ("INVALID_ARGUMENT", "RESOURCE_EXHAUSTED"),
-                                       ("too large",)))
+                                       ("too large", "exceeds the limit")))
         # A bake whose host state (8 directional encodings at 4096^2) is far
         # past any reasonable host budget: refused at submit, or kept under it.
         scene = self.upload(CORNELL)
@@ -362,8 +378,23 @@ class Suite:
         folder.mkdir(parents=True, exist_ok=True)
         deep = folder / "scene.gltf"
         deep.write_text('{"asset":{"version":"2.0"},"extras":' + "[" * 100_000 + "]" * 100_000 + "}")
-        self.case("cpu", "JSON nested 100,000 levels",
-                  lambda: self.refused(deep, ("INVALID_ARGUMENT",), ("nest", "deep", "depth")))
+
+        def nested():
+            # Sent as raw bytes: the Python client would parse the JSON
+            # itself (to find resources) and hit its own recursion limit.
+            data = deep.read_bytes()
+            header = luxel_pb2.SceneUploadHeader(
+                name="scene.gltf", format=luxel_pb2.SCENE_FORMAT_GLTF, total_size=len(data),
+                sha256=hashlib.sha256(data).hexdigest())
+            try:
+                with self.client() as c:
+                    c._upload(header, [data[i:i + MIB] for i in range(0, len(data), MIB)])
+                return False, "accepted"
+            except LuxelError as e:
+                return (e.code == "INVALID_ARGUMENT" and
+                        any(w in e.message for w in ("nest", "deep", "depth")),
+                        f"{e.code}: {e.message}")
+        self.case("cpu", "JSON nested 100,000 levels", nested)
 
     def late(self):
         root = self.out / "late"
@@ -474,21 +505,36 @@ def main(argv):
     p.add_argument("--luxeld", required=True)
     p.add_argument("--classes", default="memory,cpu,late,cancel")
     p.add_argument("--out", default=None)
+    p.add_argument("--import-budget", default=None,
+                   help="judge imports against this (default: the daemon's --import-memory-budget, "
+                        "else 3GiB)")
+    p.add_argument("--host-budget", default=None,
+                   help="judge and stop a running bake at this growth (default: the daemon's "
+                        "--host-memory-budget, else 12GiB)")
     p.add_argument("extra", nargs="*", help="flags passed to luxeld (after --)")
     args = p.parse_args(argv)
     out = args.out or tempfile.mkdtemp(prefix="luxel_hostile_")
     # The budgets the cases are judged against: the daemon's flags, else
     # what it reports as its defaults is not visible from outside, so the
     # suite states them (pass the flags to judge other values).
-    import_budget = parse_bytes(flag(args.extra, "--import-memory-budget", "3GiB"))
-    host_budget = parse_bytes(flag(args.extra, "--host-memory-budget", "12GiB"))
+    import_budget = parse_bytes(args.import_budget or
+                                flag(args.extra, "--import-memory-budget", "3GiB"))
+    host_budget = parse_bytes(args.host_budget or flag(args.extra, "--host-memory-budget", "12GiB"))
     import_timeout = float(flag(args.extra, "--import-timeout", "300"))
+    kill_above = max(2 * host_budget, 4 * import_budget)
     daemon = Luxeld(args.luxeld, extra_args=args.extra).start()
-    vitals = Vitals(daemon.process.pid)
+    vitals = Vitals(daemon.process.pid, kill_above)
     suite = Suite(daemon, vitals, out)
     summary = []
     try:
         for klass in args.classes.split(","):
+            if daemon.process.poll() is not None:
+                # The watchdog killed it: a fresh daemon for the next class.
+                vitals.close()
+                daemon.cleanup()
+                daemon = Luxeld(args.luxeld, extra_args=args.extra).start()
+                vitals = Vitals(daemon.process.pid, kill_above)
+                suite.daemon, suite.vitals = daemon, vitals
             time.sleep(1)
             before = vitals.snapshot()
             first = len(suite.rows)
