@@ -132,8 +132,8 @@ ImportBudget::ImportBudget(ImportMemoryPool* pool, uint64_t max_bytes, uint64_t 
                            double timeout_s)
     : elements_left(max_elements), pool_(pool), timeout_s_(timeout_s) {
   if (pool_ == nullptr) {
-    own_pool_ = std::make_unique<ImportMemoryPool>(
-        max_bytes, "the import memory budget (--import-memory-budget)");
+    // (The CLI's budget is the default, ImportOptions::max_import_bytes.)
+    own_pool_ = std::make_unique<ImportMemoryPool>(max_bytes, "the import memory budget");
     pool_ = own_pool_.get();
   }
   const auto now = std::chrono::steady_clock::now();
@@ -180,8 +180,8 @@ void ImportBudget::release(uint64_t bytes) {
 Status ImportBudget::check_deadline(const std::string& where) const {
   if (std::chrono::steady_clock::now() < deadline_) return Status::ok();
   return deadline_exceeded(
-      strprintf("%s: the import ran past its time limit of %g s (--import-timeout)", where.c_str(),
-                timeout_s_ > 0 ? timeout_s_ : 0.0));
+      strprintf("%s: the import ran past its time limit of %g s (luxeld --import-timeout)",
+                where.c_str(), timeout_s_ > 0 ? timeout_s_ : 0.0));
 }
 
 }  // namespace detail
