@@ -265,7 +265,9 @@ Status decode_draco_primitive(GltfDocument* doc, size_t m, size_t p, DracoContex
   // .glb: up to 16 bytes per attribute element (VEC4 of floats) and 4 per
   // index, three times.
   LUXEL_RETURN_IF_ERROR(charge_bytes(
-      bytes, detail::mul_sat(detail::mul_sat(declared, 16) + detail::mul_sat(index_count, 4), 3),
+      bytes,
+      detail::mul_sat(
+          detail::add_sat(detail::mul_sat(declared, 16), detail::mul_sat(index_count, 4)), 3),
       what + strprintf(": %llu attribute elements, %llu indices",
                        static_cast<unsigned long long>(declared),
                        static_cast<unsigned long long>(index_count))));

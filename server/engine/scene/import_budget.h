@@ -138,14 +138,20 @@ class ScopedReservation {
     bytes_ += bytes;
     return Status::ok();
   }
+  // Takes over `bytes` the budget reserved already (released with the scope).
+  void adopt(uint64_t bytes) { bytes_ += bytes; }
 
  private:
   ImportBudget* budget_;
   uint64_t bytes_ = 0;
 };
 
-// a * b * c, saturating at UINT64_MAX (declared counts are untrusted).
+// a * b * c and a + b, saturating at UINT64_MAX (declared counts are
+// untrusted).
 uint64_t mul_sat(uint64_t a, uint64_t b, uint64_t c = 1);
+inline uint64_t add_sat(uint64_t a, uint64_t b) {
+  return a > UINT64_MAX - b ? UINT64_MAX : a + b;
+}
 
 }  // namespace detail
 }  // namespace luxel::scene

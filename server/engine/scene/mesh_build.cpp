@@ -72,7 +72,7 @@ Vec3 vec3_at(const std::vector<float>& v, size_t i) {
 // reserved before, so what stays reserved is the capacity.
 template <typename T>
 Status grow(std::vector<T>* v, uint64_t extra, ImportBudget* budget, const std::string& what) {
-  const uint64_t need = v->size() + extra;
+  const uint64_t need = add_sat(v->size(), extra);
   if (need <= v->capacity()) return Status::ok();
   const uint64_t cap = std::max<uint64_t>(need, 2 * uint64_t{v->capacity()});
   LUXEL_RETURN_IF_ERROR(budget->reserve(mul_sat(cap - v->capacity(), sizeof(T)), what));
@@ -92,16 +92,17 @@ Status reserve_primitive(const tinygltf::Primitive& prim, int mode, uint64_t ver
   // Generated index list, smooth normals; triangle list copy and kept list,
   // source triangles; tangent generation's positions, UVs and output.
   uint64_t bytes = mul_sat(vertices, prim.indices >= 0 ? 12 : 16);
-  bytes += mul_sat(triangles, 3 * 8 + 4);
-  if (tangents) bytes += mul_sat(vertices, 12 + 8 + 16);
+  bytes = add_sat(bytes, mul_sat(triangles, 3 * 8 + 4));
+  if (tangents) bytes = add_sat(bytes, mul_sat(vertices, 12 + 8 + 16));
   LUXEL_RETURN_IF_ERROR(work->reserve(bytes, what));
   LUXEL_RETURN_IF_ERROR(grow(&mesh->positions, vertices, budget, what));
   LUXEL_RETURN_IF_ERROR(grow(&mesh->normals, vertices, budget, what));
   LUXEL_RETURN_IF_ERROR(grow(&mesh->uv0, vertices, budget, what));
   LUXEL_RETURN_IF_ERROR(grow(&mesh->uv1, vertices, budget, what));
   if (file_uv1)
-    LUXEL_RETURN_IF_ERROR(
-        grow(&mesh->file_uv1, mesh->uv1.size() - mesh->file_uv1.size() + vertices, budget, what));
+    LUXEL_RETURN_IF_ERROR(grow(&mesh->file_uv1,
+                               add_sat(mesh->uv1.size() - mesh->file_uv1.size(), vertices), budget,
+                               what));
   if (tangents || !mesh->tangents.empty())
     LUXEL_RETURN_IF_ERROR(grow(
         &mesh->tangents, mesh->positions.size() - mesh->tangents.size() + vertices, budget, what));

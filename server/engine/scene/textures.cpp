@@ -160,10 +160,12 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   const uint64_t sample = is16 ? 2 : 1;
   const std::string what = strprintf("%s: %d x %d texels (%s, %d channel%s)", label.c_str(), w, h,
                                      is16 ? "16-bit" : "8-bit", channels, channels == 1 ? "" : "s");
-  LUXEL_RETURN_IF_ERROR(budget->reserve(mul_sat(pixels, 4 * sample), what));
+  const uint64_t kept = mul_sat(pixels, 4 * sample);
+  const uint64_t transient =
+      mul_sat(pixels, sample, 2 * static_cast<uint64_t>(std::max(channels, 1)) + 4);
+  LUXEL_RETURN_IF_ERROR(budget->reserve(add_sat(kept, transient), what));
   ScopedReservation decoding(budget);
-  LUXEL_RETURN_IF_ERROR(decoding.reserve(
-      mul_sat(pixels, sample, 2 * static_cast<uint64_t>(std::max(channels, 1)) + 4), what));
+  decoding.adopt(transient);
 
   const bool srgb = space == ColorSpace::kSRGB;
   int dw = 0, dh = 0, dc = 0;
