@@ -67,23 +67,22 @@ Vec3 vec3_at(const std::vector<float>& v, size_t i) {
   return {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
 }
 
-// Grows `v`'s capacity (doubling) so that `extra` more elements fit, the new
-// bytes reserved in `budget` first; the capacity freed by the move was
+// The capacity `v` grows to (doubling) so that `extra` more elements fit;
+// adds the bytes that adds to `bytes`. The capacity freed by the move was
 // reserved before, so what stays reserved is the capacity.
 template <typename T>
-Status grow(std::vector<T>* v, uint64_t extra, ImportBudget* budget, const std::string& what) {
-  const uint64_t need = add_sat(v->size(), extra);
-  if (need <= v->capacity()) return Status::ok();
-  const uint64_t cap = std::max<uint64_t>(need, 2 * uint64_t{v->capacity()});
-  LUXEL_RETURN_IF_ERROR(budget->reserve(mul_sat(cap - v->capacity(), sizeof(T)), what));
-  v->reserve(static_cast<size_t>(cap));
-  return Status::ok();
+uint64_t grown(const std::vector<T>& v, uint64_t extra, uint64_t* bytes) {
+  const uint64_t need = add_sat(v.size(), extra);
+  if (need <= v.capacity()) return v.capacity();
+  const uint64_t cap = std::max<uint64_t>(need, 2 * uint64_t{v.capacity()});
+  *bytes = add_sat(*bytes, mul_sat(cap - v.capacity(), sizeof(T)));
+  return cap;
 }
 
 // Reserves what a primitive of `vertices` vertices and `list` index-list
-// entries (its indices accessor, or the vertices) will allocate, before any
-// of it is read: the mesh arrays it appends to (kept) and its working arrays
-// (released with `work`).
+// entries (its indices accessor, or the vertices) will allocate, in one
+// request before any of it is allocated or read: the mesh arrays it appends
+// to (kept for the import) and its working arrays (released with `work`).
 Status reserve_primitive(const tinygltf::Primitive& prim, int mode, uint64_t vertices,
                          uint64_t list, const std::string& what, bool file_uv1, bool tangents,
                          ImportBudget* budget, ScopedReservation* work, Mesh* mesh) {
@@ -91,24 +90,38 @@ Status reserve_primitive(const tinygltf::Primitive& prim, int mode, uint64_t ver
       mode == TINYGLTF_MODE_TRIANGLES ? list / 3 : (list >= 3 ? list - 2 : 0);
   // Generated index list, smooth normals; triangle list copy and kept list,
   // source triangles; tangent generation's positions, UVs and output.
-  uint64_t bytes = mul_sat(vertices, prim.indices >= 0 ? 12 : 16);
-  bytes = add_sat(bytes, mul_sat(triangles, 3 * 8 + 4));
-  if (tangents) bytes = add_sat(bytes, mul_sat(vertices, 12 + 8 + 16));
-  LUXEL_RETURN_IF_ERROR(work->reserve(bytes, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->positions, vertices, budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->normals, vertices, budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->uv0, vertices, budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->uv1, vertices, budget, what));
-  if (file_uv1)
-    LUXEL_RETURN_IF_ERROR(grow(&mesh->file_uv1,
-                               add_sat(mesh->uv1.size() - mesh->file_uv1.size(), vertices), budget,
-                               what));
-  if (tangents || !mesh->tangents.empty())
-    LUXEL_RETURN_IF_ERROR(grow(
-        &mesh->tangents, mesh->positions.size() - mesh->tangents.size() + vertices, budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->indices, mul_sat(triangles, 3), budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->source_triangle, triangles, budget, what));
-  LUXEL_RETURN_IF_ERROR(grow(&mesh->triangle_material, triangles, budget, what));
+  uint64_t working = mul_sat(vertices, prim.indices >= 0 ? 12 : 16);
+  working = add_sat(working, mul_sat(triangles, 3 * 8 + 4));
+  if (tangents) working = add_sat(working, mul_sat(vertices, 12 + 8 + 16));
+  uint64_t kept = 0;
+  const uint64_t positions = grown(mesh->positions, vertices, &kept);
+  const uint64_t normals = grown(mesh->normals, vertices, &kept);
+  const uint64_t uv0 = grown(mesh->uv0, vertices, &kept);
+  const uint64_t uv1 = grown(mesh->uv1, vertices, &kept);
+  const uint64_t file_uv1_cap =
+      file_uv1 ? grown(mesh->file_uv1, add_sat(mesh->uv1.size() - mesh->file_uv1.size(), vertices),
+                       &kept)
+               : 0;
+  const bool with_tangents = tangents || !mesh->tangents.empty();
+  const uint64_t tangents_cap =
+      with_tangents
+          ? grown(mesh->tangents, add_sat(mesh->positions.size() - mesh->tangents.size(), vertices),
+                  &kept)
+          : 0;
+  const uint64_t indices = grown(mesh->indices, mul_sat(triangles, 3), &kept);
+  const uint64_t sources = grown(mesh->source_triangle, triangles, &kept);
+  const uint64_t materials = grown(mesh->triangle_material, triangles, &kept);
+  LUXEL_RETURN_IF_ERROR(budget->reserve(add_sat(working, kept), what));
+  work->adopt(working);
+  mesh->positions.reserve(static_cast<size_t>(positions));
+  mesh->normals.reserve(static_cast<size_t>(normals));
+  mesh->uv0.reserve(static_cast<size_t>(uv0));
+  mesh->uv1.reserve(static_cast<size_t>(uv1));
+  if (file_uv1) mesh->file_uv1.reserve(static_cast<size_t>(file_uv1_cap));
+  if (with_tangents) mesh->tangents.reserve(static_cast<size_t>(tangents_cap));
+  mesh->indices.reserve(static_cast<size_t>(indices));
+  mesh->source_triangle.reserve(static_cast<size_t>(sources));
+  mesh->triangle_material.reserve(static_cast<size_t>(materials));
   return Status::ok();
 }
 
