@@ -167,7 +167,7 @@ def main(argv):
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="import_limits_"))
     makers = {"zeros": lambda: [zeros_gltf()], "instances": lambda: [instances_gltf()],
               "png": lambda: [png_gltf(1)], "png4": lambda: [png_gltf(10 + i) for i in range(4)]}
-    print("| luxeld | case | file KB | RSS before MB | peak MB | +MB | seconds | result |")
+    print("| luxeld | case | file KB | RSS before MiB | peak MiB | +MiB | seconds | result |")
     print("|---|---|---:|---:|---:|---:|---:|---|")
     for case in args.cases.split(","):
         files = []
