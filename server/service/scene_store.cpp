@@ -155,7 +155,9 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
             ? st.code()
             : StatusCode::kInvalidArgument;
     return Status(
-        code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
+        code, strprintf(code == StatusCode::kInvalidArgument ? "scene '%s' failed validation: %s"
+                                                             : "scene '%s' was not imported: %s",
+                        header.name().c_str(),
                         without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
   }
   const scene::SceneStats stats = scene::compute_stats(imported.value());
