@@ -584,6 +584,35 @@ bool is_supported_extension(const std::string& name) {
 
 Status convert_materials(const tinygltf::Model& model, const ImportOptions& options,
                          ImportBudget* budget, Scene* scene) {
+  if (options.decode_textures && !model.materials.empty()) {
+    // The texels every texture's image keeps, from their headers, checked
+    // against the budget before the first is decoded (each decode reserves
+    // its own again): a file whose images do not fit together is refused
+    // without decoding any. The images of textures no material uses are
+    // counted too.
+    std::vector<uint8_t> counted(model.images.size(), 0);
+    uint64_t bytes = 0;
+    size_t images = 0;
+    std::string named;
+    for (const auto& t : model.textures) {
+      if (t.source < 0 || static_cast<size_t>(t.source) >= model.images.size() ||
+          counted[static_cast<size_t>(t.source)]++)
+        continue;
+      int w = 0, h = 0;
+      const uint64_t b = declared_texel_bytes(model, t.source, options, &w, &h);
+      if (b == 0) continue;
+      bytes = add_sat(bytes, b);
+      if (++images <= 4)
+        named += strprintf("%s%s (%d x %d)", named.empty() ? "" : ", ",
+                           image_label(model, t.source).c_str(), w, h);
+    }
+    if (images > 4) named += strprintf(" and %zu more", images - 4);
+    if (bytes > 0) {
+      LUXEL_RETURN_IF_ERROR(budget->reserve(
+          bytes, strprintf("%s: decoded texels of the textures' images", named.c_str())));
+      budget->release(bytes);
+    }
+  }
   TextureTable table(model, options, budget, scene);
   for (size_t i = 0; i < model.materials.size(); ++i) {
     auto m = convert(model, static_cast<int>(i), &table);

@@ -90,6 +90,30 @@ std::string image_label(const tinygltf::Model& model, int image) {
   return n.empty() ? strprintf("image %d", image) : strprintf("image %d '%s'", image, n.c_str());
 }
 
+uint64_t declared_texel_bytes(const tinygltf::Model& model, int image, const ImportOptions& options,
+                              int* w, int* h) {
+  if (image < 0 || static_cast<size_t>(image) >= model.images.size()) return 0;
+  const auto& img = model.images[static_cast<size_t>(image)];
+  std::string_view encoded;
+  if (img.bufferView >= 0) {
+    auto bytes = buffer_view_bytes(model, img.bufferView, "");
+    if (!bytes) return 0;
+    encoded = *bytes;
+  } else {
+    encoded = std::string_view(reinterpret_cast<const char*>(img.image.data()), img.image.size());
+  }
+  if (encoded.empty() || encoded.size() > static_cast<size_t>(INT_MAX)) return 0;
+  const auto* data = reinterpret_cast<const stbi_uc*>(encoded.data());
+  const int size = static_cast<int>(encoded.size());
+  int channels = 0;
+  if (!stbi_info_from_memory(data, size, w, h, &channels) || *w <= 0 || *h <= 0 ||
+      *w > options.max_image_side || *h > options.max_image_side)
+    return 0;
+  const uint64_t pixels = static_cast<uint64_t>(*w) * static_cast<uint64_t>(*h);
+  if (pixels > options.max_image_pixels) return 0;
+  return mul_sat(pixels, 4, stbi_is_16_bit_from_memory(data, size) ? 2 : 1);
+}
+
 Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpace space,
                                const ImportOptions& options, uint64_t* pixel_budget,
                                ImportBudget* budget) {

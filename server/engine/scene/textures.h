@@ -21,6 +21,13 @@ float srgb8_to_linear(uint8_t code);
 // "image 3 'bricks'" / "image 3" for messages.
 std::string image_label(const tinygltf::Model& model, int image);
 
+// The bytes decoding image `image` keeps (4 per texel, 8 for 16-bit
+// images) from its header alone; 0 when the image has no data or no header
+// stb_image reads or over the per-image limits (decode_texture reports
+// those). `w`, `h`: the header's size.
+uint64_t declared_texel_bytes(const tinygltf::Model& model, int image, const ImportOptions& options,
+                              int* w, int* h);
+
 // Decodes glTF image `image`. 8-bit images keep their codes; 16-bit images
 // are linearized (colour channels through the sRGB EOTF when `space` is
 // kSRGB; alpha is always linear) and stored as halves. With options.decode_textures false only the

@@ -105,9 +105,16 @@ TEST(ImportBudget, ZeroPngBombIsRefusedNamingTheImage) {
        {"emissiveTexture", {{"index", 2}}},
        {"occlusionTexture", {{"index", 3}}}});
   b.doc["meshes"][0]["primitives"][0]["material"] = 0;
+  // Refused from the images' headers, before the first is decoded.
   expect_error(load(b.gltf_embedded(), budget_of(512 * kMiB)), StatusCode::kResourceExhausted,
-               {"image 0", "16384 x 4000 texels", "8-bit, 1 channel", "the import memory budget",
-                "512.0 MiB"});
+               {"image 0 (16384 x 4000), image 1 (16384 x 4000), image 2 (16384 x 4000), image 3 "
+                "(16384 x 4000)",
+                "1000.0 MiB", "the import memory budget", "512.0 MiB"});
+  // The four images' texels (1000 MiB) fit 1 GiB, but not with stb_image's
+  // buffers for the third, whose decode is refused before it allocates.
+  expect_error(load(b.gltf_embedded(), budget_of(1024 * kMiB)), StatusCode::kResourceExhausted,
+               {"image 2", "16384 x 4000 texels", "8-bit, 1 channel", "the import memory budget",
+                "1.0 GiB"});
   // Sizes only (decode_textures false): nothing to reserve.
   ImportOptions sizes = budget_of(512 * kMiB);
   sizes.decode_textures = false;
