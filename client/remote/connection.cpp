@@ -116,6 +116,12 @@ int Connection::fail(const char* cmd, const grpc::Status& st) const {
                    options_.server.c_str(), code, msg.c_str());
       break;
     case grpc::StatusCode::DEADLINE_EXCEEDED:
+      // The daemon's own limits (--import-timeout, --upload-timeout) send a
+      // message of their own; gRPC's for this client's deadline is this one.
+      if (msg != "Deadline Exceeded") {
+        std::fprintf(stderr, "luxel %s: %s: %s\n", cmd, code, msg.c_str());
+        break;
+      }
       std::fprintf(stderr, "luxel %s: luxeld at %s did not answer within %g s (%s): %s\n", cmd,
                    options_.server.c_str(), options_.timeout_s, code, msg.c_str());
       break;

@@ -42,6 +42,11 @@ const char* kDaemonUsage =
     "  --allow-readable-token-file  start anyway when it is (with a warning)\n"
     "  --tls-cert PEM --tls-key PEM   serve TLS instead of plaintext\n"
     "  --max-upload-bytes N      largest scene upload, main file + resources (default 1 GiB)\n"
+    "  --import-memory-budget B  bytes every upload and scene import running at once may\n"
+    "                            allocate, e.g. 3GiB, 512MiB (default 1/8 of the machine's\n"
+    "                            or cgroup's memory); past it RESOURCE_EXHAUSTED\n"
+    "  --import-timeout S        seconds one scene import may run (default 300); past it\n"
+    "                            DEADLINE_EXCEEDED\n"
     "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
     "  --max-queued N            most bakes waiting in the queue (default 256)\n"
     "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
@@ -132,6 +137,16 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--max-upload-bytes") {
       LUXEL_RETURN_IF_ERROR(number(1, 1e15, &x));
       c.max_upload_bytes = uint64_t(x);
+    } else if (k == "--import-memory-budget") {
+      LUXEL_RETURN_IF_ERROR(value());
+      auto bytes = scene::parse_byte_size(v);
+      if (!bytes) return invalid_argument(k + ": " + bytes.status().message());
+      if (*bytes < (uint64_t{1} << 20))
+        return invalid_argument(k + ": '" + v + "' is below the smallest budget, 1MiB");
+      c.import_memory_budget = *bytes;
+    } else if (k == "--import-timeout") {
+      LUXEL_RETURN_IF_ERROR(number(0.001, 1e6, &x));
+      c.import_timeout_s = x;
     } else if (k == "--max-resolution") {
       LUXEL_RETURN_IF_ERROR(number(1, 65536, &x));
       c.max_resolution = int(x);

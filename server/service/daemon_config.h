@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/status.h"
+#include "scene/import_budget.h"
 #include "service/stream_limits.h"
 
 namespace luxel::service {
@@ -26,6 +27,11 @@ struct DaemonConfig {
   std::vector<std::string> warnings;  // for main() to log once logging is set up
   std::string tls_cert, tls_key;      // PEM files; both or neither
   uint64_t max_upload_bytes = uint64_t{1} << 30;
+  // Bytes all imports running at once may allocate (scene/import_budget.h;
+  // default 1/8 of the machine's or the cgroup's memory) and the seconds one
+  // import may run.
+  uint64_t import_memory_budget = scene::default_import_memory_budget();
+  double import_timeout_s = 300;
   int max_resolution = 4096;
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;

@@ -55,6 +55,8 @@ grpc::Status to_grpc(const Status& status) {
       return {grpc::StatusCode::RESOURCE_EXHAUSTED, status.message()};
     case StatusCode::kUnavailable:
       return {grpc::StatusCode::UNAVAILABLE, status.message()};
+    case StatusCode::kDeadlineExceeded:
+      return {grpc::StatusCode::DEADLINE_EXCEEDED, status.message()};
     case StatusCode::kInternal:
       return {grpc::StatusCode::INTERNAL, status.message()};
     case StatusCode::kUnauthenticated:

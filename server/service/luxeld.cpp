@@ -67,7 +67,16 @@ int run(const DaemonConfig& config) {
     log_event("fatal", {{"error", lock.status().to_string()}});
     return 1;
   }
-  auto scenes = SceneStore::open(config.data_dir);
+  // One budget for every import at once: uploads being validated and stored
+  // scenes imported for a bake (docs/operations.md "Import budgets").
+  scene::ImportMemoryPool import_pool(config.import_memory_budget,
+                                      "the daemon's import memory budget (--import-memory-budget)");
+  scene::ImportOptions import;
+  import.memory_pool = &import_pool;
+  import.timeout_seconds = config.import_timeout_s;
+  log_event("import_budget", {{"bytes", std::to_string(config.import_memory_budget)},
+                              {"timeout_s", strprintf("%g", config.import_timeout_s)}});
+  auto scenes = SceneStore::open(config.data_dir, {}, {}, import);
   if (!scenes) {
     log_event("fatal", {{"error", scenes.status().to_string()}});
     return 1;

@@ -26,10 +26,10 @@ uint64_t scene_bytes(const scene::Scene& scene) {
   return n;
 }
 
-SceneCache::SceneCache(SceneCacheLimits limits, Importer importer)
+SceneCache::SceneCache(SceneCacheLimits limits, Importer importer, scene::ImportOptions import)
     : limits_(limits),
-      importer_(importer ? std::move(importer) : Importer([](const std::string& path) {
-        return scene::import_gltf_file(path);
+      importer_(importer ? std::move(importer) : Importer([import](const std::string& path) {
+        return scene::import_gltf_file(path, import);
       })) {}
 
 Result<scene::Scene> SceneCache::import(const std::string& path) {

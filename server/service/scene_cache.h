@@ -21,6 +21,7 @@
 #include <string>
 
 #include "common/status.h"
+#include "scene/gltf_import.h"
 #include "scene/scene.h"
 
 namespace luxel::service {
@@ -39,7 +40,10 @@ class SceneCache {
   // Imports the main file at `path` (scene::import_gltf_file by default).
   using Importer = std::function<Result<scene::Scene>(const std::string& path)>;
 
-  explicit SceneCache(SceneCacheLimits limits = {}, Importer importer = {});
+  // `import`: the default importer's options (the daemon's shared import
+  // memory pool and timeout, scene/import_budget.h).
+  explicit SceneCache(SceneCacheLimits limits = {}, Importer importer = {},
+                      scene::ImportOptions import = {});
 
   // Runs the importer (counted in imports()) without caching the result.
   Result<scene::Scene> import(const std::string& path);

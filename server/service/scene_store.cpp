@@ -54,15 +54,18 @@ std::string scene_id_of(const v1::SceneUploadHeader& header) {
   return scene_id(header.sha256(), std::move(resources));
 }
 
-SceneStore::SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer)
+SceneStore::SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer,
+                       scene::ImportOptions import)
     : scenes_dir_(data_dir + "/scenes"),
       staging_dir_(data_dir + "/staging"),
-      cache_(cache, std::move(importer)) {}
+      cache_(cache, std::move(importer), std::move(import)) {}
 
 Result<std::unique_ptr<SceneStore>> SceneStore::open(const std::string& data_dir,
                                                      SceneCacheLimits cache,
-                                                     SceneCache::Importer importer) {
-  std::unique_ptr<SceneStore> store(new SceneStore(data_dir, cache, std::move(importer)));
+                                                     SceneCache::Importer importer,
+                                                     scene::ImportOptions import) {
+  std::unique_ptr<SceneStore> store(
+      new SceneStore(data_dir, cache, std::move(importer), std::move(import)));
   LUXEL_RETURN_IF_ERROR(make_directories(store->scenes_dir_));
   LUXEL_RETURN_IF_ERROR(make_directories(store->staging_dir_));
   std::error_code ec;
@@ -145,11 +148,16 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
   auto imported = cache_.import(main_path);
   if (!imported) {
     const Status& st = imported.status();
-    // Whatever the importer says, the upload is what is wrong.
+    // Whatever the importer says, the upload is what is wrong, unless it ran
+    // into a limit (the import memory budget, the import timeout).
     const StatusCode code =
-        st.code() == StatusCode::kResourceExhausted ? st.code() : StatusCode::kInvalidArgument;
+        st.code() == StatusCode::kResourceExhausted || st.code() == StatusCode::kDeadlineExceeded
+            ? st.code()
+            : StatusCode::kInvalidArgument;
     return Status(
-        code, strprintf("scene '%s' failed validation: %s", header.name().c_str(),
+        code, strprintf(code == StatusCode::kInvalidArgument ? "scene '%s' failed validation: %s"
+                                                             : "scene '%s' was not imported: %s",
+                        header.name().c_str(),
                         without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
   }
   const scene::SceneStats stats = scene::compute_stats(imported.value());

@@ -35,10 +35,13 @@ class SceneStore {
  public:
   // Creates the folders, removes stale staging folders, loads every scene's
   // info. `cache` bounds the imported scenes kept in memory (SceneCache);
-  // `importer` replaces scene::import_gltf_file (tests).
+  // `importer` replaces scene::import_gltf_file (tests); `import` are its
+  // options otherwise (the daemon's import memory pool, which must outlive
+  // the store, and timeout).
   static Result<std::unique_ptr<SceneStore>> open(const std::string& data_dir,
                                                   SceneCacheLimits cache = {},
-                                                  SceneCache::Importer importer = {});
+                                                  SceneCache::Importer importer = {},
+                                                  scene::ImportOptions import = {});
 
   // A new, empty staging folder for one upload.
   Result<std::string> new_staging_dir();
@@ -49,9 +52,10 @@ class SceneStore {
   // Takes a staging folder whose files are verified (size and sha256): when
   // the scene is already stored, removes the folder and returns the stored
   // info with already_stored = true; otherwise imports and validates the main
-  // file (INVALID_ARGUMENT naming what fails), writes info.json and moves the
-  // folder into place. The folder is gone afterwards in every case. The
-  // validated import is kept in the scene cache for the first bake.
+  // file (INVALID_ARGUMENT naming what fails; RESOURCE_EXHAUSTED over the
+  // import memory budget, DEADLINE_EXCEEDED past the import timeout), writes info.json and moves
+  // the folder into place. The folder is gone afterwards in every case. The validated import is
+  // kept in the scene cache for the first bake.
   Result<v1::SceneInfo> commit(const std::string& staging_dir, const v1::SceneUploadHeader& header,
                                uint64_t stored_bytes);
 
@@ -70,7 +74,8 @@ class SceneStore {
   size_t size() const;
 
  private:
-  SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer);
+  SceneStore(std::string data_dir, SceneCacheLimits cache, SceneCache::Importer importer,
+             scene::ImportOptions import);
   std::string scene_dir(const std::string& scene_id) const;
 
   std::string scenes_dir_, staging_dir_;

@@ -21,6 +21,7 @@ enum class StatusCode {
   kDataLoss,           // truncated or corrupt data
   kResourceExhausted,  // a limit was hit (memory, size)
   kUnavailable,        // no OpenCL device / driver failure
+  kDeadlineExceeded,   // a time limit was hit (an import's --import-timeout)
   kInternal,           // a bug or an unexpected driver error
   kUnauthenticated,    // credentials refused (a coordinator's token at a worker)
 };
@@ -59,6 +60,9 @@ inline Status data_loss(std::string m) {
 }
 inline Status resource_exhausted(std::string m) {
   return {StatusCode::kResourceExhausted, std::move(m)};
+}
+inline Status deadline_exceeded(std::string m) {
+  return {StatusCode::kDeadlineExceeded, std::move(m)};
 }
 inline Status unavailable(std::string m) {
   return {StatusCode::kUnavailable, std::move(m)};

@@ -3,6 +3,7 @@
 // (index, value) pairs replace elements, as the glTF spec describes.
 #include "scene/accessor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -175,9 +176,12 @@ Status locate(const tinygltf::Model& model, int view, uint64_t byte_offset, uint
 
 // Validates and reads the raw components of an accessor (with sparse
 // substitution) as doubles; the caller interprets them.
+// `staging` reserves the doubles; `out_reserved` the caller's result, 4
+// bytes per component.
 Status read_components(const tinygltf::Model& model, int index, const char* semantic, int type,
                        unsigned allowed, unsigned unnormalized, const std::string& ctx,
-                       uint64_t* budget, std::vector<double>* out) {
+                       ImportBudget* budget, ScopedReservation* staging,
+                       ScopedReservation* out_reserved, std::vector<double>* out) {
   const std::string who = strprintf("%s: accessor %d (%s)", ctx.c_str(), index, semantic);
   if (index < 0 || static_cast<size_t>(index) >= model.accessors.size()) {
     return invalid_argument(strprintf("%s: accessor %d (%s) does not exist (%zu accessors)",
@@ -205,11 +209,11 @@ Status read_components(const tinygltf::Model& model, int index, const char* sema
                                       semantic));
   }
   const uint64_t count = acc.count;
-  if (count > *budget) {
+  if (count > budget->elements_left) {
     return resource_exhausted(strprintf("%s: count %llu exceeds the import's element limit",
                                         who.c_str(), static_cast<unsigned long long>(count)));
   }
-  *budget -= count;
+  budget->elements_left -= count;
   const auto comps = static_cast<uint64_t>(type_components(type));
   const uint64_t csize = component_size(acc.componentType);
   const uint64_t elem = comps * csize;
@@ -219,11 +223,20 @@ Status read_components(const tinygltf::Model& model, int index, const char* sema
     LUXEL_RETURN_IF_ERROR(
         locate(model, acc.bufferView, acc.byteOffset, count, elem, true, who, &run));
   }
+  {
+    const std::string what = strprintf("%s: %llu elements of %s", who.c_str(),
+                                       static_cast<unsigned long long>(count), type_name(type));
+    LUXEL_RETURN_IF_ERROR(staging->reserve(mul_sat(count, comps, kStagingBytesPerComponent), what));
+    LUXEL_RETURN_IF_ERROR(
+        out_reserved->reserve(mul_sat(count, comps, kFloatBytesPerComponent), what));
+  }
   // Without a bufferView the base values are zeros (spec); their memory is
   // bounded by the element budget checked above, not by the file size.
   out->assign(count * comps, 0.0);
   if (run.base != nullptr) {
     for (uint64_t i = 0; i < count; ++i) {
+      if (i % kDeadlineStride == kDeadlineStride - 1)
+        LUXEL_RETURN_IF_ERROR(budget->check_deadline(who));
       const uint8_t* p = run.base + i * run.stride;
       for (uint64_t c = 0; c < comps; ++c)
         (*out)[i * comps + c] = load_component(p + c * csize, acc.componentType, acc.normalized);
@@ -324,12 +337,25 @@ Result<std::string_view> buffer_view_bytes(const tinygltf::Model& model, int vie
                           bv.byteLength);
 }
 
+uint64_t declared_count(const tinygltf::Model& model, int index) {
+  if (index < 0 || static_cast<size_t>(index) >= model.accessors.size()) return 0;
+  const auto& acc = model.accessors[static_cast<size_t>(index)];
+  if (acc.bufferView < 0) return acc.count;
+  const uint64_t elem = static_cast<uint64_t>(std::max(type_components(acc.type), 1)) *
+                        std::max<uint64_t>(component_size(acc.componentType), 1);
+  Run run;
+  if (!locate(model, acc.bufferView, acc.byteOffset, acc.count, elem, true, "", &run).is_ok())
+    return 0;
+  return acc.count;
+}
+
 Status read_floats(const tinygltf::Model& model, int index, const char* semantic, int type,
                    unsigned normalized, unsigned unnormalized, const std::string& ctx,
-                   uint64_t* budget, std::vector<float>* out) {
+                   ImportBudget* budget, ScopedReservation* out_reserved, std::vector<float>* out) {
+  ScopedReservation staging(budget);
   std::vector<double> values;
   LUXEL_RETURN_IF_ERROR(read_components(model, index, semantic, type, normalized, unnormalized, ctx,
-                                        budget, &values));
+                                        budget, &staging, out_reserved, &values));
   const auto comps = static_cast<size_t>(type_components(type));
   out->resize(values.size());
   for (size_t i = 0; i < values.size(); ++i) {
@@ -347,10 +373,13 @@ Status read_floats(const tinygltf::Model& model, int index, const char* semantic
 }
 
 Status read_indices(const tinygltf::Model& model, int index, const std::string& ctx,
-                    uint64_t* budget, std::vector<uint32_t>* out) {
+                    ImportBudget* budget, ScopedReservation* out_reserved,
+                    std::vector<uint32_t>* out) {
+  ScopedReservation staging(budget);
   std::vector<double> values;
   LUXEL_RETURN_IF_ERROR(read_components(model, index, "indices", TINYGLTF_TYPE_SCALAR,
-                                        kCompU8 | kCompU16 | kCompU32, 0, ctx, budget, &values));
+                                        kCompU8 | kCompU16 | kCompU32, 0, ctx, budget, &staging,
+                                        out_reserved, &values));
   out->resize(values.size());
   for (size_t i = 0; i < values.size(); ++i) (*out)[i] = static_cast<uint32_t>(values[i]);
   return Status::ok();

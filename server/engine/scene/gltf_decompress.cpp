@@ -50,13 +50,22 @@ Status charge(uint64_t n, uint64_t* budget, const std::string& what) {
   return Status::ok();
 }
 
+// Reserves the bytes a decode will produce (kept until the import ends: the
+// decoded document becomes the .glb that is loaded) and checks the deadline.
+Status charge_bytes(detail::ImportBudget* budget, uint64_t bytes, const std::string& what) {
+  if (budget == nullptr) return Status::ok();
+  LUXEL_RETURN_IF_ERROR(budget->check_deadline(what));
+  return budget->reserve(bytes, what);
+}
+
 // ---- EXT_meshopt_compression -------------------------------------------
 
 // One compressed bufferView, decoded and appended; the view then points to
 // the decoded bytes. The checks are the README's "JSON schema updates"
 // (the conditions for a valid extension object); meshoptimizer asserts
 // rather than reports most of them.
-Status decode_meshopt_view(GltfDocument* doc, size_t index, uint64_t* budget) {
+Status decode_meshopt_view(GltfDocument* doc, size_t index, uint64_t* budget,
+                           detail::ImportBudget* bytes) {
   json& view = doc->json["bufferViews"][index];
   const json& e = view["extensions"][kMeshoptExtension];
   const std::string what = strprintf("bufferViews[%zu] (%s)", index, kMeshoptExtension);
@@ -108,6 +117,11 @@ Status decode_meshopt_view(GltfDocument* doc, size_t index, uint64_t* budget) {
         "buffer",
         static_cast<unsigned long long>(offset), static_cast<unsigned long long>(length)));
   LUXEL_RETURN_IF_ERROR(charge(count, budget, what));
+  // The decoded view, and its copy in the .glb written from the document.
+  LUXEL_RETURN_IF_ERROR(charge_bytes(
+      bytes, detail::mul_sat(count, stride, 2),
+      what + strprintf(": %llu elements of %llu bytes", static_cast<unsigned long long>(count),
+                       static_cast<unsigned long long>(stride))));
 
   Bytes out(count * stride);
   const unsigned char* src = doc->bin.data() + offset;
@@ -200,7 +214,7 @@ json* target_accessor(GltfDocument* doc, DracoContext* ctx, json* slot) {
 }
 
 Status decode_draco_primitive(GltfDocument* doc, size_t m, size_t p, DracoContext* ctx,
-                              uint64_t* budget) {
+                              uint64_t* budget, detail::ImportBudget* bytes) {
   json& mesh = doc->json["meshes"][m];
   json& prim = mesh["primitives"][p];
   const std::string name = mesh.value("name", std::string());
@@ -247,6 +261,16 @@ Status decode_draco_primitive(GltfDocument* doc, size_t m, size_t p, DracoContex
   if (prim.contains("indices") && !accessor_of(prim["indices"], &index_count))
     return bad("indices: no valid accessor");
   LUXEL_RETURN_IF_ERROR(charge(declared + index_count, budget, what));
+  // Draco's decoded mesh, the converted accessor data and its copy in the
+  // .glb: up to 16 bytes per attribute element (VEC4 of floats) and 4 per
+  // index, three times.
+  LUXEL_RETURN_IF_ERROR(charge_bytes(
+      bytes,
+      detail::mul_sat(
+          detail::add_sat(detail::mul_sat(declared, 16), detail::mul_sat(index_count, 4)), 3),
+      what + strprintf(": %llu attribute elements, %llu indices",
+                       static_cast<unsigned long long>(declared),
+                       static_cast<unsigned long long>(index_count))));
 
   const json& view = doc->json["bufferViews"][view_index];
   uint64_t offset = 0, length = 0;
@@ -385,12 +409,12 @@ bool uses_compressed_geometry(const json& doc) {
   return false;
 }
 
-Status decompress_geometry(GltfDocument* doc, uint64_t max_elements) {
+Status decompress_geometry(GltfDocument* doc, uint64_t max_elements, detail::ImportBudget* bytes) {
   json& j = doc->json;
   uint64_t budget = max_elements;
   for (size_t v = 0; v < j["bufferViews"].size(); ++v)
     if (has_extension(j["bufferViews"][v], kMeshoptExtension))
-      LUXEL_RETURN_IF_ERROR(decode_meshopt_view(doc, v, &budget));
+      LUXEL_RETURN_IF_ERROR(decode_meshopt_view(doc, v, &budget, bytes));
   if (j.contains("buffers") && j["buffers"].is_array())
     for (json& b : j["buffers"])
       if (has_extension(b, kMeshoptExtension)) erase_extension(&b, kMeshoptExtension);
@@ -403,7 +427,7 @@ Status decompress_geometry(GltfDocument* doc, uint64_t max_elements) {
         continue;
       for (size_t p = 0; p < mesh["primitives"].size(); ++p)
         if (has_extension(mesh["primitives"][p], kDracoExtension))
-          LUXEL_RETURN_IF_ERROR(decode_draco_primitive(doc, m, p, &ctx, &budget));
+          LUXEL_RETURN_IF_ERROR(decode_draco_primitive(doc, m, p, &ctx, &budget, bytes));
     }
   }
   // Nothing uses either extension any more (every use was decoded above).

@@ -34,6 +34,7 @@
 
 #include "common/status.h"
 #include "scene/gltf_document.h"
+#include "scene/import_budget.h"
 
 namespace luxel::scene {
 
@@ -47,8 +48,11 @@ bool uses_compressed_geometry(const nlohmann::json& doc);
 // Rewrites `doc` into the equivalent plain document. `max_elements` bounds
 // the decoded elements over the document: vertices of every Draco primitive
 // (once per decoded attribute), indices, and meshopt bufferView elements
-// (ImportOptions::max_accessor_elements for the importer).
+// (ImportOptions::max_accessor_elements for the importer). With `budget`, the
+// decoded bytes are reserved in it from the declared counts before decoding
+// (scene/import_budget.h) and its deadline is checked per view / primitive.
 Status decompress_geometry(GltfDocument* doc,
-                           uint64_t max_elements = std::numeric_limits<uint64_t>::max());
+                           uint64_t max_elements = std::numeric_limits<uint64_t>::max(),
+                           detail::ImportBudget* budget = nullptr);
 
 }  // namespace luxel::scene

@@ -20,6 +20,9 @@ namespace luxel::scene {
 namespace {
 
 using detail::build_mesh;
+using detail::ImportBudget;
+using detail::kDeadlineStride;
+using detail::ScopedReservation;
 
 // Material-level extensions are listed in materials.cpp; these are read by
 // mesh_build.cpp and instantiate() below.
@@ -81,7 +84,7 @@ Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
 // from its TRANSLATION / ROTATION / SCALE accessors (each optional, all of
 // one count), to be applied before the node's own world transform. Empty
 // when the node does not use the extension.
-Status instance_transforms(const tinygltf::Model& model, int node_index, uint64_t* budget,
+Status instance_transforms(const tinygltf::Model& model, int node_index, ImportBudget* budget,
                            std::vector<Mat4>* out) {
   out->clear();
   const auto& node = model.nodes[static_cast<size_t>(node_index)];
@@ -106,11 +109,27 @@ Status instance_transforms(const tinygltf::Model& model, int node_index, uint64_
                {"SCALE", TINYGLTF_TYPE_VEC3, kCompF32 | kInts, kInts, {}}};
   size_t count = 0;
   bool any = false;
+  // The instances themselves (records, names, transforms) are reserved from
+  // the declared count before their attributes are read: a million
+  // instances are 8 KB of JSON.
+  for (auto& a : attrs) {
+    const tinygltf::Value& v = attributes.Get(a.name);
+    if (!v.IsNumber() && !v.IsInt()) continue;
+    const int acc = v.GetNumberAsInt();
+    if (acc < 0 || static_cast<size_t>(acc) >= model.accessors.size()) continue;  // read_floats
+    const uint64_t declared = declared_count(model, acc);
+    LUXEL_RETURN_IF_ERROR(
+        budget->reserve(mul_sat(declared, bytes_per_instance()),
+                        strprintf("%s: accessor %d (%s): %llu instances", ctx.c_str(), acc, a.name,
+                                  static_cast<unsigned long long>(declared))));
+    break;
+  }
+  ScopedReservation values(budget);
   for (auto& a : attrs) {
     const tinygltf::Value& v = attributes.Get(a.name);
     if (!v.IsNumber() && !v.IsInt()) continue;
     LUXEL_RETURN_IF_ERROR(read_floats(model, v.GetNumberAsInt(), a.name, a.type, a.normalized,
-                                      a.unnormalized, ctx, budget, &a.values));
+                                      a.unnormalized, ctx, budget, &values, &a.values));
     const size_t n = a.values.size() / (a.type == TINYGLTF_TYPE_VEC4 ? 4 : 3);
     if (any && n != count) {
       return invalid_argument(strprintf("%s: %s has %zu elements, the other attributes %zu",
@@ -122,6 +141,7 @@ Status instance_transforms(const tinygltf::Model& model, int node_index, uint64_
   if (!any) return invalid_argument(ctx + ": none of TRANSLATION, ROTATION, SCALE is given");
   out->reserve(count);
   for (size_t i = 0; i < count; ++i) {
+    if (i % kDeadlineStride == 0) LUXEL_RETURN_IF_ERROR(budget->check_deadline(ctx));
     double t[3] = {0, 0, 0}, q[4] = {0, 0, 0, 1}, sc[3] = {1, 1, 1};
     for (size_t k = 0; k < 3; ++k) {
       if (attrs[0].present) t[k] = attrs[0].values[3 * i + k];
@@ -269,13 +289,13 @@ Status read_lightmap_scale_offset(const tinygltf::Model& model, int node_index, 
   return Status::ok();
 }
 
-Status instantiate(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
+Status instantiate(const tinygltf::Model& model, const ImportOptions& options, ImportBudget* budget,
+                   Scene* scene) {
   std::vector<int> parent;
   LUXEL_RETURN_IF_ERROR(check_hierarchy(model, &parent));
   auto roots = scene_roots(model, parent);
   if (!roots) return roots.status();
 
-  uint64_t budget = options.max_accessor_elements;
   std::vector<int> mesh_slot(model.meshes.size(), -1);
   struct Item {
     int node;
@@ -287,6 +307,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
   while (!stack.empty()) {
     const Item item = stack.back();
     stack.pop_back();
+    LUXEL_RETURN_IF_ERROR(budget->check_deadline(node_label(model, item.node)));
     const auto& node = model.nodes[static_cast<size_t>(item.node)];
     auto local = local_transform(model, item.node);
     if (!local) return local.status();
@@ -304,7 +325,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       }
       int& slot = mesh_slot[static_cast<size_t>(node.mesh)];
       if (slot < 0) {
-        auto mesh = build_mesh(model, node.mesh, options, &budget, scene);
+        auto mesh = build_mesh(model, node.mesh, options, budget, scene);
         if (!mesh) return mesh.status();
         scene->meshes.push_back(std::move(*mesh));
         slot = static_cast<int>(scene->meshes.size() - 1);
@@ -320,7 +341,7 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
       inst.mesh = slot;
       inst.object_to_world = world;
       LUXEL_RETURN_IF_ERROR(read_lightmap_scale_offset(model, item.node, -1, &inst));
-      LUXEL_RETURN_IF_ERROR(instance_transforms(model, item.node, &budget, &per_instance));
+      LUXEL_RETURN_IF_ERROR(instance_transforms(model, item.node, budget, &per_instance));
       if (!has_triangle_primitive) {
         // (skipped; see above)
       } else if (per_instance.empty()) {
@@ -329,6 +350,8 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
         // EXT_mesh_gpu_instancing: each instance's TRS is expressed in the
         // node's space, so the node's world transform applies after it.
         for (size_t k = 0; k < per_instance.size(); ++k) {
+          if (k % kDeadlineStride == 0)
+            LUXEL_RETURN_IF_ERROR(budget->check_deadline(node_label(model, item.node)));
           Instance copy = inst;
           copy.name = strprintf("node '%s' instance %zu", inst.name.c_str(), k);
           copy.instance_element = static_cast<int>(k);
@@ -355,9 +378,15 @@ Status instantiate(const tinygltf::Model& model, const ImportOptions& options, S
 
 Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
                            const std::string& name, const ImportOptions& options) {
-  tinygltf::Model model;
+  ImportBudget budget(options.memory_pool, options.max_import_bytes, options.max_accessor_elements,
+                      options.timeout_seconds);
+  // The file's bytes and tinygltf's copy of its buffers.
   LUXEL_RETURN_IF_ERROR(
-      detail::load_model(bytes, base_dir, name, options.max_accessor_elements, &model));
+      budget.reserve(detail::mul_sat(bytes.size(), 2),
+                     strprintf("'%s': %zu bytes of glTF", name.c_str(), bytes.size())));
+  tinygltf::Model model;
+  LUXEL_RETURN_IF_ERROR(detail::load_model(bytes, base_dir, name, &budget, &model));
+  LUXEL_RETURN_IF_ERROR(budget.check_deadline("'" + name + "'"));
   Scene scene;
   scene.source_name = name;
   // glTF 2.0 §3.12: a file that requires an extension the loader does not
@@ -382,8 +411,9 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
     if (!supported_extension(ext))
       scene.import_stats.warnings.push_back("extension " + ext +
                                             " is used by the file and not supported (ignored)");
-  LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &scene));
-  LUXEL_RETURN_IF_ERROR(instantiate(model, options, &scene));
+  LUXEL_RETURN_IF_ERROR(detail::convert_materials(model, options, &budget, &scene));
+  LUXEL_RETURN_IF_ERROR(instantiate(model, options, &budget, &scene));
+  LUXEL_RETURN_IF_ERROR(budget.check_deadline("'" + name + "'"));
   // Overlapping lightmap UVs make two surfaces share texels; named here so
   // that a caller can regenerate the UVs of those meshes (find_uv_overlaps).
   constexpr int kOverlapResolution = 512;
@@ -400,6 +430,7 @@ Result<Scene> import_model(std::string_view bytes, const std::string& base_dir,
     m.name = "default";
     scene.materials.push_back(m);
   }
+  scene.import_stats.peak_reserved_bytes = budget.peak();
   return scene;
 }
 

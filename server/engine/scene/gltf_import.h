@@ -25,6 +25,7 @@
 #include <string_view>
 
 #include "common/status.h"
+#include "scene/import_budget.h"
 #include "scene/scene.h"
 
 namespace luxel::scene {
@@ -46,6 +47,17 @@ struct ImportOptions {
   int max_image_side = 16384;
   uint64_t max_image_pixels = uint64_t{1} << 26;          // 8192 x 8192
   uint64_t max_total_texture_pixels = uint64_t{1} << 28;  // 4 GiB of float RGBA
+
+  // Bytes the import may allocate (scene/import_budget.h): vertices, indices,
+  // instances and decoded texels, charged from declared counts before they
+  // are allocated. With `memory_pool` set, the import reserves from that
+  // shared pool (the daemon's, over all concurrent imports) and
+  // max_import_bytes is not used.
+  uint64_t max_import_bytes = default_import_memory_budget();
+  ImportMemoryPool* memory_pool = nullptr;
+  // Seconds the import may run (checked inside its loops); past it the
+  // import ends with kDeadlineExceeded. Values <= 0 end it at the first check.
+  double timeout_seconds = 300;
 };
 
 // Loads a file from disk; the format is chosen by content (glb magic) and not

@@ -638,7 +638,7 @@ std::string trim(std::string s) {
 }  // namespace
 
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                  uint64_t max_decoded_elements, tinygltf::Model* model) {
+                  ImportBudget* budget, tinygltf::Model* model) {
   if (bytes.size() > 0xFFFFFFF0u) {
     return resource_exhausted(
         strprintf("'%s': %zu bytes, glTF files are limited to 4 GiB", name.c_str(), bytes.size()));
@@ -672,11 +672,10 @@ Status load_model(std::string_view bytes, const std::string& base_dir, const std
     // reads are the ones checked above.
     auto plain = read_gltf_document(bytes, base_dir);
     if (!plain) return plain.status();
-    LUXEL_RETURN_IF_ERROR(decompress_geometry(&plain.value(), max_decoded_elements));
+    LUXEL_RETURN_IF_ERROR(decompress_geometry(&plain.value(), budget->elements_left, budget));
     if (uses_compressed_geometry(plain.value().json))
       return internal_error("compressed geometry remained after decoding");
-    return load_model(write_glb(std::move(plain).value()), base_dir, name, max_decoded_elements,
-                      model);
+    return load_model(write_glb(std::move(plain).value()), base_dir, name, budget, model);
   }
   hide_unviewed_indices(&*doc, &rw);
   give_uriless_buffers_empty_data(&*doc, &rw);

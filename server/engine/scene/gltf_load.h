@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "common/status.h"
+#include "scene/import_budget.h"
 #include "scene/tinygltf_config.h"
 
 namespace luxel::scene::detail {
@@ -24,8 +25,9 @@ inline constexpr int kMaxJsonDepth = 64;
 // base_dir (no "..", no absolute paths): uploaded scenes must not read other
 // files of the server. Compressed geometry (KHR_draco_mesh_compression,
 // EXT_meshopt_compression) is decoded first (scene/gltf_decompress.h), at
-// most `max_decoded_elements` elements; tinygltf sees the plain file.
+// most budget->elements_left elements and the bytes `budget` allows; tinygltf
+// sees the plain file.
 Status load_model(std::string_view bytes, const std::string& base_dir, const std::string& name,
-                  uint64_t max_decoded_elements, tinygltf::Model* model);
+                  ImportBudget* budget, tinygltf::Model* model);
 
 }  // namespace luxel::scene::detail

@@ -15,9 +15,11 @@ namespace {
 
 class TextureTable {
  public:
-  TextureTable(const tinygltf::Model& model, const ImportOptions& options, Scene* scene)
+  TextureTable(const tinygltf::Model& model, const ImportOptions& options, ImportBudget* budget,
+               Scene* scene)
       : model_(model),
         options_(options),
+        budget_(budget),
         scene_(scene),
         pixel_budget_(options.max_total_texture_pixels) {}
 
@@ -39,7 +41,7 @@ class TextureTable {
     const auto key = std::make_pair(*image, space);
     auto it = decoded_.find(key);
     if (it == decoded_.end()) {
-      auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_);
+      auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_, budget_);
       if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
       it = decoded_.emplace(key, add(std::move(*tex))).first;
     }
@@ -58,7 +60,7 @@ class TextureTable {
     auto image = prepare(texture_index, texcoord, ext, what, &out.first);
     if (!image) return image.status();
     if (*image < 0) return out;
-    auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_);
+    auto tex = decode_texture(model_, *image, space, options_, &pixel_budget_, budget_);
     if (!tex) return Status(tex.status().code(), what + ": " + tex.status().message());
     out.second = std::move(*tex);
     return out;
@@ -74,6 +76,9 @@ class TextureTable {
                     "texture budget",
                     what.c_str(), tex.width, tex.height));
     pixel_budget_ -= pixels;
+    LUXEL_RETURN_IF_ERROR(budget_->reserve(
+        mul_sat(pixels, tex.format == TexelFormat::kRGBA16F ? 8 : 4),
+        strprintf("%s: %d x %d converted pixels", what.c_str(), tex.width, tex.height)));
     return add(std::move(tex));
   }
 
@@ -217,6 +222,7 @@ class TextureTable {
 
   const tinygltf::Model& model_;
   const ImportOptions& options_;
+  ImportBudget* budget_;
   Scene* scene_;
   uint64_t pixel_budget_;
   std::map<std::pair<int, ColorSpace>, int> decoded_;
@@ -576,8 +582,38 @@ bool is_supported_extension(const std::string& name) {
          name == "KHR_materials_pbrSpecularGlossiness" || name == "KHR_texture_basisu";
 }
 
-Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene) {
-  TextureTable table(model, options, scene);
+Status convert_materials(const tinygltf::Model& model, const ImportOptions& options,
+                         ImportBudget* budget, Scene* scene) {
+  if (options.decode_textures && !model.materials.empty()) {
+    // The texels every texture's image keeps, from their headers, checked
+    // against the budget before the first is decoded (each decode reserves
+    // its own again): a file whose images do not fit together is refused
+    // without decoding any. The images of textures no material uses are
+    // counted too.
+    std::vector<uint8_t> counted(model.images.size(), 0);
+    uint64_t bytes = 0;
+    size_t images = 0;
+    std::string named;
+    for (const auto& t : model.textures) {
+      if (t.source < 0 || static_cast<size_t>(t.source) >= model.images.size() ||
+          counted[static_cast<size_t>(t.source)]++)
+        continue;
+      int w = 0, h = 0;
+      const uint64_t b = declared_texel_bytes(model, t.source, options, &w, &h);
+      if (b == 0) continue;
+      bytes = add_sat(bytes, b);
+      if (++images <= 4)
+        named += strprintf("%s%s (%d x %d)", named.empty() ? "" : ", ",
+                           image_label(model, t.source).c_str(), w, h);
+    }
+    if (images > 4) named += strprintf(" and %zu more", images - 4);
+    if (bytes > 0) {
+      LUXEL_RETURN_IF_ERROR(budget->reserve(
+          bytes, strprintf("%s: decoded texels of the textures' images", named.c_str())));
+      budget->release(bytes);
+    }
+  }
+  TextureTable table(model, options, budget, scene);
   for (size_t i = 0; i < model.materials.size(); ++i) {
     auto m = convert(model, static_cast<int>(i), &table);
     if (!m) return m.status();

@@ -12,8 +12,10 @@ namespace luxel::scene::detail {
 
 // Appends one Material per glTF material to scene->materials (so glTF
 // material i is Scene material i) and decodes each (image, colour space) pair
-// they reference once into scene->textures.
-Status convert_materials(const tinygltf::Model& model, const ImportOptions& options, Scene* scene);
+// they reference once into scene->textures, their texels reserved in
+// `budget` (scene/import_budget.h) before they are decoded.
+Status convert_materials(const tinygltf::Model& model, const ImportOptions& options,
+                         ImportBudget* budget, Scene* scene);
 
 // Whether the importer reads glTF extension `name` (KHR_lights_punctual,
 // KHR_materials_emissive_strength, KHR_materials_ior, KHR_texture_transform,

@@ -67,6 +67,64 @@ Vec3 vec3_at(const std::vector<float>& v, size_t i) {
   return {v[3 * i], v[3 * i + 1], v[3 * i + 2]};
 }
 
+// The capacity `v` grows to (doubling) so that `extra` more elements fit;
+// adds the bytes that adds to `bytes`. The capacity freed by the move was
+// reserved before, so what stays reserved is the capacity.
+template <typename T>
+uint64_t grown(const std::vector<T>& v, uint64_t extra, uint64_t* bytes) {
+  const uint64_t need = add_sat(v.size(), extra);
+  if (need <= v.capacity()) return v.capacity();
+  const uint64_t cap = std::max<uint64_t>(need, 2 * uint64_t{v.capacity()});
+  *bytes = add_sat(*bytes, mul_sat(cap - v.capacity(), sizeof(T)));
+  return cap;
+}
+
+// Reserves what a primitive of `vertices` vertices and `list` index-list
+// entries (its indices accessor, or the vertices) will allocate, in one
+// request before any of it is allocated or read: the mesh arrays it appends
+// to (kept for the import) and its working arrays (released with `work`).
+Status reserve_primitive(const tinygltf::Primitive& prim, int mode, uint64_t vertices,
+                         uint64_t list, const std::string& what, bool file_uv1, bool tangents,
+                         ImportBudget* budget, ScopedReservation* work, Mesh* mesh) {
+  const uint64_t triangles =
+      mode == TINYGLTF_MODE_TRIANGLES ? list / 3 : (list >= 3 ? list - 2 : 0);
+  // Generated index list, smooth normals; triangle list copy and kept list,
+  // source triangles; tangent generation's positions, UVs and output.
+  uint64_t working = mul_sat(vertices, prim.indices >= 0 ? 12 : 16);
+  working = add_sat(working, mul_sat(triangles, 3 * 8 + 4));
+  if (tangents) working = add_sat(working, mul_sat(vertices, 12 + 8 + 16));
+  uint64_t kept = 0;
+  const uint64_t positions = grown(mesh->positions, vertices, &kept);
+  const uint64_t normals = grown(mesh->normals, vertices, &kept);
+  const uint64_t uv0 = grown(mesh->uv0, vertices, &kept);
+  const uint64_t uv1 = grown(mesh->uv1, vertices, &kept);
+  const uint64_t file_uv1_cap =
+      file_uv1 ? grown(mesh->file_uv1, add_sat(mesh->uv1.size() - mesh->file_uv1.size(), vertices),
+                       &kept)
+               : 0;
+  const bool with_tangents = tangents || !mesh->tangents.empty();
+  const uint64_t tangents_cap =
+      with_tangents
+          ? grown(mesh->tangents, add_sat(mesh->positions.size() - mesh->tangents.size(), vertices),
+                  &kept)
+          : 0;
+  const uint64_t indices = grown(mesh->indices, mul_sat(triangles, 3), &kept);
+  const uint64_t sources = grown(mesh->source_triangle, triangles, &kept);
+  const uint64_t materials = grown(mesh->triangle_material, triangles, &kept);
+  LUXEL_RETURN_IF_ERROR(budget->reserve(add_sat(working, kept), what));
+  work->adopt(working);
+  mesh->positions.reserve(static_cast<size_t>(positions));
+  mesh->normals.reserve(static_cast<size_t>(normals));
+  mesh->uv0.reserve(static_cast<size_t>(uv0));
+  mesh->uv1.reserve(static_cast<size_t>(uv1));
+  if (file_uv1) mesh->file_uv1.reserve(static_cast<size_t>(file_uv1_cap));
+  if (with_tangents) mesh->tangents.reserve(static_cast<size_t>(tangents_cap));
+  mesh->indices.reserve(static_cast<size_t>(indices));
+  mesh->source_triangle.reserve(static_cast<size_t>(sources));
+  mesh->triangle_material.reserve(static_cast<size_t>(materials));
+  return Status::ok();
+}
+
 int default_material(const tinygltf::Model& model, Scene* scene) {
   const size_t index = model.materials.size();
   if (scene->materials.size() == index) {
@@ -138,7 +196,8 @@ int lightmap_texcoord(const tinygltf::Primitive& prim, const std::string& ctx, S
 }
 
 Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_index, int mode,
-                        const ImportOptions& options, uint64_t* budget, Scene* scene, Mesh* mesh) {
+                        const ImportOptions& options, ImportBudget* budget, Scene* scene,
+                        Mesh* mesh) {
   const auto& prim =
       model.meshes[static_cast<size_t>(mesh_index)].primitives[static_cast<size_t>(prim_index)];
   const std::string ctx =
@@ -163,12 +222,31 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
       {"TEXCOORD_1", TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &uv1},
       {lightmap_name.c_str(), TINYGLTF_TYPE_VEC2, kCompF32 | kInts, kInts, &lm},
   };
+  // Everything the primitive allocates is reserved from the declared counts
+  // before an element is read: a count is only a number in the file.
+  ScopedReservation work(budget);
+  {
+    const auto pos_it = prim.attributes.find("POSITION");
+    const int pos_acc = pos_it == prim.attributes.end() ? -1 : pos_it->second;
+    const uint64_t vertices = declared_count(model, pos_acc);
+    const uint64_t list = prim.indices >= 0 ? declared_count(model, prim.indices) : vertices;
+    const bool file_uv1 = lightmap_set != 1 || !mesh->file_uv1.empty();
+    const int mat = prim.material;
+    const bool tangents = mat >= 0 && static_cast<size_t>(mat) < scene->materials.size() &&
+                          scene->materials[static_cast<size_t>(mat)].normal_texture.texture >= 0;
+    const std::string what =
+        strprintf("%s: accessor %d (POSITION): %llu vertices, %llu %s", ctx.c_str(), pos_acc,
+                  static_cast<unsigned long long>(vertices), static_cast<unsigned long long>(list),
+                  prim.indices >= 0 ? "indices" : "generated indices");
+    LUXEL_RETURN_IF_ERROR(reserve_primitive(prim, mode, vertices, list, what, file_uv1, tangents,
+                                            budget, &work, mesh));
+  }
   size_t vertex_count = 0;
   for (auto& a : attrs) {
     auto it = prim.attributes.find(a.semantic);
     if (it == prim.attributes.end()) continue;
     LUXEL_RETURN_IF_ERROR(read_floats(model, it->second, a.semantic, a.type, a.normalized,
-                                      a.unnormalized, ctx, budget, a.out));
+                                      a.unnormalized, ctx, budget, &work, a.out));
     a.present = true;
     const size_t comps = a.type == TINYGLTF_TYPE_VEC4 ? 4 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 2;
     const size_t count = a.out->size() / comps;
@@ -197,7 +275,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
 
   std::vector<uint32_t> indices;
   if (prim.indices >= 0) {
-    LUXEL_RETURN_IF_ERROR(read_indices(model, prim.indices, ctx, budget, &indices));
+    LUXEL_RETURN_IF_ERROR(read_indices(model, prim.indices, ctx, budget, &work, &indices));
     for (size_t i = 0; i < indices.size(); ++i) {
       if (indices[i] >= vertex_count) {
         return invalid_argument(
@@ -229,6 +307,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   std::vector<uint32_t> kept, kept_source;
   kept.reserve(indices.size());
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    if (t % (3 * kDeadlineStride) == 0) LUXEL_RETURN_IF_ERROR(budget->check_deadline(ctx));
     const uint32_t a = indices[t], b = indices[t + 1], c = indices[t + 2];
     if (a == b || b == c || a == c ||
         zero_area(vec3_at(pos, a), vec3_at(pos, b), vec3_at(pos, c))) {
@@ -248,6 +327,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
     // they get flat normals.
     mesh->generated_normals = true;
     for (size_t t = 0; t < kept.size(); t += 3) {
+      if (t % (3 * kDeadlineStride) == 0) LUXEL_RETURN_IF_ERROR(budget->check_deadline(ctx));
       const Vec3 p0 = vec3_at(pos, kept[t]), p1 = vec3_at(pos, kept[t + 1]),
                  p2 = vec3_at(pos, kept[t + 2]);
       const Vec3 n = cross(p1 - p0, p2 - p0);
@@ -263,6 +343,7 @@ Status append_primitive(const tinygltf::Model& model, int mesh_index, int prim_i
   const bool keep_file_uv1 = lightmap_set != 1 || !mesh->file_uv1.empty();
   if (keep_file_uv1 && mesh->file_uv1.empty()) mesh->file_uv1 = mesh->uv1;
   for (size_t i = 0; i < vertex_count; ++i) {
+    if (i % kDeadlineStride == 0) LUXEL_RETURN_IF_ERROR(budget->check_deadline(ctx));
     mesh->positions.push_back(vec3_at(pos, i));
     mesh->normals.push_back(normals[i]);
     mesh->uv0.push_back(attrs[3].present ? Vec2{uv0[2 * i], uv0[2 * i + 1]} : Vec2{});
@@ -316,7 +397,7 @@ std::string mesh_label(const tinygltf::Model& model, int mesh_index) {
 }
 
 Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const ImportOptions& options,
-                        uint64_t* budget, Scene* scene) {
+                        ImportBudget* budget, Scene* scene) {
   const auto& gm = model.meshes[static_cast<size_t>(mesh_index)];
   Mesh mesh;
   mesh.name = gm.name.empty() ? strprintf("mesh[%d]", mesh_index) : gm.name;

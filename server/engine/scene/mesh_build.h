@@ -9,6 +9,7 @@
 
 #include "common/status.h"
 #include "scene/gltf_import.h"
+#include "scene/import_budget.h"
 #include "scene/scene.h"
 #include "scene/tinygltf_config.h"
 
@@ -23,9 +24,10 @@ std::string mesh_label(const tinygltf::Model& model, int mesh_index);
 std::vector<uint32_t> to_triangle_list(int mode, const std::vector<uint32_t>& indices);
 
 // Builds the mesh. Primitives without a material get the glTF default
-// material, appended to scene->materials on first use. `budget` limits the
-// accessor elements read (see ImportOptions::max_accessor_elements).
+// material, appended to scene->materials on first use. Each primitive's
+// arrays are reserved in `budget` from the declared POSITION and index counts
+// before any is read (scene/import_budget.h).
 Result<Mesh> build_mesh(const tinygltf::Model& model, int mesh_index, const ImportOptions& options,
-                        uint64_t* budget, Scene* scene);
+                        ImportBudget* budget, Scene* scene);
 
 }  // namespace luxel::scene::detail

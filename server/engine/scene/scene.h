@@ -237,6 +237,9 @@ struct ImportStats {
   size_t degenerate_triangles_dropped = 0;  // repeated index or zero-area
   size_t skipped_primitives = 0;            // points and lines (strips and fans become triangles)
   std::vector<std::string> warnings;        // human-readable, name the node/mesh/primitive
+  // Most bytes the import held reserved at once (scene/import_budget.h): the
+  // smallest ImportOptions::max_import_bytes that accepts the file.
+  uint64_t peak_reserved_bytes = 0;
 };
 
 struct Scene {

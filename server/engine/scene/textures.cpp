@@ -4,6 +4,7 @@
 
 #include <stb_image.h>
 
+#include <algorithm>
 #include <array>
 #include <climits>
 #include <cmath>
@@ -89,8 +90,33 @@ std::string image_label(const tinygltf::Model& model, int image) {
   return n.empty() ? strprintf("image %d", image) : strprintf("image %d '%s'", image, n.c_str());
 }
 
+uint64_t declared_texel_bytes(const tinygltf::Model& model, int image, const ImportOptions& options,
+                              int* w, int* h) {
+  if (image < 0 || static_cast<size_t>(image) >= model.images.size()) return 0;
+  const auto& img = model.images[static_cast<size_t>(image)];
+  std::string_view encoded;
+  if (img.bufferView >= 0) {
+    auto bytes = buffer_view_bytes(model, img.bufferView, "");
+    if (!bytes) return 0;
+    encoded = *bytes;
+  } else {
+    encoded = std::string_view(reinterpret_cast<const char*>(img.image.data()), img.image.size());
+  }
+  if (encoded.empty() || encoded.size() > static_cast<size_t>(INT_MAX)) return 0;
+  const auto* data = reinterpret_cast<const stbi_uc*>(encoded.data());
+  const int size = static_cast<int>(encoded.size());
+  int channels = 0;
+  if (!stbi_info_from_memory(data, size, w, h, &channels) || *w <= 0 || *h <= 0 ||
+      *w > options.max_image_side || *h > options.max_image_side)
+    return 0;
+  const uint64_t pixels = static_cast<uint64_t>(*w) * static_cast<uint64_t>(*h);
+  if (pixels > options.max_image_pixels) return 0;
+  return mul_sat(pixels, 4, stbi_is_16_bit_from_memory(data, size) ? 2 : 1);
+}
+
 Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpace space,
-                               const ImportOptions& options, uint64_t* pixel_budget) {
+                               const ImportOptions& options, uint64_t* pixel_budget,
+                               ImportBudget* budget) {
   const auto& img = model.images[static_cast<size_t>(image)];
   const std::string label = image_label(model, image);
   std::string_view encoded;
@@ -114,8 +140,8 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
   const int size = static_cast<int>(encoded.size());
   const auto too_large = [&](uint64_t w, uint64_t h) {
     return resource_exhausted(strprintf(
-        "%s: %llu x %llu pixels exceeds the limit (%d per side, %llu pixels)", label.c_str(),
-        static_cast<unsigned long long>(w), static_cast<unsigned long long>(h),
+        "%s: %llu x %llu pixels is too large (the limit is %d per side and %llu pixels)",
+        label.c_str(), static_cast<unsigned long long>(w), static_cast<unsigned long long>(h),
         options.max_image_side, static_cast<unsigned long long>(options.max_image_pixels)));
   };
   int w = 0, h = 0, channels = 0;
@@ -149,10 +175,25 @@ Result<Texture> decode_texture(const tinygltf::Model& model, int image, ColorSpa
         "%s: decoding %d x %d pixels exceeds the import's texture budget", label.c_str(), w, h));
   }
   *pixel_budget -= pixels;
+  LUXEL_RETURN_IF_ERROR(budget->check_deadline(label));
+  // Reserved before stb_image allocates: the kept RGBA (4 bytes per texel,
+  // 8 for 16-bit images) for the import, and stb_image's buffers for the
+  // decode (its inflated rows and the unfiltered image, `channels` samples
+  // per texel each, and its RGBA output).
+  const bool is16 = stbi_is_16_bit_from_memory(data, size) != 0;
+  const uint64_t sample = is16 ? 2 : 1;
+  const std::string what = strprintf("%s: %d x %d texels (%s, %d channel%s)", label.c_str(), w, h,
+                                     is16 ? "16-bit" : "8-bit", channels, channels == 1 ? "" : "s");
+  const uint64_t kept = mul_sat(pixels, 4 * sample);
+  const uint64_t transient =
+      mul_sat(pixels, sample, 2 * static_cast<uint64_t>(std::max(channels, 1)) + 4);
+  LUXEL_RETURN_IF_ERROR(budget->reserve(add_sat(kept, transient), what));
+  ScopedReservation decoding(budget);
+  decoding.adopt(transient);
 
   const bool srgb = space == ColorSpace::kSRGB;
   int dw = 0, dh = 0, dc = 0;
-  if (stbi_is_16_bit_from_memory(data, size)) {
+  if (is16) {
     // 16 bits carry more than 8-bit codes can keep: linear halves (11
     // significant bits, relative error <= 2^-11, finer than the 8-bit step
     // wherever the value is above ~0.06).

@@ -76,7 +76,8 @@ TEST(SharedScenes, Sponza) {
   const auto t0 = std::chrono::steady_clock::now();
   LOAD_SHARED(r, "sponza.glb", ImportOptions{});
   const double secs = seconds_since(t0);
-  std::printf("sponza: imported in %.2f s, %zu textures\n", secs, r->textures.size());
+  std::printf("sponza: imported in %.2f s, %zu textures, %.1f MiB of import budget at the peak\n",
+              secs, r->textures.size(), r->import_stats.peak_reserved_bytes / 1048576.0);
   expect_triangles(*r, 262087, "sponza");
   // 49 images: 24 base colour (sRGB), 14 metallic-roughness and 11 normal
   // maps (linear); no image is used both as sRGB and as linear data.

@@ -821,7 +821,7 @@ TEST(SceneImportErrors, HugeImageHeaderIsTooLargeNotUnknown) {
     b.doc["textures"] = json::array({{{"source", 0}}});
     b.add_material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}});
     expect_error(load(b.gltf_embedded()), StatusCode::kResourceExhausted,
-                 {"image 0", "65535 x 65535", "exceeds the limit (16384 per side"});
+                 {"image 0", "65535 x 65535", "too large (the limit is 16384 per side"});
   }
 }
 

@@ -71,5 +71,35 @@ TEST(DaemonConfig, DataDirIsCreatedPrivateWhateverTheUmask) {
   fs::remove_all(parent);
 }
 
+TEST(DaemonConfig, ImportBudgetAndTimeout) {
+  auto d = parse_daemon_args({"--data-dir", "/tmp/x"});
+  ASSERT_TRUE(d.is_ok()) << d.status().to_string();
+  // Default: 1/8 of the machine's (or the cgroup's) memory; 300 s.
+  EXPECT_EQ(d->import_memory_budget, scene::default_import_memory_budget());
+  EXPECT_GT(d->import_memory_budget, 0u);
+  EXPECT_EQ(d->import_timeout_s, 300);
+  for (const auto& [text, bytes] :
+       {std::pair{"3GiB", uint64_t{3} << 30}, std::pair{"512MiB", uint64_t{512} << 20},
+        std::pair{"1048576", uint64_t{1} << 20}}) {
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--import-memory-budget", text});
+    ASSERT_TRUE(c.is_ok()) << text << ": " << c.status().to_string();
+    EXPECT_EQ(c->import_memory_budget, bytes) << text;
+  }
+  for (const char* bad : {"", "lots", "1.5GiB", "1000", "-3GiB"}) {
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--import-memory-budget", bad});
+    ASSERT_FALSE(c.is_ok()) << bad;
+    EXPECT_NE(c.status().message().find("--import-memory-budget"), std::string::npos)
+        << c.status().message();
+  }
+  auto t = parse_daemon_args({"--data-dir", "/tmp/x", "--import-timeout", "2.5"});
+  ASSERT_TRUE(t.is_ok()) << t.status().to_string();
+  EXPECT_EQ(t->import_timeout_s, 2.5);
+  for (const char* bad : {"0", "-1", "soon"}) {
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--import-timeout", bad});
+    ASSERT_FALSE(c.is_ok()) << bad;
+    EXPECT_NE(c.status().message().find("--import-timeout"), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace luxel::service
