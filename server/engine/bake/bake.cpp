@@ -45,6 +45,7 @@ Result<size_t> Baker::start() {
     LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  LUXEL_RETURN_IF_ERROR(check_cancel(CancelToken(hooks.cancel), "the first tile's clear"));
   result_.setup_s = seconds_since(t_setup);
   return first_tile;
 }
@@ -73,7 +74,8 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   finish_result(s_, settings_, result_);
   // Device memory of the bake (with a snapshot denoiser, held beside it).
   size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
-  if (denoise_method() != Denoise::kOff) {
+  // A cancelled bake's result is thrown away: no denoise (seconds at 4096^2).
+  if (denoise_method() != Denoise::kOff && why != Termination::kCancelled) {
     auto held = denoise_result();
     if (!held) return held.status();
     peak = std::max(peak, held.value());
@@ -276,8 +278,10 @@ void Baker::keep_final_state() {
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const BakeHooks& hooks) {
   const auto t0 = SteadyClock::now();
-  auto layout = lay_out_lightmap(scene, settings);
+  const CancelToken cancel(hooks.cancel);
+  auto layout = lay_out_lightmap(scene, settings, cancel);
   if (!layout) return layout.status();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the lightmap layout"));
   const double layout_s = seconds_since(t0);
   if (hooks.on_layout)
     hooks.on_layout(describe_lightmap_layout(layout.value()) +

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "bake/lightmap_layout.h"
 #include "common/atomic_file.h"
 #include "probes/gltf_nodes.h"
 #include "probes/placement.h"
@@ -36,6 +37,29 @@ Result<probes::ProbeBakeSettings> probe_settings(const JobInput& in) {
   if (!window) return window.status();
   ps.window = window.value();
   return ps;
+}
+
+// A fixed resolution of at most kSmallLayoutSide texels on a scene of at
+// most kSmallLayoutTriangles is laid out (lay_out_lightmap, as the bake
+// does) in well under a second: charts that fit no page are refused before
+// the job is queued. Larger layouts are left to the bake.
+constexpr int kSmallLayoutSide = 256;
+constexpr size_t kSmallLayoutTriangles = 20000;
+
+Status check_small_layout(const JobInput& in) {
+  const pipeline::BakeSettings& s = in.settings;
+  if (s.atlas.resolution <= 0 || s.atlas.resolution > kSmallLayoutSide) return Status::ok();
+  size_t triangles = 0;
+  for (const scene::Instance& inst : in.scene->instances)
+    if (inst.mesh >= 0 && static_cast<size_t>(inst.mesh) < in.scene->meshes.size())
+      triangles += in.scene->meshes[static_cast<size_t>(inst.mesh)].indices.size() / 3;
+  if (triangles == 0 || triangles > kSmallLayoutTriangles) return Status::ok();
+  auto layout = pipeline::lay_out_lightmap(*in.scene, s);
+  if (layout) return Status::ok();
+  const Status& st = layout.status();
+  if (st.message().rfind("settings.", 0) == 0) return st;
+  return Status(st.code(),
+                strprintf("settings.resolution: %d: %s", s.atlas.resolution, st.message().c_str()));
 }
 
 // The name the user knows the scene by: the job's, the file's, the scene's own.
@@ -100,6 +124,22 @@ Status write_outputs(const JobInput& in, const std::string& dir, JobResult& job)
 }
 
 }  // namespace
+
+Status check_bake_job(const JobInput& in, const pipeline::DeviceLimits& device) {
+  const pipeline::BakeSettings& s = in.settings;
+  if (s.lightmap) {
+    auto e = pipeline::estimate_bake_resources(*in.scene, s, device);
+    if (!e) return e.status();
+    LUXEL_RETURN_IF_ERROR(check_small_layout(in));
+  }
+  if (!s.probes.empty()) {
+    auto ps = probe_settings(in);
+    if (!ps) return ps.status();
+    auto plan = probes::plan_placement(*in.scene, ps.value().placement);
+    if (!plan) return plan.status();
+  }
+  return Status::ok();
+}
 
 bool JobResult::cancelled() const {
   return (lightmap && lightmap->termination == Termination::kCancelled) ||

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "bake/bake.h"
+#include "bake/resource_estimate.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "post/bake_outputs.h"
@@ -67,6 +68,16 @@ struct JobResult {
   // The job's figures: the lightmap's, or the probes' when there is none.
   const pipeline::BakeResult& figures() const;
 };
+
+// What the job can refuse before it runs, checked with the functions the
+// run uses, so that a job accepted here does not FAIL for a reason known
+// now: the lightmap's resources against `device` (bake/resource_estimate.h),
+// a small fixed resolution laid out as the bake lays it out (charts that fit
+// no page), and the probe placement (probes::plan_placement: the grid's
+// count, the file's or the glTF nodes' positions). The daemon runs it at
+// SubmitBake and the CLI before `bake --local`. Errors start with the
+// setting ("settings.probes: ...").
+Status check_bake_job(const JobInput& input, const pipeline::DeviceLimits& device);
 
 // Runs the job on `ctx` and writes its outputs into `out_dir` (created if
 // needed). A cancelled step (hooks.cancel) ends the job with what it has and

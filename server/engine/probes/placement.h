@@ -61,6 +61,21 @@ struct ProbeLayout {
   std::string describe_json() const;  // the manifest's "probes.layout" object
 };
 
+// What placement knows before a ray is traced: the positions of the file
+// and nodes modes, read and checked, and the grid's lattice over the box or
+// the scene's triangles, its size counted in doubles (a spacing of 1e-9, or
+// a box of +-1e30, overflows an int). place_probes starts from it, and the
+// daemon (SubmitBake) and the CLI call it before queueing, so a placement
+// that cannot be baked is refused at submit with the same message.
+struct PlacementPlan {
+  std::vector<Vec3> positions;  // file and nodes modes
+  bool grid = false;            // grid and adaptive modes
+  int dims[3] = {0, 0, 0};
+  Bounds3 box;
+  size_t count = 0;  // probes before adaptive drops any
+};
+Result<PlacementPlan> plan_placement(const scene::Scene& scene, const PlacementSettings& settings);
+
 // Places the probes of `settings` in the scene. INVALID_ARGUMENT for a
 // malformed file, an empty box or scene; RESOURCE_EXHAUSTED past
 // settings.max_probes.
