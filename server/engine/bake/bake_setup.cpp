@@ -10,6 +10,20 @@
 
 namespace luxel::pipeline {
 
+Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene,
+                                              const atlas::Atlas& atlas) {
+  auto info = atlas::build_sample_info(scene, atlas);
+  if (!info) return info.status();
+  if (info.value().covered_texels.empty())
+    return invalid_argument(strprintf(
+        "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
+        "small for this resolution?)",
+        atlas.width, atlas.height));
+  if (info.value().covered_texels.size() >= kSlotMask)
+    return resource_exhausted("lightmap has too many covered texels for 32-bit path keys");
+  return info;
+}
+
 Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
                                const BakeSettings& settings, device::Context& ctx,
                                const ProbeDomain* probes, CancelToken cancel) {
@@ -42,17 +56,10 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
     s.info.records = n;
   } else {
     s.atlas = std::move(atlas);
-    auto info = atlas::build_sample_info(scene, s.atlas);
+    auto info = covered_sample_info(scene, s.atlas);
     if (!info) return info.status();
     s.info = std::move(info.value());
   }
-  if (s.info.covered_texels.empty())
-    return invalid_argument(strprintf(
-        "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
-        "small for this resolution?)",
-        s.atlas.width, s.atlas.height));
-  if (s.info.covered_texels.size() >= kSlotMask)
-    return resource_exhausted("lightmap has too many covered texels for 32-bit path keys");
   LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the sample info"));
 
   auto soup = accel::build_triangle_soup(scene);
