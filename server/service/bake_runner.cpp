@@ -238,6 +238,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   hooks.fingerprint = fingerprint;
   hooks.resume = resume ? &*resume : nullptr;
   hooks.cancel = &running.cancel;
+  hooks.discard_cancelled = true;  // a cancelled or interrupted bake's result is not kept
   if (info->finish_requested()) running.finish = true;
   hooks.finish_now = &running.finish;
   hooks.device_turn = &device_turn_;  // concurrent bakes take turns on the one device

@@ -115,7 +115,7 @@ def main(argv):
                            period=0.002)
                 time.sleep(delay)
                 rows.append((f"{delay:g} s",) + cancel_and_measure(c, bake.bake_id))
-                print("%-8s phase %-8s call returned %.3f s (%s), call -> %s %.3f s" %
+                print("%-8s phase %-8s call returned %.3f s (%s), call -> end %.3f s (%s)" %
                       rows[-1], flush=True)
     finally:
         stop.set()

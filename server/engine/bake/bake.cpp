@@ -42,7 +42,8 @@ Result<size_t> Baker::start() {
     progress_.iteration = hooks.resume->iteration;
     result_.series = series_from_checkpoint(*hooks.resume);
   } else {
-    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end,
+                                       CancelToken(hooks.cancel)));
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
   LUXEL_RETURN_IF_ERROR(check_cancel(CancelToken(hooks.cancel), "the first tile's clear"));
@@ -65,6 +66,12 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto stopped = run_tile(ti, ti > first_tile.value());
     if (!stopped) return stopped.status();
     why = stopped.value();
+    if (why == Termination::kCancelled && hooks.discard_cancelled) {
+      result_.termination = why;
+      result_.seconds = elapsed();
+      result_.paths = done_.paths + paths_done_;
+      return std::move(result_);
+    }
     const bool last = ti + 1 == plan_.tiles.size() || why == Termination::kCancelled;
     LUXEL_RETURN_IF_ERROR(finish_tile(plan_.tiles[ti], last));
     if (last) break;
@@ -74,8 +81,7 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   finish_result(s_, settings_, result_);
   // Device memory of the bake (with a snapshot denoiser, held beside it).
   size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
-  // A cancelled bake's result is thrown away: no denoise (seconds at 4096^2).
-  if (denoise_method() != Denoise::kOff && why != Termination::kCancelled) {
+  if (denoise_method() != Denoise::kOff) {
     auto held = denoise_result();
     if (!held) return held.status();
     peak = std::max(peak, held.value());

@@ -200,7 +200,7 @@ size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {
 }
 
 Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin,
-                              size_t end) {
+                              size_t end, CancelToken cancel) {
   const SampleSlice slice = slice_sample_info(setup.info, begin, end);
   SceneArgs& g = args_.scene;
   LUXEL_RETURN_IF_ERROR(ctx.write(g.covered, slice.covered.data(), slice.covered.size() * 4));
@@ -211,9 +211,15 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
   size_t unused = 0;
   Allocator a(ctx, unused);
   const AccumArgs& acc = args_.accum;
-  for (const device::Buffer* z : {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite,
-                                  static_cast<const device::Buffer*>(&args_.encodings.basis_state)})
+  for (const device::Buffer* z :
+       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite,
+        static_cast<const device::Buffer*>(&args_.encodings.basis_state)}) {
     LUXEL_RETURN_IF_ERROR(a.zero(*z));
+    if (cancel.flag()) {
+      LUXEL_RETURN_IF_ERROR(ctx.finish());
+      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's clear"));
+    }
+  }
   return ctx.finish();  // the slice's host memory goes when this returns
 }
 

@@ -42,7 +42,10 @@ class BakeBuffers {
   // their texels and sample-info records, sets args().params.covered_count
   // and clears the accumulation (state of slot k of the tile = covered slot
   // begin + k).
-  Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end);
+  // cancel: polled between the buffers' clears (a 2048^2 basis state is
+  // hundreds of MB); a request ends it with cancelled_error.
+  Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end,
+                   CancelToken cancel = {});
 
   // The kernels' arguments (args().params is the bake's LuxBakeParams).
   BakeKernelArgs& args() { return args_; }

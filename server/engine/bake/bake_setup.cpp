@@ -10,9 +10,9 @@
 
 namespace luxel::pipeline {
 
-Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene,
-                                              const atlas::Atlas& atlas) {
-  auto info = atlas::build_sample_info(scene, atlas);
+Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene, const atlas::Atlas& atlas,
+                                              CancelToken cancel) {
+  auto info = atlas::build_sample_info(scene, atlas, cancel);
   if (!info) return info.status();
   if (info.value().covered_texels.empty())
     return invalid_argument(strprintf(
@@ -56,7 +56,7 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
     s.info.records = n;
   } else {
     s.atlas = std::move(atlas);
-    auto info = covered_sample_info(scene, s.atlas);
+    auto info = covered_sample_info(scene, s.atlas, cancel);
     if (!info) return info.status();
     s.info = std::move(info.value());
   }

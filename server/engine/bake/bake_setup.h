@@ -61,7 +61,8 @@ inline constexpr int kTagShift = 29;
 // when no texel is covered or too many are for 32-bit path keys: the first
 // step of prepare_bake, also run at submit on small layouts
 // (job::check_bake_job).
-Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene, const atlas::Atlas& atlas);
+Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene, const atlas::Atlas& atlas,
+                                              CancelToken cancel = {});
 
 // cancel: polled between the steps and by the BVH build; a request ends
 // the setup with cancelled_error (common/cancel.h).
