@@ -22,7 +22,7 @@ Result<size_t> Baker::start() {
   // Shards keep every tile's state for BakeResult::final_state.
   keep_finished_ = (tiled() && static_cast<bool>(hooks.on_checkpoint)) || settings_.sharded() ||
                    hooks.keep_final_state;
-  begin_result(s_, result_);
+  LUXEL_RETURN_IF_ERROR(begin_result(s_, result_, CancelToken(hooks.cancel)));
   size_t first_tile = 0;
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)

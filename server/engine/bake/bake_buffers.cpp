@@ -35,6 +35,24 @@ class Allocator {
                                                  b.bytes(), 0, nullptr, nullptr),
                              "clear buffer");
   }
+  // The same in pieces of kClearChunk bytes, waiting for each and polling
+  // `cancel` between them: one fill of a 2048^2 basis state took 0.48 s on
+  // PoCL (2 cores), longer than a cancel may wait.
+  Status zero(const device::Buffer& b, const CancelToken& cancel) {
+    if (dry_ || !cancel.flag()) return zero(b);
+    static constexpr uint32_t kZero = 0;
+    constexpr size_t kClearChunk = size_t{64} << 20;
+    for (size_t at = 0; at < b.bytes(); at += kClearChunk) {
+      const size_t n = std::min(kClearChunk, b.bytes() - at);
+      LUXEL_RETURN_IF_ERROR(
+          device::cl_status(clEnqueueFillBuffer(ctx_.queue(), b.get(), &kZero, sizeof kZero, at, n,
+                                                0, nullptr, nullptr),
+                            "clear buffer"));
+      LUXEL_RETURN_IF_ERROR(ctx_.finish());
+      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's clear"));
+    }
+    return Status::ok();
+  }
 
  private:
   Status count(size_t size) {
@@ -214,11 +232,7 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
   for (const device::Buffer* z :
        {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite,
         static_cast<const device::Buffer*>(&args_.encodings.basis_state)}) {
-    LUXEL_RETURN_IF_ERROR(a.zero(*z));
-    if (cancel.flag()) {
-      LUXEL_RETURN_IF_ERROR(ctx.finish());
-      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's clear"));
-    }
+    LUXEL_RETURN_IF_ERROR(a.zero(*z, cancel));
   }
   return ctx.finish();  // the slice's host memory goes when this returns
 }
