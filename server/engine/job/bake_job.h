@@ -82,7 +82,8 @@ Status check_bake_job(const JobInput& input, const pipeline::DeviceLimits& devic
 // Runs the job on `ctx` and writes its outputs into `out_dir` (created if
 // needed). A cancelled step (hooks.cancel) ends the job with what it has and
 // writes nothing; one cancelled during its setup fails with cancelled_error
-// (common/cancel.h), which the host that set the flag reads as cancelled. Errors name the step (and the setting or file) at fault;
+// (common/cancel.h), which the host that set the flag reads as cancelled.
+// Errors name the step (and the setting or file) at fault;
 // the lightmap's INVALID_ARGUMENT and RESOURCE_EXHAUSTED start with "scene
 // 'NAME': " (scene_name, else the file name).
 Result<JobResult> run_bake_job(const JobInput& input, device::Context& ctx, const JobEvents& events,
