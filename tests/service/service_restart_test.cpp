@@ -252,6 +252,10 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   cancel.set_bake_id(blocker.bake_id());
   ctx = daemon.context();
   ASSERT_TRUE(stub->CancelBake(ctx.get(), cancel, &cancelled).ok());
+  // A running bake uses its scene until it has stopped (CancelBake returns
+  // before that).
+  EXPECT_EQ(wait_for_bake(daemon, blocker.bake_id(), is_finished).state(),
+            v1::BAKE_STATE_CANCELLED);
 
   // Now nothing uses the scene.
   v1::DeleteSceneRequest del;
