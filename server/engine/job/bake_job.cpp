@@ -95,7 +95,7 @@ Result<probes::ProbeBake> bake_probes(const JobInput& in, device::Context& ctx, 
                                       bool after_lightmap) {
   auto ps = probe_settings(in);
   if (!ps) return ps.status();
-  auto layout = probes::place_probes(*in.scene, ps.value().placement);
+  auto layout = probes::place_probes(*in.scene, ps.value().placement, CancelToken(ev.hooks.cancel));
   if (!layout) return layout.status();
   if (ev.on_probe_layout) ev.on_probe_layout(layout.value());
   pipeline::BakeHooks hooks = ev.hooks;

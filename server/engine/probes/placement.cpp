@@ -74,7 +74,26 @@ class Classifier {
   bool empty() const { return !tracer_; }
   const Bounds3& bounds() const { return soup_->bounds; }
 
-  std::vector<Probe> classify(const std::vector<Vec3>& points) const {
+  // In blocks of kClassifyBlock probes, polling `cancel` between them.
+  Result<std::vector<Probe>> classify(const std::vector<Vec3>& points,
+                                      const CancelToken& cancel) const {
+    constexpr size_t kClassifyBlock = 4096;
+    if (points.size() <= kClassifyBlock) return classify_block(points);
+    std::vector<Probe> out;
+    out.reserve(points.size());
+    for (size_t at = 0; at < points.size(); at += kClassifyBlock) {
+      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the probes' classification"));
+      const size_t end = std::min(points.size(), at + kClassifyBlock);
+      const std::vector<Probe> block =
+          classify_block(std::vector<Vec3>(points.begin() + static_cast<ptrdiff_t>(at),
+                                           points.begin() + static_cast<ptrdiff_t>(end)));
+      out.insert(out.end(), block.begin(), block.end());
+    }
+    return out;
+  }
+
+ private:
+  std::vector<Probe> classify_block(const std::vector<Vec3>& points) const {
     std::vector<Probe> out(points.size());
     if (empty()) return out;
     const size_t k = dirs_.size();
@@ -106,7 +125,6 @@ class Classifier {
     return out;
   }
 
- private:
   std::unique_ptr<accel::TriangleSoup> soup_;
   std::unique_ptr<accel::DeviceBvh> bvh_;
   std::unique_ptr<accel::EmbreeTracer> tracer_;
@@ -193,7 +211,8 @@ Result<PlacementPlan> plan_placement(const scene::Scene& scene, const PlacementS
   return plan;
 }
 
-Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& s) {
+Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& s,
+                                 CancelToken cancel) {
   const auto t0 = std::chrono::steady_clock::now();
   auto planned = plan_placement(scene, s);
   if (!planned) return planned.status();
@@ -230,7 +249,9 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
     for (size_t i = 0; i < out.positions.size(); ++i) out.grid_index[i] = static_cast<int32_t>(i);
   }
 
-  std::vector<Probe> cls = c.classify(out.positions);
+  auto classified = c.classify(out.positions, cancel);
+  if (!classified) return classified.status();
+  std::vector<Probe> cls = std::move(classified.value());
   const bool adaptive = s.mode == PlacementMode::kAdaptive;
   for (size_t p = 0; p < out.positions.size(); ++p)
     if (cls[p].backface_fraction > s.inside_fraction) ++out.inside_detected;
@@ -248,7 +269,9 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
         moved.push_back(out.positions[p] + cls[p].back_dir * step);
       }
       if (todo.empty()) break;
-      const std::vector<Probe> again = c.classify(moved);
+      auto reclassified = c.classify(moved, cancel);
+      if (!reclassified) return reclassified.status();
+      const std::vector<Probe>& again = reclassified.value();
       for (size_t i = 0; i < todo.size(); ++i) {
         out.positions[todo[i]] = moved[i];
         out.flags[todo[i]] |= kProbeMoved;

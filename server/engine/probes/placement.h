@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "common/cancel.h"
 #include "common/math.h"
 #include "common/status.h"
 #include "scene/scene.h"
@@ -79,6 +80,10 @@ Result<PlacementPlan> plan_placement(const scene::Scene& scene, const PlacementS
 // Places the probes of `settings` in the scene. INVALID_ARGUMENT for a
 // malformed file, an empty box or scene; RESOURCE_EXHAUSTED past
 // settings.max_probes.
-Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& settings);
+// cancel: polled between blocks of probes while they are classified (a
+// million probes are 128 million test rays); a request ends it with
+// cancelled_error (common/cancel.h).
+Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& settings,
+                                 CancelToken cancel = {});
 
 }  // namespace luxel::probes
