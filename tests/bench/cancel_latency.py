@@ -12,7 +12,8 @@ CANCELLED (docs/operations.md, "Cancel latency"):
 
 Phases: queued; layout (RUNNING, no lightmap layout reported yet: UV
 layout or generation); setup (layout reported, no path traced: sample info,
-BVH, buffers, kernels, first tile clear); tracing (paths > 0). luxeld is
+BVH, buffers, kernels, first tile clear); tracing (paths > 0); finishing (fraction 1: the last iteration done, the
+encodings' solve, the denoise and the outputs to come). luxeld is
 killed if its resident memory passes --max-rss-gib.
 """
 
@@ -41,6 +42,8 @@ def phase_of(info):
     state = state_name(info.state)
     if state != "RUNNING":
         return state.lower()
+    if info.progress.fraction >= 1:
+        return "finishing"
     if info.progress.paths > 0:
         return "tracing"
     return "setup" if info.lightmap_layout else "layout"
@@ -90,6 +93,7 @@ def main(argv):
     p.add_argument("--encodings", default="sh2,sg12")
     p.add_argument("--delays", default="0,0.1,0.3,0.6,1,1.5,2.5,4,8")
     p.add_argument("--max-rss-gib", type=float, default=6.0)
+    p.add_argument("--denoise", default="atrous", help="denoiser of the finishing-phase bake")
     p.add_argument("extra", nargs="*", help="flags passed to luxeld (after --)")
     args = p.parse_args(argv)
     settings = dict(resolution=args.resolution, samples_per_texel=4096, encodings=args.encodings,
@@ -117,6 +121,15 @@ def main(argv):
                 rows.append((f"{delay:g} s",) + cancel_and_measure(c, bake.bake_id))
                 print("%-8s phase %-8s call returned %.3f s (%s), call -> end %.3f s (%s)" %
                       rows[-1], flush=True)
+            # Finishing: the last iteration done (fraction 1), the solve, the
+            # denoise and the outputs still to come.
+            finishing = dict(settings, samples_per_texel=8, denoise=args.denoise)
+            bake = c.submit_bake(scene.scene_id, **finishing)
+            wait_until(c, bake.bake_id, lambda b: b.progress.fraction >= 1 or
+                       state_name(b.state) in TERMINAL, period=0.002)
+            rows.append(("last iteration done",) + cancel_and_measure(c, bake.bake_id))
+            print("%-8s phase %-8s call returned %.3f s (%s), call -> end %.3f s (%s)" %
+                  rows[-1], flush=True)
     finally:
         stop.set()
         daemon.stop()

@@ -51,6 +51,15 @@ Result<size_t> Baker::start() {
   return first_tile;
 }
 
+// A cancelled bake whose host throws it away (BakeHooks::discard_cancelled):
+// the figures of the log only.
+BakeResult Baker::discarded() {
+  result_.termination = Termination::kCancelled;
+  result_.seconds = elapsed();
+  result_.paths = done_.paths + paths_done_;
+  return std::move(result_);
+}
+
 Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   LUXEL_RETURN_IF_ERROR(validate_settings(settings_));
   hooks_ = &hooks;
@@ -66,19 +75,18 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto stopped = run_tile(ti, ti > first_tile.value());
     if (!stopped) return stopped.status();
     why = stopped.value();
-    if (why == Termination::kCancelled && hooks.discard_cancelled) {
-      result_.termination = why;
-      result_.seconds = elapsed();
-      result_.paths = done_.paths + paths_done_;
-      return std::move(result_);
-    }
+    if (why == Termination::kCancelled && hooks.discard_cancelled) return discarded();
     const bool last = ti + 1 == plan_.tiles.size() || why == Termination::kCancelled;
     LUXEL_RETURN_IF_ERROR(finish_tile(plan_.tiles[ti], last));
     if (last) break;
   }
   if ((settings_.sharded() || hooks.keep_final_state) && why != Termination::kCancelled)
     keep_final_state();
+  // A cancel that came after the last iteration: the solve and the denoise
+  // take seconds at 2048^2 with directional encodings.
+  if (hooks.discard_cancelled && cancelled()) return discarded();
   finish_result(s_, settings_, result_);
+  if (hooks.discard_cancelled && cancelled()) return discarded();
   // Device memory of the bake (with a snapshot denoiser, held beside it).
   size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
   if (denoise_method() != Denoise::kOff) {
@@ -237,6 +245,9 @@ Status Baker::write_checkpoint(size_t ti) {
 // The tile's state into the result; its statistics into done_. The last
 // tile (or a cancelled one) ends with the final report.
 Status Baker::finish_tile(const Tile& tile, bool last) {
+  // A host that throws a cancelled bake away (the daemon) stops here too:
+  // the read-back and its assembly take a second at 2048^2.
+  const CancelToken cancel(hooks_->discard_cancelled ? hooks_->cancel : nullptr);
   if (last) {
     result_.seconds = elapsed();
     auto final_report = report(true);
@@ -244,8 +255,10 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
   } else {
     LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress_));
   }
-  auto state = read_state();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
+  auto state = read_state(cancel);
   if (!state) return state.status();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
   write_state(s_, state.value(), tile.begin, result_);
   if (tracks_progressive_variance())
     two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);

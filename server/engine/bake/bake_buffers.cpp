@@ -237,7 +237,7 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
   return ctx.finish();  // the slice's host memory goes when this returns
 }
 
-Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c) const {
+Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, CancelToken cancel) const {
   const cl::LuxBakeParams& p = args_.params;
   const size_t n = p.covered_count;
   const AccumArgs& acc = args_.accum;
@@ -254,7 +254,14 @@ Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c) const {
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.weight, c.weight));
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.spp, c.spp));
   c.basis.resize(p.encoding_count == 0 ? 0 : n * p.basis_stride);
-  if (!c.basis.empty()) LUXEL_RETURN_IF_ERROR(ctx.read(args_.encodings.basis_state, c.basis));
+  constexpr size_t kReadChunk = size_t{64} << 20;
+  const size_t basis_bytes = c.basis.size() * sizeof(c.basis[0]);
+  for (size_t at = 0; at < basis_bytes; at += kReadChunk) {
+    LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the state's read-back"));
+    LUXEL_RETURN_IF_ERROR(ctx.read(args_.encodings.basis_state,
+                                   reinterpret_cast<char*>(c.basis.data()) + at,
+                                   std::min(kReadChunk, basis_bytes - at), at));
+  }
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.nonfinite, &nonfinite, sizeof nonfinite));
   LUXEL_RETURN_IF_ERROR(ctx.finish());
   c.nonfinite = nonfinite;

@@ -168,6 +168,15 @@ Result<JobResult> run_bake_job(const JobInput& in, device::Context& ctx, const J
     job.lightmap = std::move(r.value());
     if (job.cancelled()) return job;
   }
+  // A cancel after the lightmap's last iteration (or during the probes'
+  // last) ends the job here, before the next step or the outputs.
+  const CancelToken cancel(events.hooks.cancel);
+  auto cancelled_now = [&]() -> JobResult {
+    pipeline::BakeResult& r = job.lightmap ? *job.lightmap : job.probes->bake;
+    r.termination = Termination::kCancelled;
+    return std::move(job);
+  };
+  if (job.lightmap && cancel.requested()) return cancelled_now();
   if (!in.settings.probes.empty()) {
     auto b = bake_probes(in, ctx, events, job.lightmap.has_value());
     if (!b) return b.status();
@@ -177,6 +186,7 @@ Result<JobResult> run_bake_job(const JobInput& in, device::Context& ctx, const J
   if (!job.lightmap && !job.probes)
     return invalid_argument(
         "settings.lightmap: off, and settings.probes is empty: nothing to bake");
+  if (cancel.requested()) return cancelled_now();
   LUXEL_RETURN_IF_ERROR(write_outputs(in, out_dir, job));
   return job;
 }
