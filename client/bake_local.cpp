@@ -149,25 +149,24 @@ int run_bake(const std::vector<std::string>& args) {
     std::fprintf(stderr, "luxel bake: %s\n", ctx.status().to_string().c_str());
     return 1;
   }
-  // The daemon's check at SubmitBake (bake/resource_estimate.h): a bake
-  // that cannot fit is refused before the layout and the BVH are built.
-  if (a.settings.lightmap)
-    if (auto e = pipeline::estimate_bake_resources(scene.value(), a.settings,
-                                                   pipeline::DeviceLimits::of(ctx.value()->info()));
-        !e) {
-      std::fprintf(stderr, "luxel bake: %s\n", e.status().to_string().c_str());
-      return 1;
-    }
-  std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
-              ctx.value()->info().describe().c_str());
-  const bool tty = isatty(fileno(stdout));
-  const bool bar = tty && !a.quiet;
   // Named as luxeld names an upload by default (its file name), so a local
-  // bake writes the same bytes as the daemon's.
+  // bake writes the same bytes as the daemon's. The daemon's check at
+  // SubmitBake (job::check_bake_job): a bake that
+  // cannot fit, or probes that cannot be placed, are refused before the
+  // layout and the BVH are built.
   job::JobInput input{.scene = &scene.value(),
                       .settings = a.settings,
                       .scene_file = a.scene,
                       .scene_name = std::filesystem::path(a.scene).filename().string()};
+  if (Status st = job::check_bake_job(input, pipeline::DeviceLimits::of(ctx.value()->info()));
+      !st.is_ok()) {
+    std::fprintf(stderr, "luxel bake: %s\n", st.to_string().c_str());
+    return st.code() == StatusCode::kInvalidArgument ? 2 : 1;
+  }
+  std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
+              ctx.value()->info().describe().c_str());
+  const bool tty = isatty(fileno(stdout));
+  const bool bar = tty && !a.quiet;
   job::JobEvents events;
   if (a.settings.sharded()) {
     // A shard's accumulators.bin carries the bake's fingerprint, as the

@@ -83,7 +83,9 @@ int run_cancel(const std::vector<std::string>& args) {
   return bake_call(
       "cancel",
       "usage: luxel cancel BAKE [--finish] [connection options]\n"
-      "  cancels a queued or running bake (a finished one is left as it is);\n"
+      "  cancels a queued or running bake (a finished one is left as it is); returns\n"
+      "  at once, and a running bake ends CANCELLED within a fraction of a second\n"
+      "  (luxel watch BAKE waits for it);\n"
       "  --finish: stop tracing and complete the bake from the samples it has\n"
       "  (SUCCEEDED, termination \"stopped\"; results download as usual)\n",
       args,

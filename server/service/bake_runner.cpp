@@ -30,6 +30,22 @@ BakeRunner::~BakeRunner() {
 Status BakeRunner::recover() {
   for (const v1::BakeInfo& info : bakes_.list({})) {
     const std::string& id = info.bake_id();
+    if (!is_terminal(info.state()) && info.cancel_requested()) {
+      // CancelBake was answered before the daemon stopped: the bake ends as
+      // asked, not resumed.
+      LUXEL_RETURN_IF_ERROR(bakes_.update(
+          id,
+          [](v1::BakeInfo& b) {
+            b.set_state(v1::BAKE_STATE_CANCELLED);
+            b.set_termination("cancelled");
+            b.set_finished_at(unix_now());
+            b.add_notes("cancelled: CancelBake was answered before the daemon stopped");
+          },
+          /*persist=*/true));
+      std::remove(bakes_.checkpoint_path(id).c_str());
+      log_event("bake_cancelled", {{"bake", id}, {"scene", info.scene_id()}, {"while", "stopped"}});
+      continue;
+    }
     if (info.state() == v1::BAKE_STATE_RUNNING) {
       LUXEL_RETURN_IF_ERROR(bakes_.update(
           id,
@@ -74,47 +90,42 @@ void BakeRunner::shutdown() {
 }
 
 Result<v1::BakeInfo> BakeRunner::cancel(const std::string& bake_id, bool finish) {
-  {
-    std::lock_guard<std::mutex> lock(mu_);
-    auto info = bakes_.get(bake_id);
-    if (!info) return info.status();
-    if (is_terminal(info->state())) return info;
-    if (finish) {
-      // On disk first: a bake that starts (or restarts) later reads it there.
-      LUXEL_RETURN_IF_ERROR(bakes_.update(
-          bake_id, [](v1::BakeInfo& b) { b.set_finish_requested(true); }, true));
-      if (auto it = running_.find(bake_id); it != running_.end()) it->second->finish = true;
-      log_event("bake_finish_requested", {{"bake", bake_id}});
-      return bakes_.get(bake_id);
-    }
-    if (auto it = running_.find(bake_id); it != running_.end()) {
-      it->second->by_user = true;
-      it->second->cancel = true;
-    } else {
-      // Queued (or popped by a worker that has not registered it yet: the
-      // worker checks the state under mu_ before it starts).
-      queue_.remove(bake_id);
-      LUXEL_RETURN_IF_ERROR(bakes_.update(
-          bake_id,
-          [](v1::BakeInfo& b) {
-            b.set_state(v1::BAKE_STATE_CANCELLED);
-            b.set_termination("cancelled");
-            b.set_finished_at(unix_now());
-          },
-          true));
-      log_event("bake_cancelled",
-                {{"bake", bake_id}, {"scene", info->scene_id()}, {"while", "queued"}});
-      return bakes_.get(bake_id);
-    }
+  std::lock_guard<std::mutex> lock(mu_);
+  auto info = bakes_.get(bake_id);
+  if (!info) return info.status();
+  if (is_terminal(info->state())) return info;
+  if (finish) {
+    // On disk first: a bake that starts (or restarts) later reads it there.
+    LUXEL_RETURN_IF_ERROR(bakes_.update(
+        bake_id, [](v1::BakeInfo& b) { b.set_finish_requested(true); }, true));
+    if (auto it = running_.find(bake_id); it != running_.end()) it->second->finish = true;
+    log_event("bake_finish_requested", {{"bake", bake_id}});
+    return bakes_.get(bake_id);
   }
-  const auto deadline = Clock::now() + std::chrono::seconds(5);
-  uint64_t seen = 0;
-  while (Clock::now() < deadline) {
-    auto view = bakes_.wait_for_change(bake_id, seen, std::chrono::milliseconds(100));
-    if (!view) return view.status();
-    if (is_terminal(view->info.state())) return view->info;
-    seen = view->version;
+  if (auto it = running_.find(bake_id); it != running_.end()) {
+    // On disk first (a restart ends the bake CANCELLED instead of
+    // resuming it), then the flag the bake's steps poll; the call does
+    // not wait for the bake to stop.
+    LUXEL_RETURN_IF_ERROR(bakes_.update(
+        bake_id, [](v1::BakeInfo& b) { b.set_cancel_requested(true); }, true));
+    it->second->by_user = true;
+    it->second->cancel = true;
+    log_event("bake_cancel_requested", {{"bake", bake_id}});
+    return bakes_.get(bake_id);
   }
+  // Queued (or popped by a worker that has not registered it yet: the
+  // worker checks the state under mu_ before it starts).
+  queue_.remove(bake_id);
+  LUXEL_RETURN_IF_ERROR(bakes_.update(
+      bake_id,
+      [](v1::BakeInfo& b) {
+        b.set_state(v1::BAKE_STATE_CANCELLED);
+        b.set_termination("cancelled");
+        b.set_finished_at(unix_now());
+      },
+      true));
+  log_event("bake_cancelled",
+            {{"bake", bake_id}, {"scene", info->scene_id()}, {"while", "queued"}});
   return bakes_.get(bake_id);
 }
 
@@ -227,6 +238,7 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   hooks.fingerprint = fingerprint;
   hooks.resume = resume ? &*resume : nullptr;
   hooks.cancel = &running.cancel;
+  hooks.discard_cancelled = true;  // a cancelled or interrupted bake's result is not kept
   if (info->finish_requested()) running.finish = true;
   hooks.finish_now = &running.finish;
   hooks.device_turn = &device_turn_;  // concurrent bakes take turns on the one device
@@ -326,17 +338,22 @@ void BakeRunner::run_bake(const std::string& bake_id, std::unique_ptr<device::Co
   remove_tree(partial);
   remove_tree(final_dir);
   auto done = job::run_bake_job(input, *ctx, events, partial);
-  if (!done) {
+  // A step that polled the cancel request stops with an error of its own
+  // (common/cancel.h): with the request set, the job was cancelled, not failed.
+  const bool stopped_early = !done && running.cancel.load();
+  if (!done && !stopped_early) {
     ctx.reset();  // a driver error may leave the context unusable: the next bake makes a new one
     return finish_failed(bake_id, done.status());
   }
   // The figures of the record: the lightmap's, or the probes' alone.
-  const pipeline::BakeResult& r = done->figures();
+  const pipeline::BakeResult no_figures;
+  const pipeline::BakeResult& r = done ? done->figures() : no_figures;
   // The workers traced a sharded lightmap's paths (and count them themselves).
-  if (!(sharded && done->lightmap)) paths_traced_ += r.paths - std::min(r.paths, last_paths);
-  traced_s = r.seconds;
+  if (done && !(sharded && done->lightmap))
+    paths_traced_ += r.paths - std::min(r.paths, last_paths);
+  if (done) traced_s = r.seconds;
 
-  if (done->cancelled()) {
+  if (stopped_early || done->cancelled()) {
     remove_tree(partial);
     const bool by_user = running.by_user.load();
     outcome = by_user ? "cancelled" : "interrupted";

@@ -7,7 +7,9 @@
 #include <fstream>
 
 #include "common/sha256.h"
+#include "job/bake_job.h"
 #include "luxel_version.h"
+#include "output/exr.h"
 #include "service/coordinator/shard_plan.h"
 #include "service/coordinator/worker_pool.h"
 #include "service/files.h"
@@ -156,8 +158,33 @@ grpc::Status LuxelService::estimate_at_submit(const std::string& scene_id,
     return {grpc::StatusCode::NOT_FOUND, strprintf("scene_id: no scene '%s'", scene_id.c_str())};
   auto scene = scenes_.load_scene(info.value());  // cached; the bake reuses it
   if (!scene) return to_grpc(scene.status());
-  auto estimate = pipeline::estimate_bake_resources(*scene.value(), settings, options_.device);
-  return to_grpc(estimate.status());
+  // What the job will need and what it will place, checked by the functions
+  // the bake runs (job/bake_job.h), against the scene as the runner reads it.
+  const job::JobInput input{.scene = scene.value().get(),
+                            .settings = settings,
+                            .scene_file = scenes_.main_file_path(info.value()),
+                            .scene_name = info->name()};
+  return to_grpc(job::check_bake_job(input, options_.device));
+}
+
+// A reference lightmap of another size fails the bake when it starts
+// (bake_buffers.cpp); with a fixed resolution the size is known now: R
+// wide, and R tall per page. Its stored EXR header says the reference's.
+grpc::Status LuxelService::check_reference_size(const std::string& ref,
+                                                const pipeline::BakeSettings& settings) {
+  const int r = settings.atlas.resolution;
+  if (r <= 0 || !settings.lightmap) return grpc::Status::OK;
+  auto size = output::read_exr_size(bakes_.results_dir(ref) + "/irradiance.exr");
+  if (!size)
+    return invalid(strprintf("settings.reference_bake_id: bake %s has no readable irradiance.exr",
+                             ref.c_str()));
+  const auto [w, h] = size.value();
+  if (w != r || h % r != 0)
+    return invalid(
+        strprintf("settings.reference_bake_id: bake %s is a %dx%d lightmap; this bake's is %dx%d "
+                  "(settings.resolution): a reference must have the bake's size",
+                  ref.c_str(), w, h, r, r));
+  return grpc::Status::OK;
 }
 
 grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::SubmitBakeRequest* req,
@@ -215,6 +242,7 @@ grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::Submit
       return invalid(
           strprintf("settings.reference_bake_id: bake %s is %s; a reference must have SUCCEEDED",
                     ref.c_str(), v1::BakeState_Name(ref_info->state()).c_str()));
+    if (auto st = check_reference_size(ref, settings.value()); !st.ok()) return st;
   }
   if (Status st = queue_.check_room(); !st.is_ok()) return to_grpc(st);
   auto created = bakes_.create(req->scene_id(), req->settings(), req->idempotency_key());

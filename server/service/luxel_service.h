@@ -92,10 +92,14 @@ class LuxelService final : public LuxelServiceBase {
                                v1::ServerStatus* response) override;
 
  private:
-  // The resource estimate of a bake (bake/resource_estimate.h) as a
-  // gRPC status: RESOURCE_EXHAUSTED or INVALID_ARGUMENT naming the setting.
+  // The job's check before queueing (job::check_bake_job: the resource
+  // estimate, a small layout, the probe placement) as a gRPC status:
+  // RESOURCE_EXHAUSTED or INVALID_ARGUMENT naming the setting.
   grpc::Status estimate_at_submit(const std::string& scene_id,
                                   const pipeline::BakeSettings& settings);
+  // INVALID_ARGUMENT when the reference bake's lightmap has another size
+  // than the one a fixed resolution gives this bake.
+  grpc::Status check_reference_size(const std::string& ref, const pipeline::BakeSettings& settings);
   // UNAUTHENTICATED unless the call carries the configured bearer token.
   grpc::Status authenticate(grpc::ServerContextBase* ctx, const char* rpc) const;
 

@@ -3,6 +3,7 @@
 #include <google/protobuf/util/json_util.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "common/scene_id.h"
@@ -127,6 +128,30 @@ std::string without_dir(std::string text, const std::string& dir, const std::str
   return text;
 }
 
+// Coordinates past this magnitude leave a float no room for the offsets a
+// ray needs off a surface (an ulp at 1e16 is about 1e9 units), and past
+// FLT_MAX they are infinite: every bake of such a scene fails.
+constexpr float kMaxCoordinate = 1e16f;
+
+// A scene no bake can use is refused at upload, naming the upload's file:
+// no triangle to bake or to put probes around, or world coordinates past
+// kMaxCoordinate.
+Status check_bakeable(const scene::SceneStats& stats, const std::string& name) {
+  if (stats.world_triangles == 0)
+    return invalid_argument(
+        strprintf("scene '%s' failed validation: it has no triangles (every bake needs geometry)",
+                  name.c_str()));
+  const Bounds3& b = stats.world_bounds;
+  for (int a = 0; a < 3; ++a)
+    if (!(std::fabs(b.lo[a]) <= kMaxCoordinate && std::fabs(b.hi[a]) <= kMaxCoordinate))
+      return invalid_argument(strprintf(
+          "scene '%s' failed validation: world coordinates reach %g (axis %c), past +-%g; scale "
+          "the scene down",
+          name.c_str(), double(std::max(std::fabs(b.lo[a]), std::fabs(b.hi[a]))), "xyz"[a],
+          double(kMaxCoordinate)));
+  return Status::ok();
+}
+
 }  // namespace
 
 Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
@@ -161,6 +186,7 @@ Result<v1::SceneInfo> SceneStore::commit(const std::string& staging_dir,
                         without_dir(st.message(), staging_dir, main_path, header.name()).c_str()));
   }
   const scene::SceneStats stats = scene::compute_stats(imported.value());
+  if (Status st = check_bakeable(stats, header.name()); !st.is_ok()) return st;
 
   v1::SceneInfo info;
   info.set_scene_id(id);

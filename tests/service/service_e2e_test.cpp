@@ -417,15 +417,14 @@ TEST_F(ServiceE2E, ReferenceBakeGivesTrueErrorInProgress) {
   EXPECT_EQ(bytes.find(",,"), std::string::npos)
       << "every point carries rmse and rel_mse: " << bytes;
 
-  // A reference of another size fails the bake with a message naming it.
+  // A reference of another size is refused at submit, naming the field
+  // (its size read from the reference's stored EXR header).
   v1::BakeSettings other = small_settings(16, 64);
   other.set_reference_bake_id(ref.bake_id());
-  ASSERT_TRUE(submit(other, &bake).ok());
-  const v1::BakeInfo failed =
-      wait_for_bake(*daemon_, bake.bake_id(), is_finished, std::chrono::seconds(60));
-  EXPECT_EQ(failed.state(), v1::BAKE_STATE_FAILED);
-  EXPECT_NE(failed.error_message().find("settings.reference"), std::string::npos)
-      << failed.error_message();
+  const grpc::Status refused = submit(other, &bake);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(refused.error_message().rfind("settings.reference_bake_id", 0), 0u)
+      << refused.error_message();
 }
 
 TEST_F(ServiceE2E, IdempotencyKeyReturnsTheSameBake) {

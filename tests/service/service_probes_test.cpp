@@ -140,12 +140,17 @@ TEST(ServiceProbes, ProbesAtTaggedGltfNodes) {
   const json meta = json::parse(fetch(daemon, a.bake_id(), "probes.json"));
   EXPECT_EQ(meta["layout"]["mode"], "nodes");
   ASSERT_EQ(meta["probes"].size(), 2u);
-  // The untagged Cornell box: the bake fails and names the setting.
+  // The untagged Cornell box: refused at submit, naming the setting.
   const std::string plain = upload_cornell(daemon);
-  const v1::BakeInfo b = submit_bake(daemon, plain, s);
-  const v1::BakeInfo rb = wait_for_bake(daemon, b.bake_id(), is_finished);
-  EXPECT_EQ(rb.state(), v1::BAKE_STATE_FAILED);
-  EXPECT_NE(rb.error_message().find("luxelProbe"), std::string::npos) << rb.error_message();
+  v1::SubmitBakeRequest req;
+  req.set_scene_id(plain);
+  *req.mutable_settings() = s;
+  v1::BakeInfo b;
+  auto ctx = daemon.context();
+  const grpc::Status st = daemon.stub()->SubmitBake(ctx.get(), req, &b);
+  EXPECT_EQ(st.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(st.error_message().rfind("settings.probes", 0), 0u) << st.error_message();
+  EXPECT_NE(st.error_message().find("luxelProbe"), std::string::npos) << st.error_message();
 }
 
 }  // namespace

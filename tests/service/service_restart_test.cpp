@@ -221,6 +221,9 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   v1::BakeInfo cancelled;
   auto ctx = daemon.context();
   ASSERT_TRUE(stub->CancelBake(ctx.get(), cancel, &cancelled).ok());
+  // The call returns at once; the bake ends CANCELLED at its next poll.
+  EXPECT_TRUE(cancelled.cancel_requested() || cancelled.state() == v1::BAKE_STATE_CANCELLED);
+  cancelled = wait_for_bake(daemon, running.bake_id(), is_finished);
   EXPECT_EQ(cancelled.state(), v1::BAKE_STATE_CANCELLED);
   EXPECT_EQ(cancelled.termination(), "cancelled");
   const v1::BakeInfo h = wait_for_bake(daemon, later_high.bake_id(), is_finished);
@@ -249,6 +252,10 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   cancel.set_bake_id(blocker.bake_id());
   ctx = daemon.context();
   ASSERT_TRUE(stub->CancelBake(ctx.get(), cancel, &cancelled).ok());
+  // A running bake uses its scene until it has stopped (CancelBake returns
+  // before that).
+  EXPECT_EQ(wait_for_bake(daemon, blocker.bake_id(), is_finished).state(),
+            v1::BAKE_STATE_CANCELLED);
 
   // Now nothing uses the scene.
   v1::DeleteSceneRequest del;

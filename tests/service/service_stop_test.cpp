@@ -80,8 +80,8 @@ TEST(ServiceStop, CancelAndSigtermActWithinAProgressIntervalOnHugeBatches) {
     ASSERT_TRUE(daemon->stub()->CancelBake(ctx.get(), req, &after).ok());
     const double latency = seconds_since(t0);
     std::printf("CancelBake -> %s: %.3f s\n", v1::BakeState_Name(after.state()).c_str(), latency);
-    // CancelBake waits a while for the bake to stop; on a loaded machine it
-    // may return before, still RUNNING: the record then ends CANCELLED.
+    // CancelBake returns at once (cancel_requested set); the record then
+    // ends CANCELLED.
     const v1::BakeInfo done = wait_for_bake(*daemon, bake.bake_id(), is_finished, 600s);
     EXPECT_EQ(done.state(), v1::BAKE_STATE_CANCELLED);
   }

@@ -229,9 +229,11 @@ class Client:
         return list(self._unary(self._stub.ListBakes, request).bakes)
 
     def cancel_bake(self, bake_id, finish=False):
-        """Cancels a queued or running bake. finish=True keeps it instead: the
-        bake stops tracing and completes from the samples it has (SUCCEEDED,
-        termination "stopped"); the call returns at once."""
+        """Cancels a queued or running bake and returns at once: a queued bake
+        comes back CANCELLED, a running one RUNNING with cancel_requested set,
+        and ends CANCELLED within a fraction of a second (wait() for it).
+        finish=True keeps it instead: the bake stops tracing and completes
+        from the samples it has (SUCCEEDED, termination "stopped")."""
         return self._unary(self._stub.CancelBake,
                            luxel_pb2.CancelBakeRequest(bake_id=bake_id, finish=finish))
 

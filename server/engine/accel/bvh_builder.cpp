@@ -28,6 +28,10 @@ struct BuildLeaf : BuildNode {
   unsigned prims[1];  // `count` entries (allocated with the leaf)
 };
 
+bool build_progress(void* cancel, double) {
+  return !static_cast<const CancelToken*>(cancel)->requested();
+}
+
 void* create_node(RTCThreadLocalAllocator alloc, unsigned num_children, void*) {
   auto* n = static_cast<BuildInner*>(rtcThreadLocalAlloc(alloc, sizeof(BuildInner), 16));
   n->leaf = false;
@@ -318,10 +322,17 @@ Result<DeviceBvh> build_bvh(const TriangleSoup& soup, const BvhBuildOptions& opt
   args.setNodeBounds = set_bounds;
   args.createLeaf = create_leaf;
   args.splitPrimitive = nullptr;
-  args.buildProgress = nullptr;
-  args.userPtr = nullptr;
+  // The monitor returns false to abort (Embree then returns no root and
+  // RTC_ERROR_CANCELLED); userPtr reaches it and the node callbacks, which
+  // ignore it.
+  args.buildProgress = options.cancel.flag() ? build_progress : nullptr;
+  args.userPtr = const_cast<CancelToken*>(&options.cancel);
 
   auto* root = static_cast<BuildNode*>(rtcBuildBVH(&args));
+  if (!root && options.cancel.requested()) {
+    rtcReleaseBVH(bvh);
+    return cancelled_error("the BVH build");
+  }
   if (!root) {
     const RTCError err = rtcGetDeviceError(device.value());
     rtcReleaseBVH(bvh);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "accel/triangle_soup.h"
+#include "common/cancel.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "kernels/shared/geometry.h"
@@ -21,6 +22,9 @@ struct BvhBuildOptions {
   unsigned max_depth = 48;      // the traversal stack (LUX_STACK_SIZE) must be deeper
   float traversal_cost = 1.0f;  // SAH cost of one node visit relative to...
   float intersection_cost = 1.0f;  // ...one triangle test
+  // Polled by Embree's build-progress monitor: a set request aborts the
+  // build with cancelled_error (common/cancel.h).
+  CancelToken cancel;
 };
 
 struct BvhStats {

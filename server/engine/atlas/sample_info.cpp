@@ -101,7 +101,8 @@ void emit_band(const std::vector<Coverage>& coverage, const WorldTriangles& tris
 
 }  // namespace
 
-Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atlas) {
+Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atlas,
+                                     CancelToken cancel) {
   if (atlas.placements.size() != scene.instances.size())
     return invalid_argument(strprintf("atlas has %zu placements for %zu instances",
                                       atlas.placements.size(), scene.instances.size()));
@@ -139,6 +140,7 @@ Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atl
   std::vector<Coverage> coverage, sorted;
   std::vector<uint32_t> counts;
   for (size_t band = 0; band + 1 < lists.first.size(); ++band) {
+    LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the sample info"));
     const int row0 = static_cast<int>(band) * band_rows;
     const int row1 = std::min(atlas.height, row0 + band_rows);
     coverage.clear();

@@ -20,6 +20,7 @@
 
 #include "atlas/atlas.h"
 #include "atlas/texel_raster.h"
+#include "common/cancel.h"
 #include "common/math.h"
 #include "common/status.h"
 #include "scene/scene.h"
@@ -45,7 +46,9 @@ struct SampleInfo {
   size_t bytes() const { return (offsets.size() + words.size()) * sizeof(uint32_t); }
 };
 
-Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atlas);
+// cancel: polled per band of rows; a request ends it with cancelled_error.
+Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atlas,
+                                     CancelToken cancel = {});
 
 // One decoded sample position (host twin of lux_sample_info_lookup).
 struct SamplePoint {

@@ -22,7 +22,7 @@ Result<size_t> Baker::start() {
   // Shards keep every tile's state for BakeResult::final_state.
   keep_finished_ = (tiled() && static_cast<bool>(hooks.on_checkpoint)) || settings_.sharded() ||
                    hooks.keep_final_state;
-  begin_result(s_, result_);
+  LUXEL_RETURN_IF_ERROR(begin_result(s_, result_, CancelToken(hooks.cancel)));
   size_t first_tile = 0;
   if (hooks.resume) {
     if (hooks.resume->fingerprint != hooks.fingerprint)
@@ -42,11 +42,22 @@ Result<size_t> Baker::start() {
     progress_.iteration = hooks.resume->iteration;
     result_.series = series_from_checkpoint(*hooks.resume);
   } else {
-    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end));
+    LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, plan_.tiles[0].begin, plan_.tiles[0].end,
+                                       CancelToken(hooks.cancel)));
   }
   LUXEL_RETURN_IF_ERROR(ctx_.finish());
+  LUXEL_RETURN_IF_ERROR(check_cancel(CancelToken(hooks.cancel), "the first tile's clear"));
   result_.setup_s = seconds_since(t_setup);
   return first_tile;
+}
+
+// A cancelled bake whose host throws it away (BakeHooks::discard_cancelled):
+// the figures of the log only.
+BakeResult Baker::discarded() {
+  result_.termination = Termination::kCancelled;
+  result_.seconds = elapsed();
+  result_.paths = done_.paths + paths_done_;
+  return std::move(result_);
 }
 
 Result<BakeResult> Baker::run(const BakeHooks& hooks) {
@@ -64,13 +75,18 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
     auto stopped = run_tile(ti, ti > first_tile.value());
     if (!stopped) return stopped.status();
     why = stopped.value();
+    if (why == Termination::kCancelled && hooks.discard_cancelled) return discarded();
     const bool last = ti + 1 == plan_.tiles.size() || why == Termination::kCancelled;
     LUXEL_RETURN_IF_ERROR(finish_tile(plan_.tiles[ti], last));
     if (last) break;
   }
   if ((settings_.sharded() || hooks.keep_final_state) && why != Termination::kCancelled)
     keep_final_state();
+  // A cancel that came after the last iteration: the solve and the denoise
+  // take seconds at 2048^2 with directional encodings.
+  if (hooks.discard_cancelled && cancelled()) return discarded();
   finish_result(s_, settings_, result_);
+  if (hooks.discard_cancelled && cancelled()) return discarded();
   // Device memory of the bake (with a snapshot denoiser, held beside it).
   size_t peak = device_bytes_held() + (denoiser_ ? denoiser_->device_bytes() : 0);
   if (denoise_method() != Denoise::kOff) {
@@ -229,6 +245,9 @@ Status Baker::write_checkpoint(size_t ti) {
 // The tile's state into the result; its statistics into done_. The last
 // tile (or a cancelled one) ends with the final report.
 Status Baker::finish_tile(const Tile& tile, bool last) {
+  // A host that throws a cancelled bake away (the daemon) stops here too:
+  // the read-back and its assembly take a second at 2048^2.
+  const CancelToken cancel(hooks_->discard_cancelled ? hooks_->cancel : nullptr);
   if (last) {
     result_.seconds = elapsed();
     auto final_report = report(true);
@@ -236,8 +255,10 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
   } else {
     LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress_));
   }
-  auto state = read_state();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
+  auto state = read_state(cancel);
   if (!state) return state.status();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
   write_state(s_, state.value(), tile.begin, result_);
   if (tracks_progressive_variance())
     two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
@@ -276,8 +297,10 @@ void Baker::keep_final_state() {
 Result<BakeResult> bake(const scene::Scene& scene, const BakeSettings& settings,
                         device::Context& ctx, const BakeHooks& hooks) {
   const auto t0 = SteadyClock::now();
-  auto layout = lay_out_lightmap(scene, settings);
+  const CancelToken cancel(hooks.cancel);
+  auto layout = lay_out_lightmap(scene, settings, cancel);
   if (!layout) return layout.status();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the lightmap layout"));
   const double layout_s = seconds_since(t0);
   if (hooks.on_layout)
     hooks.on_layout(describe_lightmap_layout(layout.value()) +

@@ -164,7 +164,16 @@ struct BakeHooks {
   const std::atomic<bool>* checkpoint_now = nullptr;  // set: checkpoint after the current iteration
   std::string fingerprint;                            // stored in checkpoints (scene + settings)
   const BakeCheckpoint* resume = nullptr;             // continue from this state
-  const std::atomic<bool>* cancel = nullptr;          // set to stop after the current iteration
+  // Set to stop: at the next stage of the current iteration, or during
+  // setup (layout, UV generation, BVH build, buffers: common/cancel.h), where
+  // bake() then fails with cancelled_error.
+  const std::atomic<bool>* cancel = nullptr;
+  // The host throws a cancelled bake away (the daemon): return at once,
+  // with termination, seconds and paths only, without the final report,
+  // the state's read-back, the encodings' solve or the denoise (seconds at
+  // 2048^2 with directional encodings). Off: the result holds what was
+  // accumulated.
+  bool discard_cancelled = false;
   // Set: stop after the current iteration (or before the first, when set
   // already) and finish with the samples traced so far: outputs, encodings
   // and BakeResult::final_state as for any stopping rule (Termination::kStopped).

@@ -25,7 +25,7 @@ void fill_irradiance(const BakeSetup& setup, const std::vector<cl::float4>& mean
   }
 }
 
-void begin_result(const BakeSetup& setup, BakeResult& r) {
+Status begin_result(const BakeSetup& setup, BakeResult& r, CancelToken cancel) {
   const size_t t = setup.params.texel_count;
   r.width = setup.atlas.width;
   r.height = setup.atlas.height;
@@ -36,6 +36,7 @@ void begin_result(const BakeSetup& setup, BakeResult& r) {
   r.encodings.clear();
   const EncodingPlan& plan = setup.plan;
   for (size_t k = 0; k < plan.encodings.size(); ++k) {
+    LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the result's images"));
     EncodedLightmap e;
     e.name = plan.encodings[k].name();
     e.count = plan.table[k].count;
@@ -43,6 +44,7 @@ void begin_result(const BakeSetup& setup, BakeResult& r) {
     e.residual_rms = 0;  // the sum over covered texels until finish_result
     r.encodings.push_back(std::move(e));
   }
+  return check_cancel(cancel, "the result's images");
 }
 
 void fill_rel_error(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin,
@@ -111,7 +113,7 @@ void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeRes
 
 void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
                      const BakeCheckpoint& state, BakeResult& r) {
-  begin_result(setup, r);
+  (void)begin_result(setup, r);  // no cancel token: always OK
   write_state(setup, state, 0, r);
   finish_result(setup, settings, r);
 }

@@ -29,7 +29,9 @@ void fill_rel_error(const BakeSetup& setup, const BakeCheckpoint& state, size_t 
 // state.spp.size()) into them (irradiance, samples, rel_error,
 // coefficients) and adds its nonfinite count; finish_result adds what the
 // setup decided (atlas, coverage, features, manifest entries).
-void begin_result(const BakeSetup& setup, BakeResult& r);
+// cancel: polled between the images (hundreds of MB each at 2048^2 with
+// directional encodings); a request ends it with cancelled_error.
+Status begin_result(const BakeSetup& setup, BakeResult& r, CancelToken cancel = {});
 void write_state(const BakeSetup& setup, const BakeCheckpoint& state, size_t begin, BakeResult& r);
 void finish_result(const BakeSetup& setup, const BakeSettings& settings, BakeResult& r);
 // All three for one state of every covered slot.

@@ -42,7 +42,10 @@ class BakeBuffers {
   // their texels and sample-info records, sets args().params.covered_count
   // and clears the accumulation (state of slot k of the tile = covered slot
   // begin + k).
-  Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end);
+  // cancel: polled between the buffers' clears (a 2048^2 basis state is
+  // hundreds of MB); a request ends it with cancelled_error.
+  Status load_tile(device::Context& ctx, const BakeSetup& setup, size_t begin, size_t end,
+                   CancelToken cancel = {});
 
   // The kernels' arguments (args().params is the bake's LuxBakeParams).
   BakeKernelArgs& args() { return args_; }
@@ -60,7 +63,9 @@ class BakeBuffers {
   // count) to and from a checkpoint, per covered slot; width/height and the
   // covered count are checked on restore. covered: the setup's covered
   // texels, to compact a whole-image (version 1-2) checkpoint.
-  Status read_state(device::Context& ctx, BakeCheckpoint& c) const;
+  // cancel: polled between 64 MiB pieces of the basis state (1 GB at 2048^2
+  // with sh2 and sg12); a request ends it with cancelled_error.
+  Status read_state(device::Context& ctx, BakeCheckpoint& c, CancelToken cancel = {}) const;
   Status restore_state(device::Context& ctx, const BakeCheckpoint& c,
                        const std::vector<uint32_t>& covered);
 

@@ -10,9 +10,23 @@
 
 namespace luxel::pipeline {
 
+Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene, const atlas::Atlas& atlas,
+                                              CancelToken cancel) {
+  auto info = atlas::build_sample_info(scene, atlas, cancel);
+  if (!info) return info.status();
+  if (info.value().covered_texels.empty())
+    return invalid_argument(strprintf(
+        "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
+        "small for this resolution?)",
+        atlas.width, atlas.height));
+  if (info.value().covered_texels.size() >= kSlotMask)
+    return resource_exhausted("lightmap has too many covered texels for 32-bit path keys");
+  return info;
+}
+
 Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
                                const BakeSettings& settings, device::Context& ctx,
-                               const ProbeDomain* probes) {
+                               const ProbeDomain* probes, CancelToken cancel) {
   BakeSetup s;
   if (probes) {
     // The probe domain: probe i is "texel" (i, 0) of a probes x 1 atlas,
@@ -42,30 +56,27 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
     s.info.records = n;
   } else {
     s.atlas = std::move(atlas);
-    auto info = atlas::build_sample_info(scene, s.atlas);
+    auto info = covered_sample_info(scene, s.atlas, cancel);
     if (!info) return info.status();
     s.info = std::move(info.value());
   }
-  if (s.info.covered_texels.empty())
-    return invalid_argument(strprintf(
-        "no texel of the %dx%d lightmap contains a sample of any triangle (lightmap UVs too "
-        "small for this resolution?)",
-        s.atlas.width, s.atlas.height));
-  if (s.info.covered_texels.size() >= kSlotMask)
-    return resource_exhausted("lightmap has too many covered texels for 32-bit path keys");
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the sample info"));
 
   auto soup = accel::build_triangle_soup(scene);
   if (!soup) return soup.status();
   s.soup = std::move(soup.value());
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the triangle soup"));
   // The node width is the device's (BVH4 on CPUs, docs/performance.md).
   accel::BvhBuildOptions bvh_options;
   bvh_options.width = accel::preferred_bvh_width(ctx.info());
+  bvh_options.cancel = cancel;
   auto bvh = accel::build_bvh(s.soup, bvh_options);
   if (!bvh) return bvh.status();
   s.bvh = std::make_unique<accel::DeviceBvh>(std::move(bvh.value()));
   auto tracer = accel::make_intersector(settings.intersector, ctx, *s.bvh);
   if (!tracer) return tracer.status();
   s.tracer = std::move(tracer.value());
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the intersector's setup"));
 
   auto lights = build_light_table(scene, s.soup, settings.lights, s.soup.bounds);
   if (!lights) return lights.status();
@@ -73,6 +84,7 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   auto data = prepare_scene_data(scene, s.soup, s.atlas, s.lights.triangle_light);
   if (!data) return data.status();
   s.data = std::move(data.value());
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the scene data"));
   auto plan = plan_encodings(settings.encodings);
   if (!plan) return plan.status();
   s.plan = std::move(plan.value());

@@ -13,6 +13,7 @@
 #include "atlas/sample_info.h"
 #include "bake/encodings.h"
 #include "bake/scene_data.h"
+#include "common/cancel.h"
 #include "device/context.h"
 #include "device/feature_set.h"
 #include "kernels/shared/bake.h"
@@ -56,8 +57,17 @@ inline constexpr int kTagShift = 29;
 // table, encodings and tracer as they come.
 // probes: a probe domain instead of the atlas's texels (then `atlas` is
 // ignored); its settings.encodings must be SH in the world frame.
+// The sample info of a laid-out atlas (atlas::build_sample_info), refused
+// when no texel is covered or too many are for 32-bit path keys: the first
+// step of prepare_bake, also run at submit on small layouts
+// (job::check_bake_job).
+Result<atlas::SampleInfo> covered_sample_info(const scene::Scene& scene, const atlas::Atlas& atlas,
+                                              CancelToken cancel = {});
+
+// cancel: polled between the steps and by the BVH build; a request ends
+// the setup with cancelled_error (common/cancel.h).
 Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
                                const BakeSettings& settings, device::Context& ctx,
-                               const ProbeDomain* probes = nullptr);
+                               const ProbeDomain* probes = nullptr, CancelToken cancel = {});
 
 }  // namespace luxel::pipeline

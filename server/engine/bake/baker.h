@@ -59,6 +59,7 @@ class Baker {
   Result<size_t> denoise_result();  // baker_denoise.cpp
   double elapsed() const { return resumed_elapsed_ + seconds_since(t_start_); }
   bool cancelled() const { return hooks_->cancel && hooks_->cancel->load(); }
+  BakeResult discarded();
 
   // Setup and tiles (baker_tiles.cpp).
   Status setup();
@@ -136,9 +137,9 @@ class Baker {
   // The manifest's "denoise" object when auto found no OIDN: why the map
   // stays raw.
   std::string auto_off_json() const;
-  Result<BakeCheckpoint> read_state() {
+  Result<BakeCheckpoint> read_state(CancelToken cancel = {}) {
     BakeCheckpoint c;
-    LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c));
+    LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, c, cancel));
     c.paths_done = paths_done_;
     label_state(c);
     return c;

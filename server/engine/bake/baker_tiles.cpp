@@ -10,7 +10,8 @@
 namespace luxel::pipeline {
 
 Status Baker::setup() {
-  auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_, probes_);
+  const CancelToken cancel(hooks_->cancel);
+  auto setup = prepare_bake(scene_, layout_.atlas, settings_, ctx_, probes_, cancel);
   if (!setup) return setup.status();
   s_ = std::move(setup.value());
   auto sort = RadixSort::create(ctx_, s_.capacity);
@@ -21,7 +22,9 @@ Status Baker::setup() {
     if (!compaction) return compaction.status();
     compaction_ = std::move(compaction.value());
   }
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the sort's setup"));
   LUXEL_RETURN_IF_ERROR(plan_memory());
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile plan"));
   auto buffers =
       BakeBuffers::create(ctx_, scene_, s_, settings_, {plan_.max_slots, plan_.max_words});
   if (!buffers) return buffers.status();
@@ -29,10 +32,11 @@ Status Baker::setup() {
   auto offsets = OffsetBuffer::create(ctx_, s_.capacity, static_cast<uint32_t>(plan_.max_slots));
   if (!offsets) return offsets.status();
   offset_buffer_ = std::move(offsets.value());
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the buffers' allocation"));
   auto kernels = BakeKernels::create(ctx_, s_.features);
   if (!kernels) return kernels.status();
   kernels_ = std::move(kernels.value());
-  return Status::ok();
+  return check_cancel(cancel, "the kernels' setup");
 }
 
 // The tiles of the covered texels under the device-memory budget.

@@ -32,9 +32,10 @@ std::string missing_lightmap_uvs(const scene::Scene& scene) {
 }
 
 Result<LightmapLayout> generate(const scene::Scene& scene, const BakeSettings& settings,
-                                std::string reason) {
+                                std::string reason, CancelToken cancel) {
   uv::GenerateOptions options;
   options.atlas = settings.atlas;
+  options.cancel = cancel;
   auto gen = uv::generate_lightmap_uvs(scene, options);
   if (!gen) return gen.status();
   uv::GeneratedUvs& g = gen.value();
@@ -115,7 +116,8 @@ std::string describe_layout_warnings(const atlas::Atlas& atlas) {
   return text;
 }
 
-Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings) {
+Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings,
+                                        CancelToken cancel) {
   if (!settings.node_placements.empty()) {
     // Placement dictated by the client through the API: honoured exactly,
     // as the nodes' extras would be (atlas::build_atlas, placed mode).
@@ -128,13 +130,13 @@ Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSet
           "settings.placements: placement maps the file's TEXCOORD_1 into the atlas; it cannot "
           "be combined with --uv generate");
     rest.uv = UvMode::kExisting;
-    auto layout = lay_out_lightmap(*placed.value(), rest);
+    auto layout = lay_out_lightmap(*placed.value(), rest, cancel);
     if (!layout) return layout.status();
     layout->generated_scene = std::move(placed.value());
     layout->scene = layout->generated_scene.get();
     return layout;
   }
-  if (settings.uv == UvMode::kGenerate) return generate(scene, settings, "--uv generate");
+  if (settings.uv == UvMode::kGenerate) return generate(scene, settings, "--uv generate", cancel);
   std::string reason = missing_lightmap_uvs(scene);
   if (reason.empty()) {
     auto atlas = atlas::build_atlas(scene, settings.atlas);
@@ -164,7 +166,7 @@ Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSet
     layout.atlas = std::move(atlas.value());
     return layout;
   }
-  return generate(scene, settings, reason);
+  return generate(scene, settings, reason, cancel);
 }
 
 }  // namespace luxel::pipeline

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "atlas/atlas.h"
+#include "common/cancel.h"
 #include "common/status.h"
 #include "scene/scene.h"
 #include "settings/bake_settings.h"
@@ -41,7 +42,9 @@ struct LightmapLayout {
   std::shared_ptr<const GeneratedUvLayout> generated;  // null when TEXCOORD_1 was used
 };
 
-Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings);
+// cancel: polled while UVs are generated (uv::GenerateOptions::cancel).
+Result<LightmapLayout> lay_out_lightmap(const scene::Scene& scene, const BakeSettings& settings,
+                                        CancelToken cancel = {});
 
 // One line saying where the UVs came from, the size and the texel density
 // the layout reached and, when generated, how long that took and the

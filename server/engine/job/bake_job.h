@@ -17,6 +17,7 @@
 #include <string>
 
 #include "bake/bake.h"
+#include "bake/resource_estimate.h"
 #include "common/status.h"
 #include "device/context.h"
 #include "post/bake_outputs.h"
@@ -68,9 +69,21 @@ struct JobResult {
   const pipeline::BakeResult& figures() const;
 };
 
+// What the job can refuse before it runs, checked with the functions the
+// run uses, so that a job accepted here does not FAIL for a reason known
+// now: the lightmap's resources against `device` (bake/resource_estimate.h),
+// a small fixed resolution laid out as the bake lays it out (charts that fit
+// no page), and the probe placement (probes::plan_placement: the grid's
+// count, the file's or the glTF nodes' positions). The daemon runs it at
+// SubmitBake and the CLI before `bake --local`. Errors start with the
+// setting ("settings.probes: ...").
+Status check_bake_job(const JobInput& input, const pipeline::DeviceLimits& device);
+
 // Runs the job on `ctx` and writes its outputs into `out_dir` (created if
 // needed). A cancelled step (hooks.cancel) ends the job with what it has and
-// writes nothing. Errors name the step (and the setting or file) at fault;
+// writes nothing; one cancelled during its setup fails with cancelled_error
+// (common/cancel.h), which the host that set the flag reads as cancelled.
+// Errors name the step (and the setting or file) at fault;
 // the lightmap's INVALID_ARGUMENT and RESOURCE_EXHAUSTED start with "scene
 // 'NAME': " (scene_name, else the file name).
 Result<JobResult> run_bake_job(const JobInput& input, device::Context& ctx, const JobEvents& events,

@@ -91,6 +91,19 @@ Result<Image> read_exr(const std::string& path, ExrInfo* info) {
   return image;
 }
 
+Result<std::pair<int, int>> read_exr_size(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    return not_found(strprintf("%s: no such file", path.c_str()));
+  auto in = OIIO::ImageInput::open(path);
+  if (!in)
+    return data_loss(strprintf("%s: cannot read: %s", path.c_str(), OIIO::geterror().c_str()));
+  if (std::string(in->format_name()) != "openexr")
+    return invalid_argument(
+        strprintf("%s: is a %s file, not OpenEXR", path.c_str(), in->format_name()));
+  return std::make_pair(in->spec().width, in->spec().height);
+}
+
 Status write_samples_exr(const std::string& path, const Image& samples,
                          std::map<std::string, std::string> metadata) {
   LUXEL_RETURN_IF_ERROR(check_image(samples, path));

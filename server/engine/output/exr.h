@@ -8,6 +8,7 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "output/image.h"
@@ -43,6 +44,11 @@ struct ExrInfo {
 // NOT_FOUND for a missing file, INVALID_ARGUMENT for a file that is not
 // OpenEXR or is a volume, DATA_LOSS for a truncated or corrupt one.
 Result<Image> read_exr(const std::string& path, ExrInfo* info = nullptr);
+
+// The width and height in the header of an OpenEXR file, without decoding
+// its pixels (a reference lightmap's size, checked at submit); the codes of
+// read_exr.
+Result<std::pair<int, int>> read_exr_size(const std::string& path);
 
 // The samples-per-texel map: a single-channel image written as channel "Y"
 // with "luxel/encoding" = "samples_per_texel" (plus `metadata`). Counts are

@@ -74,7 +74,26 @@ class Classifier {
   bool empty() const { return !tracer_; }
   const Bounds3& bounds() const { return soup_->bounds; }
 
-  std::vector<Probe> classify(const std::vector<Vec3>& points) const {
+  // In blocks of kClassifyBlock probes, polling `cancel` between them.
+  Result<std::vector<Probe>> classify(const std::vector<Vec3>& points,
+                                      const CancelToken& cancel) const {
+    constexpr size_t kClassifyBlock = 4096;
+    if (points.size() <= kClassifyBlock) return classify_block(points);
+    std::vector<Probe> out;
+    out.reserve(points.size());
+    for (size_t at = 0; at < points.size(); at += kClassifyBlock) {
+      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the probes' classification"));
+      const size_t end = std::min(points.size(), at + kClassifyBlock);
+      const std::vector<Probe> block =
+          classify_block(std::vector<Vec3>(points.begin() + static_cast<ptrdiff_t>(at),
+                                           points.begin() + static_cast<ptrdiff_t>(end)));
+      out.insert(out.end(), block.begin(), block.end());
+    }
+    return out;
+  }
+
+ private:
+  std::vector<Probe> classify_block(const std::vector<Vec3>& points) const {
     std::vector<Probe> out(points.size());
     if (empty()) return out;
     const size_t k = dirs_.size();
@@ -106,7 +125,6 @@ class Classifier {
     return out;
   }
 
- private:
   std::unique_ptr<accel::TriangleSoup> soup_;
   std::unique_ptr<accel::DeviceBvh> bvh_;
   std::unique_ptr<accel::EmbreeTracer> tracer_;
@@ -141,47 +159,87 @@ Status read_file_positions(const PlacementSettings& s, std::vector<Vec3>& out) {
   return Status::ok();
 }
 
+// The world bounds of the triangles the classifier traces: the same points
+// as accel::build_triangle_soup's bounds, without copying the triangles.
+Bounds3 triangle_bounds(const scene::Scene& scene) {
+  Bounds3 b;
+  for (const scene::Instance& inst : scene.instances) {
+    if (inst.mesh < 0 || static_cast<size_t>(inst.mesh) >= scene.meshes.size()) continue;
+    const scene::Mesh& mesh = scene.meshes[static_cast<size_t>(inst.mesh)];
+    for (uint32_t i : mesh.indices)
+      b.extend(transform_point(inst.object_to_world, mesh.positions[i]));
+  }
+  return b;
+}
+
 }  // namespace
 
-Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& s) {
+Result<PlacementPlan> plan_placement(const scene::Scene& scene, const PlacementSettings& s) {
+  PlacementPlan plan;
+  if (s.mode == PlacementMode::kFile || s.mode == PlacementMode::kNodes) {
+    LUXEL_RETURN_IF_ERROR(read_file_positions(s, plan.positions));
+    if (plan.positions.size() > s.max_probes)
+      return resource_exhausted(strprintf("settings.probes: %zu probes, at most %zu",
+                                          plan.positions.size(), s.max_probes));
+    plan.count = plan.positions.size();
+    return plan;
+  }
+  plan.box = s.has_box ? s.box : triangle_bounds(scene);
+  if (plan.box.empty())
+    return invalid_argument("settings.probes: the scene has no geometry to put a grid over");
+  const Vec3 e = plan.box.extent();
+  // Counted in doubles first: the float quotient of a tiny spacing or a
+  // huge box does not fit an int (and an extent past FLT_MAX is inf).
+  double cells = 1;
+  for (int a = 0; a < 3; ++a) cells *= std::floor(double(e[a]) / double(s.spacing) + 1e-4) + 1;
+  if (!(cells <= double(s.max_probes)))
+    return resource_exhausted(strprintf(
+        "settings.probes: a grid of spacing %g over this box has %.4g probes, at most %zu "
+        "(use a larger spacing or a box)",
+        double(s.spacing), cells, s.max_probes));
+  plan.grid = true;
+  plan.count = 1;
+  for (int a = 0; a < 3; ++a) {
+    plan.dims[a] = static_cast<int>(std::floor(e[a] / s.spacing + 1e-4f)) + 1;
+    plan.count *= static_cast<size_t>(plan.dims[a]);
+  }
+  if (plan.count > s.max_probes)  // the float rounding of the lattice above
+    return resource_exhausted(
+        strprintf("settings.probes: a grid of spacing %g over this box has %zu probes, at most "
+                  "%zu (use a larger spacing or a box)",
+                  double(s.spacing), plan.count, s.max_probes));
+  return plan;
+}
+
+Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& s,
+                                 CancelToken cancel) {
   const auto t0 = std::chrono::steady_clock::now();
+  auto planned = plan_placement(scene, s);
+  if (!planned) return planned.status();
+  PlacementPlan& plan = planned.value();
   auto classifier = Classifier::create(scene, std::max(8, s.test_rays));
   if (!classifier) return classifier.status();
   const Classifier& c = classifier.value();
   ProbeLayout out;
   out.mode = s.mode;
   float cap = s.spacing * 2.0f;
-  if (s.mode == PlacementMode::kFile || s.mode == PlacementMode::kNodes) {
-    LUXEL_RETURN_IF_ERROR(read_file_positions(s, out.positions));
-    if (out.positions.size() > s.max_probes)
-      return resource_exhausted(strprintf("settings.probes: %zu probes, at most %zu",
-                                          out.positions.size(), s.max_probes));
+  if (!plan.grid) {
+    out.positions = std::move(plan.positions);
     out.flags.assign(out.positions.size(), kProbeUser);
     // User positions have no spacing: the visibility cap is the scene's size.
     const Vec3 e = c.empty() ? Vec3{1, 1, 1} : c.bounds().extent();
     cap = std::max(1e-3f, length(e));
   } else {
-    Bounds3 box = s.has_box ? s.box : (c.empty() ? Bounds3{} : c.bounds());
-    if (box.empty())
-      return invalid_argument("settings.probes: the scene has no geometry to put a grid over");
+    const Bounds3& box = plan.box;
     const Vec3 e = box.extent();
-    double cells = 1;
-    for (int a = 0; a < 3; ++a) {
-      const float ext = a == 0 ? e.x : (a == 1 ? e.y : e.z);
-      out.dims[a] = static_cast<int>(std::floor(ext / s.spacing + 1e-4f)) + 1;
-      cells *= out.dims[a];
-    }
-    if (cells > double(s.max_probes))
-      return resource_exhausted(strprintf(
-          "settings.probes: a grid of spacing %g over this box has %.0f probes, at most %zu "
-          "(use a larger spacing or a box)",
-          double(s.spacing), cells, s.max_probes));
+    for (int a = 0; a < 3; ++a) out.dims[a] = plan.dims[a];
     out.grid = true;
     out.spacing = s.spacing;
     // Centred in the box.
     const Vec3 used{(out.dims[0] - 1) * s.spacing, (out.dims[1] - 1) * s.spacing,
                     (out.dims[2] - 1) * s.spacing};
     out.origin = box.lo + (e - used) * 0.5f;
+    out.positions.reserve(plan.count);
     for (int k = 0; k < out.dims[2]; ++k)
       for (int j = 0; j < out.dims[1]; ++j)
         for (int i = 0; i < out.dims[0]; ++i)
@@ -191,7 +249,9 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
     for (size_t i = 0; i < out.positions.size(); ++i) out.grid_index[i] = static_cast<int32_t>(i);
   }
 
-  std::vector<Probe> cls = c.classify(out.positions);
+  auto classified = c.classify(out.positions, cancel);
+  if (!classified) return classified.status();
+  std::vector<Probe> cls = std::move(classified.value());
   const bool adaptive = s.mode == PlacementMode::kAdaptive;
   for (size_t p = 0; p < out.positions.size(); ++p)
     if (cls[p].backface_fraction > s.inside_fraction) ++out.inside_detected;
@@ -209,7 +269,9 @@ Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSetti
         moved.push_back(out.positions[p] + cls[p].back_dir * step);
       }
       if (todo.empty()) break;
-      const std::vector<Probe> again = c.classify(moved);
+      auto reclassified = c.classify(moved, cancel);
+      if (!reclassified) return reclassified.status();
+      const std::vector<Probe>& again = reclassified.value();
       for (size_t i = 0; i < todo.size(); ++i) {
         out.positions[todo[i]] = moved[i];
         out.flags[todo[i]] |= kProbeMoved;

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "common/cancel.h"
 #include "common/math.h"
 #include "common/status.h"
 #include "scene/scene.h"
@@ -61,9 +62,28 @@ struct ProbeLayout {
   std::string describe_json() const;  // the manifest's "probes.layout" object
 };
 
+// What placement knows before a ray is traced: the positions of the file
+// and nodes modes, read and checked, and the grid's lattice over the box or
+// the scene's triangles, its size counted in doubles (a spacing of 1e-9, or
+// a box of +-1e30, overflows an int). place_probes starts from it, and the
+// daemon (SubmitBake) and the CLI call it before queueing, so a placement
+// that cannot be baked is refused at submit with the same message.
+struct PlacementPlan {
+  std::vector<Vec3> positions;  // file and nodes modes
+  bool grid = false;            // grid and adaptive modes
+  int dims[3] = {0, 0, 0};
+  Bounds3 box;
+  size_t count = 0;  // probes before adaptive drops any
+};
+Result<PlacementPlan> plan_placement(const scene::Scene& scene, const PlacementSettings& settings);
+
 // Places the probes of `settings` in the scene. INVALID_ARGUMENT for a
 // malformed file, an empty box or scene; RESOURCE_EXHAUSTED past
 // settings.max_probes.
-Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& settings);
+// cancel: polled between blocks of probes while they are classified (a
+// million probes are 128 million test rays); a request ends it with
+// cancelled_error (common/cancel.h).
+Result<ProbeLayout> place_probes(const scene::Scene& scene, const PlacementSettings& settings,
+                                 CancelToken cancel = {});
 
 }  // namespace luxel::probes

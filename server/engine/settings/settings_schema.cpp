@@ -5,6 +5,7 @@
 #include <set>
 #include <type_traits>
 
+#include "common/direction.h"
 #include "settings/bake_settings.h"
 #include "settings/schema_table.h"
 
@@ -133,10 +134,14 @@ Status check_setting(const Setting& st, const SettingValue& v) {
           return bad(
               strprintf("each value must be %s, got %s", range_phrase(st).c_str(), got.c_str()));
       if (st.nonzero && c.x == 0 && c.y == 0 && c.z == 0) return bad("must not be zero");
-      // The bake normalizes the vector (common/math.h length), and refuses
-      // one whose squared length underflows.
-      if (st.nonzero && !(length(c) > 0))
-        return bad("must not be zero: its length underflows to 0 in single precision, got " + got);
+      // The bake normalizes the vector and refuses one that does not survive
+      // it (common/direction.h: a squared length past FLT_MAX or below the
+      // smallest normal float), on whichever thread builds the light table.
+      if (st.nonzero && !normalizable(c))
+        return bad(
+            "its squared length must be a normal single-precision float (about 1e-19 to 1e19 "
+            "per component): it does not survive normalisation, got " +
+            got);
       return Status::ok();
     }
   }

@@ -2,6 +2,7 @@
 // glTF intensities are used 1:1 as radiometric quantities (light.h: UNITS).
 #include <cmath>
 
+#include "common/direction.h"
 #include "shading/color.h"
 #include "shading/light_builders.h"
 
@@ -21,8 +22,16 @@ cl::float4 f4(Vec3 v, float w = 0) {
 // (a ~ 0.27 deg) the float cos would lose most of its digits.
 Status directional_candidate(const std::string& what, Vec3 direction, Vec3 irradiance,
                              float angular_radius_degrees, double disc_area, LightCandidate* c) {
-  if (!is_finite(direction) || !(length(direction) > 0))
-    return invalid_argument(what + ": direction must be finite and non-zero");
+  // The sun is a setting (settings.sun.*, checked by the same rule at
+  // submit); other directional lights come from the scene file.
+  const bool setting = what.rfind("settings.", 0) == 0;
+  const std::string direction_field = setting ? what + ".direction: " : what + ": direction ";
+  if (!normalizable(direction))
+    return invalid_argument(
+        strprintf("%s(%g, %g, %g) does not survive normalisation in single precision (finite, "
+                  "squared length a normal float)",
+                  direction_field.c_str(), static_cast<double>(direction.x),
+                  static_cast<double>(direction.y), static_cast<double>(direction.z)));
   if (!(angular_radius_degrees >= 0 && angular_radius_degrees < kMaxAngularRadiusDegrees))
     return invalid_argument(strprintf("%s: angular radius %g degrees must be in [0, %g)",
                                       what.c_str(), static_cast<double>(angular_radius_degrees),
@@ -108,10 +117,11 @@ Status add_punctual_lights(const scene::Scene& scene, float directional_angular_
 
 Status add_sun(const SunSettings& sun, double disc_area, std::vector<LightCandidate>* out) {
   if (!sun.enabled) return Status::ok();
-  LUXEL_RETURN_IF_ERROR(check_color("sun", "color", sun.color));
-  LUXEL_RETURN_IF_ERROR(check_nonnegative("sun", "illuminance", sun.illuminance));
+  LUXEL_RETURN_IF_ERROR(check_color("settings.sun", "color", sun.color));
+  LUXEL_RETURN_IF_ERROR(check_nonnegative("settings.sun", "illuminance", sun.illuminance));
   LightCandidate c;
-  LUXEL_RETURN_IF_ERROR(directional_candidate("sun", sun.direction, sun.color * sun.illuminance,
+  LUXEL_RETURN_IF_ERROR(directional_candidate("settings.sun", sun.direction,
+                                              sun.color * sun.illuminance,
                                               sun.angular_radius_degrees, disc_area, &c));
   out->push_back(c);
   return Status::ok();

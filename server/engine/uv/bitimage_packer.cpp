@@ -525,6 +525,7 @@ Result<PackResult> pack_shapes(const std::vector<PackShape>& shapes, const PackO
   });
 
   PackResult result;
+  LUXEL_RETURN_IF_ERROR(check_cancel(options.cancel, "UV packing"));
   if (fixed) {
     result.width = options.width, result.height = options.height, result.attempts = 1;
     if (!place_all(infos, order, result.width, result.height, padding, &result.placements)) {
@@ -543,6 +544,7 @@ Result<PackResult> pack_shapes(const std::vector<PackShape>& shapes, const PackO
             shapes.size(), padding, side, side, options.max_resolution));
       }
       ++result.attempts;
+      LUXEL_RETURN_IF_ERROR(check_cancel(options.cancel, "UV packing"));
       if (place_all(infos, order, side, side, padding, &result.placements)) break;
       const int next = std::max(side + 4, round_up_to_4(side * kGrowth));
       // The last size tried below the limit is the limit itself.

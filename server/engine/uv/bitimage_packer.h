@@ -36,6 +36,7 @@
 
 #include <vector>
 
+#include "common/cancel.h"
 #include "common/math.h"
 #include "common/status.h"
 
@@ -61,6 +62,9 @@ struct PackOptions {
   int width = 0, height = 0;
   // Largest side the automatic size may reach (and a fixed size may have).
   int max_resolution = 8192;
+  // Polled before each size tried: a request ends the packing with
+  // cancelled_error (common/cancel.h).
+  CancelToken cancel;
 };
 
 struct ShapePlacement {

@@ -408,6 +408,7 @@ Result<std::vector<MeshCharts>> chart_meshes(const scene::Scene& scene,
   for (uint32_t m = 0; m < meshes.size(); ++m) {
     MeshCharts& mc = meshes[m];
     if (mc.instances.empty()) continue;
+    LUXEL_RETURN_IF_ERROR(check_cancel(options.cancel, "UV charting"));
     const scene::Mesh& mesh = scene.meshes[m];
     auto charts = build_charts(mesh, options.charts);
     if (!charts) return charts.status();
@@ -459,6 +460,7 @@ Result<PackAttempt> pack_meshes(const std::vector<MeshCharts>& meshes,
   const atlas::AtlasSettings& as = options.atlas;
   PackOptions pack;
   pack.padding_texels = as.padding_texels;
+  pack.cancel = options.cancel;
   // A density's pages are at most max_resolution; a resolution asked is the
   // page itself, and the instanced meshes' own layouts may grow to the limit.
   pack.max_resolution = as.resolution > 0 ? std::max(as.resolution_limit, as.resolution)

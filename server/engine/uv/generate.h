@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "atlas/atlas.h"
+#include "common/cancel.h"
 #include "common/status.h"
 #include "scene/scene.h"
 #include "uv/charts.h"
@@ -40,6 +41,9 @@ struct GenerateOptions {
   // asked (when the charts fit it at no density); 1: RESOURCE_EXHAUSTED
   // instead.
   int max_pages = 64;
+  // Polled per mesh while charting and per packing tried: a request ends
+  // the generation with cancelled_error (common/cancel.h).
+  CancelToken cancel;
 };
 
 // What `luxel inspect --uv` and the manifest report about a generated layout.

@@ -234,8 +234,12 @@ TEST(LightTable, ErrorsNameTheLightMaterialOrSetting) {
   s.sun.illuminance = -5;
   expect_invalid(build(SceneBuilder(), s), "sun: illuminance");
   s.sun.illuminance = 5;
-  s.sun.direction = {0, 0, 0};
-  expect_invalid(build(SceneBuilder(), s), "sun: direction");
+  // Every direction that does not survive normalisation on every thread
+  // (common/direction.h), named as the setting (settings.sun.direction).
+  for (Vec3 d : {Vec3{0, 0, 0}, Vec3{1e-45f, 0, 0}, Vec3{1e-20f, 0, 0}, Vec3{3e38f, 3e38f, 0}}) {
+    s.sun.direction = d;
+    expect_invalid(build(SceneBuilder(), s), "settings.sun.direction: ");
+  }
   s = {};
   s.sky.kind = SkySettings::Kind::kConstant;
   s.sky.intensity = -1;
