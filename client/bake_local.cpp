@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "api/scene_files.h"
+#include "bake/host_memory.h"
 #include "bake/resource_estimate.h"
 #include "bake_options.h"
 #include "commands.h"
@@ -151,13 +152,30 @@ int run_bake(const std::vector<std::string>& args) {
   }
   // The daemon's check at SubmitBake (bake/resource_estimate.h): a bake
   // that cannot fit is refused before the layout and the BVH are built.
-  if (a.settings.lightmap)
-    if (auto e = pipeline::estimate_bake_resources(scene.value(), a.settings,
-                                                   pipeline::DeviceLimits::of(ctx.value()->info()));
-        !e) {
-      std::fprintf(stderr, "luxel bake: %s\n", e.status().to_string().c_str());
+  if (a.settings.lightmap) {
+    const auto device = pipeline::DeviceLimits::of(ctx.value()->info());
+    auto e = pipeline::estimate_bake_resources(scene.value(), a.settings, device);
+    // The host side too (bake/host_memory.h): on a CPU device its buffers
+    // are host memory.
+    Status host = e.status();
+    const size_t budget = a.host_memory_budget < 0 ? pipeline::default_host_memory_budget()
+                                                   : static_cast<size_t>(a.host_memory_budget);
+    std::string estimate_line;
+    if (e) {
+      auto h = pipeline::estimate_host_memory(e.value(), a.settings, !device.is_gpu);
+      host = h ? pipeline::check_host_memory(h.value(), a.settings, budget,
+                                             "luxel bake --host-memory-budget")
+               : h.status();
+      if (h)
+        estimate_line = strprintf("host mem   estimated %zu bytes (%s), budget %zu\n",
+                                  h.value().total(), h.value().describe().c_str(), budget);
+    }
+    if (!host.is_ok()) {
+      std::fprintf(stderr, "luxel bake: %s\n", host.to_string().c_str());
       return 1;
     }
+    if (!a.quiet) std::printf("%s", estimate_line.c_str());
+  }
   std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
               ctx.value()->info().describe().c_str());
   const bool tty = isatty(fileno(stdout));

@@ -27,6 +27,10 @@ struct DaemonConfig {
   std::string tls_cert, tls_key;      // PEM files; both or neither
   uint64_t max_upload_bytes = uint64_t{1} << 30;
   int max_resolution = 4096;
+  // --host-memory-budget: host bytes one bake may be estimated to need at
+  // SubmitBake (bake/host_memory.h); -1: half the machine's memory or the
+  // cgroup's limit, 0: not checked.
+  double host_memory_budget = -1;
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;
   int max_message_bytes = 16 << 20;   // largest request message accepted

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 
+#include "bake/host_memory.h"
 #include "common/sha256.h"
 #include "luxel_version.h"
 #include "service/coordinator/shard_plan.h"
@@ -153,7 +154,15 @@ grpc::Status LuxelService::estimate_at_submit(const std::string& scene_id,
   auto scene = scenes_.load_scene(info.value());  // cached; the bake reuses it
   if (!scene) return to_grpc(scene.status());
   auto estimate = pipeline::estimate_bake_resources(*scene.value(), settings, options_.device);
-  return to_grpc(estimate.status());
+  if (!estimate || options_.host_memory_budget == 0 || !settings.lightmap)
+    return to_grpc(estimate.status());
+  // The host side: result images, kept state, denoiser, output assembly
+  // and, on a CPU device, the device buffers.
+  const bool device_is_host = !options_.device.is_gpu && options_.device.global_mem_bytes > 0;
+  auto host = pipeline::estimate_host_memory(estimate.value(), settings, device_is_host);
+  if (!host) return to_grpc(host.status());
+  return to_grpc(pipeline::check_host_memory(host.value(), settings, options_.host_memory_budget,
+                                             "luxeld --host-memory-budget"));
 }
 
 grpc::Status LuxelService::SubmitBake(grpc::ServerContext* ctx, const v1::SubmitBakeRequest* req,

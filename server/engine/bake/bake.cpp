@@ -236,16 +236,32 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
   } else {
     LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress_));
   }
-  auto state = read_state();
-  if (!state) return state.status();
-  write_state(s_, state.value(), tile.begin, result_);
-  if (tracks_progressive_variance())
-    two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
-  if (keep_finished_) append_state(finished_, state.value());
+  uint64_t nonfinite = 0;
+  if (!keep_finished_ && !tracks_progressive_variance()) {
+    // Into the result a slice at a time: the host holds a slice of the
+    // tile's state beside the result images, not a copy of the whole tile.
+    const size_t slots = tile.end - tile.begin;
+    for (size_t first = 0; first < slots; first += kStateSlice) {
+      BakeCheckpoint part;
+      LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, part, first, std::min(kStateSlice, slots - first)));
+      if (first == 0) nonfinite = part.nonfinite;
+      part.nonfinite = 0;
+      write_state(s_, part, tile.begin + first, result_);
+    }
+    result_.nonfinite_dropped += nonfinite;
+  } else {
+    auto state = read_state();
+    if (!state) return state.status();
+    write_state(s_, state.value(), tile.begin, result_);
+    if (tracks_progressive_variance())
+      two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
+    if (keep_finished_) append_state(finished_, state.value());
+    nonfinite = state.value().nonfinite;
+  }
   const double n = static_cast<double>(tile.end - tile.begin);
   done_.slots = tile.end;
   done_.paths += paths_done_;
-  done_.nonfinite += state.value().nonfinite;
+  done_.nonfinite += nonfinite;
   done_.error_sum += tile_progress_.error * n;
   if (settings_.reference) {
     done_.sq_sum += tile_progress_.rmse * tile_progress_.rmse * n;

@@ -61,6 +61,9 @@ class BakeBuffers {
   // covered count are checked on restore. covered: the setup's covered
   // texels, to compact a whole-image (version 1-2) checkpoint.
   Status read_state(device::Context& ctx, BakeCheckpoint& c) const;
+  // Slots [first, first + n) of the tile alone (the dropped count is the
+  // tile's).
+  Status read_state(device::Context& ctx, BakeCheckpoint& c, size_t first, size_t n) const;
   Status restore_state(device::Context& ctx, const BakeCheckpoint& c,
                        const std::vector<uint32_t>& covered);
 

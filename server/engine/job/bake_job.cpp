@@ -82,8 +82,10 @@ Result<probes::ProbeBake> bake_probes(const JobInput& in, device::Context& ctx, 
 
 Status write_outputs(const JobInput& in, const std::string& dir, JobResult& job) {
   if (job.lightmap) {
-    auto written = pipeline::write_bake_outputs(dir, *in.scene, in.settings, *job.lightmap,
-                                                in.scene_sha256, in.scene_file, in.scene_name);
+    // The job is done with the images once they are written (its caller
+    // reads the figures): each is released as its file is written.
+    auto written = pipeline::write_bake_outputs_releasing(
+        dir, *in.scene, in.settings, *job.lightmap, in.scene_sha256, in.scene_file, in.scene_name);
     if (!written) return written.status();
     job.written = std::move(written.value());
   } else {

@@ -57,6 +57,8 @@ struct JobEvents {
 };
 
 struct JobResult {
+  // Once the outputs are written, a one-page lightmap's images are released
+  // (post/bake_outputs.h, write_bake_outputs_releasing); its figures stay.
   std::optional<pipeline::BakeResult> lightmap;
   std::optional<probes::ProbeBake> probes;
   // Files written into the output folder (the lightmap's, then probes.bin
