@@ -162,7 +162,8 @@ int run_bake(const std::vector<std::string>& args) {
                                                    : static_cast<size_t>(a.host_memory_budget);
     std::string estimate_line;
     if (e) {
-      auto h = pipeline::estimate_host_memory(e.value(), a.settings, !device.is_gpu);
+      // A local bake writes no checkpoints.
+      auto h = pipeline::estimate_host_memory(e.value(), a.settings, !device.is_gpu, false);
       host = h ? pipeline::check_host_memory(h.value(), a.settings, budget,
                                              "luxel bake --host-memory-budget")
                : h.status();

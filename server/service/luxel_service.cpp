@@ -159,7 +159,8 @@ grpc::Status LuxelService::estimate_at_submit(const std::string& scene_id,
   // The host side: result images, kept state, denoiser, output assembly
   // and, on a CPU device, the device buffers.
   const bool device_is_host = !options_.device.is_gpu && options_.device.global_mem_bytes > 0;
-  auto host = pipeline::estimate_host_memory(estimate.value(), settings, device_is_host);
+  auto host = pipeline::estimate_host_memory(estimate.value(), settings, device_is_host,
+                                             options_.checkpoints);
   if (!host) return to_grpc(host.status());
   return to_grpc(pipeline::check_host_memory(host.value(), settings, options_.host_memory_budget,
                                              "luxeld --host-memory-budget"));

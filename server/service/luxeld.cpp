@@ -142,6 +142,7 @@ int run(const DaemonConfig& config) {
   so.host_memory_budget = config.host_memory_budget < 0
                               ? pipeline::default_host_memory_budget()
                               : static_cast<size_t>(config.host_memory_budget);
+  so.checkpoints = config.checkpoint_interval_s > 0;
   so.streams = config.streams;
   so.upload_deadlines = {config.upload_idle_timeout_s, config.upload_timeout_s};
   so.metrics = &metrics;

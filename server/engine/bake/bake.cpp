@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "bake/baker.h"
+#include "bake/host_memory.h"
 
 namespace luxel::pipeline {
 
@@ -241,9 +242,10 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
     // Into the result a slice at a time: the host holds a slice of the
     // tile's state beside the result images, not a copy of the whole tile.
     const size_t slots = tile.end - tile.begin;
-    for (size_t first = 0; first < slots; first += kStateSlice) {
+    for (size_t first = 0; first < slots; first += kStateSliceSlots) {
       BakeCheckpoint part;
-      LUXEL_RETURN_IF_ERROR(b_.read_state(ctx_, part, first, std::min(kStateSlice, slots - first)));
+      LUXEL_RETURN_IF_ERROR(
+          b_.read_state(ctx_, part, first, std::min(kStateSliceSlots, slots - first)));
       if (first == 0) nonfinite = part.nonfinite;
       part.nonfinite = 0;
       write_state(s_, part, tile.begin + first, result_);

@@ -53,9 +53,6 @@ class Baker {
   Status send_snapshot(const Tile& tile);
   Status write_checkpoint(size_t ti);
   Status finish_tile(const Tile& tile, bool last);
-  // Covered slots finish_tile reads back at a time (host_memory.h counts a
-  // tile's whole state: snapshots and checkpoints read all of it).
-  static constexpr size_t kStateSlice = size_t{1} << 20;
   void keep_final_state();
   // Denoises the result (settings.denoise) after releasing the path
   // buffers; returns the device bytes held while it ran (0: skipped).

@@ -78,7 +78,8 @@ std::string HostMemoryEstimate::describe() const {
 }
 
 Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
-                                                const BakeSettings& settings, bool device_is_host) {
+                                                const BakeSettings& settings, bool device_is_host,
+                                                bool checkpoints) {
   auto plan = plan_encodings(settings.encodings);
   if (!plan) return plan.status();
   const EncodingPlan& p = plan.value();
@@ -99,11 +100,17 @@ Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
   const size_t per_slot = std::max<size_t>(1, e.per_texel_bytes);
   const size_t room = e.budget > e.device_bytes(0) ? e.budget - e.device_bytes(0) : 0;
   const size_t tile_slots = std::min(c, std::max<size_t>(1, room / per_slot));
-  h.tile_state = tile_slots * state_bytes_per_slot(p);
-  // Tiled bakes keep the finished tiles' state for checkpoints; shards keep
-  // every tile's for their accumulators.
+  // Checkpoints and snapshots (a daemon's bakes) read a whole tile; a bake
+  // without them or the denoiser's variances reads it in slices.
+  const bool whole_tile = checkpoints || settings.sharded() || settings.denoise != Denoise::kOff;
+  h.tile_state =
+      (whole_tile ? tile_slots : std::min(tile_slots, kStateSliceSlots)) * state_bytes_per_slot(p);
+  // Shards keep every tile's state for their accumulators; tiled bakes that
+  // checkpoint keep the finished tiles' and assemble each checkpoint of the
+  // whole atlas beside them (bake.cpp, tiled_checkpoint).
   const bool tiled = tile_slots < c;
-  if (settings.sharded() || tiled) h.finished_state = c * state_bytes_per_slot(p);
+  if (settings.sharded() || (tiled && checkpoints))
+    h.finished_state = c * state_bytes_per_slot(p) * (tiled && checkpoints ? 2 : 1);
   if (settings.denoise != Denoise::kOff) {
     // Guides (position, normal, chart), the filter's buffers, the variances
     // (Welford, two-point, the kept one) and the denoised map.

@@ -41,6 +41,11 @@ size_t result_floats_per_texel(const EncodingPlan& plan);
 // irradiance RGBA or one encoding's coefficients.
 size_t largest_image_floats(const EncodingPlan& plan);
 
+// Covered slots a finished tile is read back at a time when nothing needs
+// all of its state at once (bake.cpp, finish_tile: no checkpoints of a
+// tiled bake, no progressive variance for the denoiser).
+inline constexpr size_t kStateSliceSlots = size_t{1} << 20;
+
 // Host bytes per covered slot of a state read back from the device
 // (BakeCheckpoint: mean, M2, weight, samples, the encodings' state).
 size_t state_bytes_per_slot(const EncodingPlan& plan);
@@ -63,9 +68,13 @@ struct HostMemoryEstimate {
 
 // The estimate for `e` (estimate_bake_resources) under `settings`;
 // device_is_host: a CPU device, whose buffers are host memory (the device
-// part is then the bake's device estimate, at most its budget).
+// part is then the bake's device estimate, at most its budget);
+// checkpoints: the host writes checkpoints (the daemon unless
+// --checkpoint-interval 0), so a tiled bake keeps its finished tiles and
+// assembles whole-atlas checkpoints from them.
 Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
-                                                const BakeSettings& settings, bool device_is_host);
+                                                const BakeSettings& settings, bool device_is_host,
+                                                bool checkpoints);
 
 // RESOURCE_EXHAUSTED naming the settings that size it (settings.resolution
 // or texel_density, settings.encodings, settings.denoise, the device) and

@@ -82,7 +82,7 @@ TEST_F(HostMemoryTest, EstimateBoundsThePeakOfARealBake) {
   const auto device = pipeline::DeviceLimits::of(ctx_->info());
   auto e = pipeline::estimate_bake_resources(scene.value(), s, device);
   ASSERT_TRUE(e) << e.status().to_string();
-  auto h = pipeline::estimate_host_memory(e.value(), s, !device.is_gpu);
+  auto h = pipeline::estimate_host_memory(e.value(), s, !device.is_gpu, false);
   ASSERT_TRUE(h) << h.status().to_string();
   // The result images alone: 1024^2 texels x (4 + 1 + 1 + 27 + 36 + 27) floats.
   EXPECT_EQ(h.value().result_bytes, size_t{1024} * 1024 * 96 * 4);
@@ -113,7 +113,7 @@ TEST(HostMemory, RefusalNamesTheSettingsAndTheBytes) {
   e.per_texel_bytes = 64;
   BakeSettings s = many_encodings(4096);
   s.encodings.names = {"sh1", "sh2", "sg6", "sg9", "sg12", "sg6-hemi", "sg9-hemi", "sg12-hemi"};
-  auto h = pipeline::estimate_host_memory(e, s, true);
+  auto h = pipeline::estimate_host_memory(e, s, true, true);
   ASSERT_TRUE(h);
   // 16.7 M texels x (6 + 3 x 67) floats of result images alone.
   EXPECT_EQ(h.value().result_bytes, size_t{4096} * 4096 * 207 * 4);
