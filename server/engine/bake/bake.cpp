@@ -223,6 +223,7 @@ Status Baker::write_checkpoint(size_t ti) {
   c.elapsed_s = elapsed();
   series_to_checkpoint(result_.series, c);
   hooks_->on_checkpoint(c);
+  if (tiled()) return_finished(c);
   last_checkpoint_ = SteadyClock::now();
   return Status::ok();
 }

@@ -107,10 +107,9 @@ Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
       (whole_tile ? tile_slots : std::min(tile_slots, kStateSliceSlots)) * state_bytes_per_slot(p);
   // Shards keep every tile's state for their accumulators; tiled bakes that
   // checkpoint keep the finished tiles' and assemble each checkpoint of the
-  // whole atlas beside them (bake.cpp, tiled_checkpoint).
+  // whole atlas in the same arrays (baker_tiles.cpp, tiled_checkpoint).
   const bool tiled = tile_slots < c;
-  if (settings.sharded() || (tiled && checkpoints))
-    h.finished_state = c * state_bytes_per_slot(p) * (tiled && checkpoints ? 2 : 1);
+  if (settings.sharded() || (tiled && checkpoints)) h.finished_state = c * state_bytes_per_slot(p);
   if (settings.denoise != Denoise::kOff) {
     // Guides (position, normal, chart), the filter's buffers, the variances
     // (Welford, two-point, the kept one) and the denoised map.

@@ -71,7 +71,7 @@ struct HostMemoryEstimate {
 // part is then the bake's device estimate, at most its budget);
 // checkpoints: the host writes checkpoints (the daemon unless
 // --checkpoint-interval 0), so a tiled bake keeps its finished tiles and
-// assembles whole-atlas checkpoints from them.
+// assembles whole-atlas checkpoints in their arrays.
 Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
                                                 const BakeSettings& settings, bool device_is_host,
                                                 bool checkpoints);
