@@ -120,11 +120,14 @@ Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
       if (p.encodings[k].basis.describe().name.rfind("sh", 0) == 0)
         h.result_bytes += t * coefficient_floats(p, k) * sizeof(float);
   }
-  // One page image at a time (post/bake_outputs.cpp): the image (a copy
-  // when it is not released as written), the page's coverage, dilation's
-  // state byte and ring of texel indices, the relative errors seam
-  // stitching reads; the EXR is encoded straight into its file.
-  h.output_bytes = t * (largest_image_floats(p) * sizeof(float) + sizeof(float) + 1 +
+  // One page image at a time (post/bake_outputs.cpp, the job's
+  // write_bake_outputs_releasing): a one-page result's image is moved out
+  // of the result, a page of several is a copy of its rows; beside it the
+  // page's coverage, dilation's state byte and ring of texel indices, the
+  // relative errors seam stitching reads. The EXR is encoded straight
+  // into its file.
+  const bool pages = e.max_texels > e.min_texels;
+  h.output_bytes = t * ((pages ? largest_image_floats(p) * sizeof(float) : 0) + sizeof(float) + 1 +
                         sizeof(size_t) + sizeof(float));
   return h;
 }
