@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "api/scene_files.h"
+#include "bake/host_memory.h"
 #include "bake/resource_estimate.h"
 #include "bake_options.h"
 #include "commands.h"
@@ -158,13 +159,25 @@ int run_bake(const std::vector<std::string>& args) {
                       .settings = a.settings,
                       .scene_file = a.scene,
                       .scene_name = std::filesystem::path(a.scene).filename().string()};
-  if (Status st = job::check_bake_job(input, pipeline::DeviceLimits::of(ctx.value()->info()));
-      !st.is_ok()) {
+  // The host side too (bake/host_memory.h): on a CPU device the device
+  // buffers are host memory. A local bake writes no checkpoints.
+  const auto device = pipeline::DeviceLimits::of(ctx.value()->info());
+  const job::HostMemoryCheck host{.budget = a.host_memory_budget < 0
+                                                ? pipeline::default_host_memory_budget()
+                                                : static_cast<size_t>(a.host_memory_budget),
+                                  .device_is_host = !device.is_gpu,
+                                  .checkpoints = false,
+                                  .budget_name = "luxel bake --host-memory-budget"};
+  pipeline::HostMemoryEstimate host_estimate;
+  if (Status st = job::check_bake_job(input, device, host, &host_estimate); !st.is_ok()) {
     std::fprintf(stderr, "luxel bake: %s\n", st.to_string().c_str());
     return st.code() == StatusCode::kInvalidArgument ? 2 : 1;
   }
   std::printf("scene      %s\ndevice     %s\n", a.scene.c_str(),
               ctx.value()->info().describe().c_str());
+  if (a.settings.lightmap && !a.quiet)
+    std::printf("host mem   estimated %zu bytes (%s), budget %zu\n", host_estimate.total(),
+                host_estimate.describe().c_str(), host.budget);
   const bool tty = isatty(fileno(stdout));
   const bool bar = tty && !a.quiet;
   job::JobEvents events;

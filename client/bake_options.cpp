@@ -1,6 +1,7 @@
 #include "bake_options.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -26,7 +27,10 @@ const char* kRemoteOptions =
     "  (and the connection options of `luxel upload --help`)\n"
     "exit codes: 0 done, 1 error (daemon, network, files), 2 usage, 3 bake failed/cancelled\n";
 
-const char* kLocalOptions = "  --device SPEC            OpenCL device (see `luxel devices`)\n";
+const char* kLocalOptions =
+    "  --device SPEC            OpenCL device (see `luxel devices`)\n"
+    "  --host-memory-budget N   refuse a bake estimated to need more host bytes (default half\n"
+    "                           the machine's memory or the cgroup's memory.max; 0 = no check)\n";
 
 // "  --bounces B              indirect bounces ... (default 4)", wrapped at 100 columns.
 std::string option_help(const Setting& st) {
@@ -111,7 +115,7 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeCommand& 
   for (size_t i = 0; i < args.size(); ++i) {
     const std::string& k = args[i];
     if (is_remote_only(k)) a.remote_only.push_back(k);
-    if (k == "--device") a.local_only.push_back(k);
+    if (k == "--device" || k == "--host-memory-budget") a.local_only.push_back(k);
     const auto m = remote::take_connection_option("bake", args, i, a.connection);
     if (m == remote::OptionMatch::kError) return ParseOutcome::kUsageError;
     if (m == remote::OptionMatch::kTaken) continue;
@@ -142,7 +146,17 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeCommand& 
       ok = text(a.out);
     else if (k == "--device")
       ok = text(a.device);
-    else if (k == "--name")
+    else if (k == "--host-memory-budget") {
+      std::string v;
+      char* end = nullptr;
+      ok = text(v);
+      if (ok) a.host_memory_budget = std::strtod(v.c_str(), &end);
+      if (ok && (v.empty() || *end != '\0' || !(a.host_memory_budget >= 0))) {
+        std::fprintf(stderr, "luxel bake: --host-memory-budget: expected bytes >= 0, got '%s'\n",
+                     v.c_str());
+        ok = false;
+      }
+    } else if (k == "--name")
       ok = text(a.name);
     else if (k == "--snapshots")
       ok = text(a.snapshots_dir);

@@ -23,6 +23,9 @@ struct BakeCommand {
   pipeline::BakeSettings settings;
 
   std::string device;  // --local only: OpenCL device
+  // --local only: host bytes the bake may be estimated to need
+  // (bake/host_memory.h); -1: half the machine's or cgroup's memory, 0: none.
+  double host_memory_budget = -1;
 
   // Remote only.
   remote::ConnectionOptions connection;

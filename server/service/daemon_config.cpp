@@ -49,6 +49,9 @@ const char* kDaemonUsage =
     "                            DEADLINE_EXCEEDED\n"
     "  --max-resolution N        largest lightmap side in texels (default 4096)\n"
     "  --max-queued N            most bakes waiting in the queue (default 256)\n"
+    "  --host-memory-budget N    host bytes a bake may be estimated to need; SubmitBake refuses\n"
+    "                            more with RESOURCE_EXHAUSTED (default half the machine's\n"
+    "                            memory or the cgroup's memory.max; 0 = no check)\n"
     "  --checkpoint-interval S   seconds between bake checkpoints (default 10; 0 = none)\n"
     "  --max-message-bytes N     largest request message (default 16 MiB)\n"
     "  --max-uploads N           uploads open at once, all clients (default 16)\n"
@@ -150,6 +153,9 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
     } else if (k == "--max-resolution") {
       LUXEL_RETURN_IF_ERROR(number(1, 65536, &x));
       c.max_resolution = int(x);
+    } else if (k == "--host-memory-budget") {
+      LUXEL_RETURN_IF_ERROR(number(0, 1e18, &x));
+      c.host_memory_budget = x;
     } else if (k == "--max-queued") {
       LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x));
       c.max_queued = size_t(x);

@@ -33,6 +33,10 @@ struct DaemonConfig {
   uint64_t import_memory_budget = scene::default_import_memory_budget();
   double import_timeout_s = 300;
   int max_resolution = 4096;
+  // --host-memory-budget: host bytes one bake may be estimated to need at
+  // SubmitBake (bake/host_memory.h); -1: half the machine's memory or the
+  // cgroup's limit, 0: not checked.
+  double host_memory_budget = -1;
   size_t max_queued = 256;
   double checkpoint_interval_s = 10;
   int max_message_bytes = 16 << 20;   // largest request message accepted

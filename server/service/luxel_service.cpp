@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <fstream>
 
+#include "bake/host_memory.h"
 #include "common/sha256.h"
 #include "job/bake_job.h"
 #include "luxel_version.h"
@@ -164,7 +165,14 @@ grpc::Status LuxelService::estimate_at_submit(const std::string& scene_id,
                             .settings = settings,
                             .scene_file = scenes_.main_file_path(info.value()),
                             .scene_name = info->name()};
-  return to_grpc(job::check_bake_job(input, options_.device));
+  // The host side too: result images, kept state, denoiser, output
+  // assembly and, on a CPU device, the device buffers (bake/host_memory.h).
+  const job::HostMemoryCheck host{
+      .budget = options_.host_memory_budget,
+      .device_is_host = !options_.device.is_gpu && options_.device.global_mem_bytes > 0,
+      .checkpoints = options_.checkpoints,
+      .budget_name = "luxeld --host-memory-budget"};
+  return to_grpc(job::check_bake_job(input, options_.device, host));
 }
 
 // A reference lightmap of another size fails the bake when it starts

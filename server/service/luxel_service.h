@@ -43,6 +43,10 @@ struct ServiceOptions {
   // (bake/resource_estimate.h); zeros when there is no device.
   pipeline::DeviceLimits device;
   uint32_t max_concurrent_bakes = 1;
+  // Host bytes one bake may be estimated to need (bake/host_memory.h); 0:
+  // not checked. On a CPU device its device memory counts here too.
+  size_t host_memory_budget = 0;
+  bool checkpoints = true;  // bakes write checkpoints (--checkpoint-interval > 0)
   StreamCaps streams;
   UploadDeadlines upload_deadlines;
   // How often watchers look for a new bake state and uploads for deadlines.

@@ -19,6 +19,7 @@
 #include <memory>
 #include <thread>
 
+#include "bake/host_memory.h"
 #include "device/context.h"
 #include "service/bake_runner.h"
 #include "service/bake_store.h"
@@ -147,6 +148,10 @@ int run(const DaemonConfig& config) {
   so.device_description = device_description;
   so.device = device_limits;
   so.max_concurrent_bakes = static_cast<uint32_t>(config.max_concurrent_bakes);
+  so.host_memory_budget = config.host_memory_budget < 0
+                              ? pipeline::default_host_memory_budget()
+                              : static_cast<size_t>(config.host_memory_budget);
+  so.checkpoints = config.checkpoint_interval_s > 0;
   so.streams = config.streams;
   so.upload_deadlines = {config.upload_idle_timeout_s, config.upload_timeout_s};
   so.metrics = &metrics;
@@ -208,6 +213,7 @@ int run(const DaemonConfig& config) {
                           {"tls", config.tls_cert.empty() ? "off" : "on"},
                           {"auth", config.token.empty() ? "off" : "bearer"},
                           {"device", device_description},
+                          {"host_memory_budget", std::to_string(so.host_memory_budget)},
                           {"data_dir", config.data_dir}});
   if (!is_loopback(config.listen) && config.token.empty())
     log_event("warning", {{"message", "listening beyond loopback without --token"}});

@@ -401,5 +401,47 @@ TEST_F(ServiceErrors, ReflectionListsTheLuxelService) {
   EXPECT_NE(response.find("luxel.v1.Luxel"), std::string::npos);
 }
 
+// A bake whose host memory (result images of every encoding, on a CPU
+// device its device buffers too) passes --host-memory-budget is refused at
+// submit, naming the settings and the bytes; the same bake small is
+// accepted and runs.
+TEST(ServiceHostMemory, OversizeBakeIsRefusedAtSubmitNamingTheSettingsAndBytes) {
+  TempDir dir;
+  Daemon daemon(dir.path() + "/data", {"--max-resolution", "4096", "--host-memory-budget", "2e9"});
+  const std::string scene = upload_cornell(daemon);
+  auto stub = daemon.stub();
+  auto submit = [&](uint32_t resolution, v1::BakeInfo* out) {
+    v1::SubmitBakeRequest req;
+    req.set_scene_id(scene);
+    *req.mutable_settings() = small_settings(1, resolution);
+    for (v1::Encoding e :
+         {v1::ENCODING_SH1, v1::ENCODING_SH2, v1::ENCODING_SG6, v1::ENCODING_SG9, v1::ENCODING_SG12,
+          v1::ENCODING_SG6_HEMI, v1::ENCODING_SG9_HEMI, v1::ENCODING_SG12_HEMI})
+      req.mutable_settings()->add_encodings(e);
+    auto ctx = daemon.context();
+    return stub->SubmitBake(ctx.get(), req, out);
+  };
+  v1::BakeInfo info;
+  const grpc::Status big = submit(4096, &info);
+  ASSERT_EQ(big.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << big.error_message();
+  const std::string& m = big.error_message();
+  for (const char* part :
+       {"settings.resolution 4096", "settings.encodings 'sh1,sh2,sg6,sg9,sg12,sg6-hemi,sg9-hemi,",
+        "settings.denoise", "host-memory budget of 2000000000 bytes", "--host-memory-budget",
+        "result images"})
+    EXPECT_NE(m.find(part), std::string::npos) << part << " in: " << m;
+  // The estimate in bytes: at least the result images, 4096^2 x 207 floats.
+  const size_t at = m.find("needs an estimated ");
+  ASSERT_NE(at, std::string::npos) << m;
+  EXPECT_GE(std::stoull(m.substr(at + 19)), 4096ull * 4096 * 207 * 4) << m;
+  EXPECT_NE(daemon.log().find("bake_refused"), std::string::npos);
+
+  const grpc::Status small = submit(64, &info);
+  ASSERT_TRUE(small.ok()) << small.error_message();
+  const v1::BakeInfo done = wait_for_bake(daemon, info.bake_id(), is_finished);
+  EXPECT_EQ(done.state(), v1::BAKE_STATE_SUCCEEDED) << done.DebugString();
+  EXPECT_EQ(daemon.stop(SIGTERM), 0);
+}
+
 }  // namespace
 }  // namespace luxel::test

@@ -10,6 +10,7 @@
 #include <mutex>
 
 #include "bake/baker.h"
+#include "bake/host_memory.h"
 
 namespace luxel::pipeline {
 
@@ -238,6 +239,7 @@ Status Baker::write_checkpoint(size_t ti) {
   c.elapsed_s = elapsed();
   series_to_checkpoint(result_.series, c);
   hooks_->on_checkpoint(c);
+  if (tiled()) return_finished(c);
   last_checkpoint_ = SteadyClock::now();
   return Status::ok();
 }
@@ -256,17 +258,35 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
     LUXEL_RETURN_IF_ERROR(compute_stats(tile_progress_));
   }
   LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
-  auto state = read_state(cancel);
-  if (!state) return state.status();
-  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
-  write_state(s_, state.value(), tile.begin, result_);
-  if (tracks_progressive_variance())
-    two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
-  if (keep_finished_) append_state(finished_, state.value());
+  uint64_t nonfinite = 0;
+  if (!keep_finished_ && !tracks_progressive_variance()) {
+    // Into the result a slice at a time: the host holds a slice of the
+    // tile's state beside the result images, not a copy of the whole tile.
+    const size_t slots = tile.end - tile.begin;
+    for (size_t first = 0; first < slots; first += kStateSliceSlots) {
+      BakeCheckpoint part;
+      LUXEL_RETURN_IF_ERROR(
+          b_.read_state(ctx_, part, first, std::min(kStateSliceSlots, slots - first), cancel));
+      LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
+      if (first == 0) nonfinite = part.nonfinite;
+      part.nonfinite = 0;
+      write_state(s_, part, tile.begin + first, result_);
+    }
+    result_.nonfinite_dropped += nonfinite;
+  } else {
+    auto state = read_state(cancel);
+    if (!state) return state.status();
+    LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the tile's read-back"));
+    write_state(s_, state.value(), tile.begin, result_);
+    if (tracks_progressive_variance())
+      two_point_texels_ += progressive_.fill(s_, state.value(), tile.begin, denoise_variance_);
+    if (keep_finished_) append_state(finished_, state.value());
+    nonfinite = state.value().nonfinite;
+  }
   const double n = static_cast<double>(tile.end - tile.begin);
   done_.slots = tile.end;
   done_.paths += paths_done_;
-  done_.nonfinite += state.value().nonfinite;
+  done_.nonfinite += nonfinite;
   done_.error_sum += tile_progress_.error * n;
   if (settings_.reference) {
     done_.sq_sum += tile_progress_.rmse * tile_progress_.rmse * n;

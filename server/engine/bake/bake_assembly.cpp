@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 
+#include "bake/host_memory.h"
 #include "bake/progressive_variance.h"
 #include "kernels/shared/probe.h"
 
@@ -29,9 +30,10 @@ Status begin_result(const BakeSetup& setup, BakeResult& r, CancelToken cancel) {
   const size_t t = setup.params.texel_count;
   r.width = setup.atlas.width;
   r.height = setup.atlas.height;
-  r.irradiance.assign(t * 4, 0.0f);
-  r.samples.assign(t, 0.0f);
-  r.rel_error.assign(t, 0.0f);
+  // Sized with host_memory.h's figures, the submit-time estimate's.
+  r.irradiance.assign(t * kIrradianceFloats, 0.0f);
+  r.samples.assign(t * kScalarImageFloats, 0.0f);
+  r.rel_error.assign(t * kScalarImageFloats, 0.0f);
   r.nonfinite_dropped = 0;
   r.encodings.clear();
   const EncodingPlan& plan = setup.plan;
@@ -40,7 +42,7 @@ Status begin_result(const BakeSetup& setup, BakeResult& r, CancelToken cancel) {
     EncodedLightmap e;
     e.name = plan.encodings[k].name();
     e.count = plan.table[k].count;
-    e.coefficients.assign(t * static_cast<size_t>(e.count) * 3, 0.0f);
+    e.coefficients.assign(t * coefficient_floats(plan, k), 0.0f);
     e.residual_rms = 0;  // the sum over covered texels until finish_result
     r.encodings.push_back(std::move(e));
   }

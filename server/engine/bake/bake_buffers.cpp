@@ -1,6 +1,7 @@
 #include "bake/bake_buffers.h"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "bake/resource_estimate.h"
 #include "bake/sample_slice.h"
@@ -238,8 +239,12 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
 }
 
 Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, CancelToken cancel) const {
+  return read_state(ctx, c, 0, args_.params.covered_count, cancel);
+}
+
+Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, size_t first, size_t n,
+                               CancelToken cancel) const {
   const cl::LuxBakeParams& p = args_.params;
-  const size_t n = p.covered_count;
   const AccumArgs& acc = args_.accum;
   c.width = p.width;
   c.height = p.height;
@@ -249,18 +254,24 @@ Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, CancelTo
   c.weight.resize(n);
   c.spp.resize(n);
   uint32_t nonfinite = 0;
-  LUXEL_RETURN_IF_ERROR(ctx.read(acc.mean, c.mean));
-  LUXEL_RETURN_IF_ERROR(ctx.read(acc.m2, c.m2));
-  LUXEL_RETURN_IF_ERROR(ctx.read(acc.weight, c.weight));
-  LUXEL_RETURN_IF_ERROR(ctx.read(acc.spp, c.spp));
-  c.basis.resize(p.encoding_count == 0 ? 0 : n * p.basis_stride);
+  auto read = [&](const device::Buffer& b, auto& v, size_t per_slot) {
+    using T = typename std::decay_t<decltype(v)>::value_type;
+    return ctx.read(b, v.data(), v.size() * sizeof(T), first * per_slot * sizeof(T));
+  };
+  LUXEL_RETURN_IF_ERROR(read(acc.mean, c.mean, 1));
+  LUXEL_RETURN_IF_ERROR(read(acc.m2, c.m2, 1));
+  LUXEL_RETURN_IF_ERROR(read(acc.weight, c.weight, 1));
+  LUXEL_RETURN_IF_ERROR(read(acc.spp, c.spp, 1));
+  const size_t stride = p.encoding_count == 0 ? 0 : p.basis_stride;
+  c.basis.resize(n * stride);
   constexpr size_t kReadChunk = size_t{64} << 20;
   const size_t basis_bytes = c.basis.size() * sizeof(c.basis[0]);
+  const size_t basis_offset = first * stride * sizeof(c.basis[0]);
   for (size_t at = 0; at < basis_bytes; at += kReadChunk) {
     LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the state's read-back"));
     LUXEL_RETURN_IF_ERROR(ctx.read(args_.encodings.basis_state,
                                    reinterpret_cast<char*>(c.basis.data()) + at,
-                                   std::min(kReadChunk, basis_bytes - at), at));
+                                   std::min(kReadChunk, basis_bytes - at), basis_offset + at));
   }
   LUXEL_RETURN_IF_ERROR(ctx.read(acc.nonfinite, &nonfinite, sizeof nonfinite));
   LUXEL_RETURN_IF_ERROR(ctx.finish());

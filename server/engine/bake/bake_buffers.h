@@ -63,9 +63,13 @@ class BakeBuffers {
   // count) to and from a checkpoint, per covered slot; width/height and the
   // covered count are checked on restore. covered: the setup's covered
   // texels, to compact a whole-image (version 1-2) checkpoint.
-  // cancel: polled between 64 MiB pieces of the basis state (1 GB at 2048^2
-  // with sh2 and sg12); a request ends it with cancelled_error.
+  // Slots [first, first + n) of the tile alone (the dropped count is the
+  // tile's); the whole tile without them. cancel: polled between 64 MiB
+  // pieces of the basis state (1 GB at 2048^2 with sh2 and sg12); a request
+  // ends it with cancelled_error.
   Status read_state(device::Context& ctx, BakeCheckpoint& c, CancelToken cancel = {}) const;
+  Status read_state(device::Context& ctx, BakeCheckpoint& c, size_t first, size_t n,
+                    CancelToken cancel = {}) const;
   Status restore_state(device::Context& ctx, const BakeCheckpoint& c,
                        const std::vector<uint32_t>& covered);
 

@@ -92,8 +92,11 @@ class Baker {
   // Restores a checkpoint: finished tiles into the result, the current
   // tile onto the device (loaded); returns the current tile's index.
   Result<size_t> resume_tiles(const BakeCheckpoint& c, BakeResult& result);
-  // A checkpoint of the whole atlas from the current tile's state.
-  BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile) const;
+  // A checkpoint of the whole atlas from the current tile's state. It
+  // borrows finished_'s arrays (no second copy of the finished tiles);
+  // return_finished gives them back once the checkpoint is written.
+  BakeCheckpoint tiled_checkpoint(const BakeCheckpoint& current, size_t tile);
+  void return_finished(BakeCheckpoint& checkpoint);
   static void append_state(BakeCheckpoint& to, const BakeCheckpoint& from);
   // settings_.denoise applied to a whole-atlas RGBA image with the variance
   // of each texel's mean (the guides are built and uploaded on the first

@@ -116,8 +116,13 @@ void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
   to.basis.insert(to.basis.end(), from.basis.begin(), from.basis.end());
 }
 
-BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) const {
-  BakeCheckpoint c = finished_;
+BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) {
+  BakeCheckpoint c;
+  c.mean = std::move(finished_.mean);
+  c.m2 = std::move(finished_.m2);
+  c.weight = std::move(finished_.weight);
+  c.spp = std::move(finished_.spp);
+  c.basis = std::move(finished_.basis);
   label_state(c);
   c.width = current.width;
   c.height = current.height;
@@ -144,6 +149,23 @@ BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti)
   c.tile[kTileDoneRel] = done_.rel_sum;
   c.tile[kTileDoneMinSpp] = static_cast<double>(done_.min_spp);
   return c;
+}
+
+void Baker::return_finished(BakeCheckpoint& c) {
+  // Slots [0, done_.slots) are the finished tiles'; the arrays keep their
+  // capacity for the next checkpoint.
+  const size_t n = done_.slots;
+  const size_t stride = s_.params.encoding_count == 0 ? 0 : s_.params.basis_stride;
+  c.mean.resize(n);
+  c.m2.resize(n);
+  c.weight.resize(n);
+  c.spp.resize(n);
+  c.basis.resize(n * stride);
+  finished_.mean = std::move(c.mean);
+  finished_.m2 = std::move(c.m2);
+  finished_.weight = std::move(c.weight);
+  finished_.spp = std::move(c.spp);
+  finished_.basis = std::move(c.basis);
 }
 
 Result<size_t> Baker::resume_tiles(const BakeCheckpoint& c, BakeResult& result) {

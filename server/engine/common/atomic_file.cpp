@@ -94,6 +94,24 @@ Status write_file_atomic(const std::string& path, const void* data, size_t bytes
   return sync_directory_of(path);
 }
 
+Status write_file_atomic_with(const std::string& path,
+                              const std::function<Status(int fd, const std::string& tmp)>& fill) {
+  if (path.empty()) return invalid_argument("write_file_atomic: empty output path");
+  const std::string tmp = atomic_temp_path(path);
+  const int fd = ::open(tmp.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return errno_status(errno, "cannot create", tmp);
+  Status st = fill(fd, tmp);
+  if (st.is_ok() && ::fsync(fd) != 0) st = errno_status(errno, "cannot fsync", tmp);
+  if (::close(fd) != 0 && st.is_ok()) st = errno_status(errno, "cannot close", tmp);
+  if (st.is_ok() && ::rename(tmp.c_str(), path.c_str()) != 0)
+    st = errno_status(errno, "cannot rename temporary file onto", path);
+  if (!st.is_ok()) {
+    ::unlink(tmp.c_str());
+    return st;
+  }
+  return sync_directory_of(path);
+}
+
 Result<std::string> read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return not_found(strprintf("%s: cannot open", path.c_str()));

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -30,6 +31,13 @@ Status write_file_atomic(const std::string& path, const void* data, size_t bytes
 inline Status write_file_atomic(const std::string& path, std::string_view bytes) {
   return write_file_atomic(path, bytes.data(), bytes.size());
 }
+
+// The same with the bytes written by `fill` into the open temporary `fd`
+// (it may seek; the file is fsync'ed, closed and renamed after it returns
+// OK): an encoder streams a large file to disk instead of holding all of it
+// in memory first. `tmp` names the temporary in fill's errors.
+Status write_file_atomic_with(const std::string& path,
+                              const std::function<Status(int fd, const std::string& tmp)>& fill);
 
 // Makes renames and creations inside `dir` durable (fsync of the directory).
 Status fsync_directory(const std::string& dir);

@@ -5,14 +5,21 @@
 namespace luxel {
 
 Hasher& Hasher::add(const void* data, size_t size) {
-  const auto* p = static_cast<const unsigned char*>(data);
   // Length-prefix each field so ("ab","c") and ("a","bc") differ.
-  uint64_t len = size;
+  return add_length(size).add_piece(data, size);
+}
+
+Hasher& Hasher::add_length(uint64_t len) {
   for (int i = 0; i < 8; ++i) {
     const unsigned char c = static_cast<unsigned char>(len >> (8 * i));
     a_ = fnv1a_step(a_, c);
     b_ = fnv1a_step(b_, c + 0x5bu);
   }
+  return *this;
+}
+
+Hasher& Hasher::add_piece(const void* data, size_t size) {
+  const auto* p = static_cast<const unsigned char*>(data);
   for (size_t i = 0; i < size; ++i) {
     a_ = fnv1a_step(a_, p[i]);
     b_ = fnv1a_step(b_, static_cast<unsigned char>(p[i] + 0x5bu));

@@ -31,6 +31,11 @@ class Hasher {
   Hasher& add(std::string_view bytes);
   Hasher& add(const void* data, size_t size);
   Hasher& add_u64(uint64_t v) { return add(&v, sizeof v); }
+  // One field given in pieces: add(data, size) is add_length(size) then
+  // add_piece for its bytes in order, however they are split (a file
+  // hashed as it is streamed out).
+  Hasher& add_length(uint64_t size);
+  Hasher& add_piece(const void* data, size_t size);
   // 32 lowercase hex digits.
   std::string hex() const;
 

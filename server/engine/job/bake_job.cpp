@@ -115,8 +115,10 @@ Result<probes::ProbeBake> bake_probes(const JobInput& in, device::Context& ctx, 
 
 Status write_outputs(const JobInput& in, const std::string& dir, JobResult& job) {
   if (job.lightmap) {
-    auto written = pipeline::write_bake_outputs(dir, *in.scene, in.settings, *job.lightmap,
-                                                in.scene_sha256, in.scene_file, in.scene_name);
+    // The job is done with the images once they are written (its caller
+    // reads the figures): each is released as its file is written.
+    auto written = pipeline::write_bake_outputs_releasing(
+        dir, *in.scene, in.settings, *job.lightmap, in.scene_sha256, in.scene_file, in.scene_name);
     if (!written) return written.status();
     job.written = std::move(written.value());
   } else {
@@ -134,11 +136,19 @@ Status write_outputs(const JobInput& in, const std::string& dir, JobResult& job)
 
 }  // namespace
 
-Status check_bake_job(const JobInput& in, const pipeline::DeviceLimits& device) {
+Status check_bake_job(const JobInput& in, const pipeline::DeviceLimits& device,
+                      const HostMemoryCheck& host, pipeline::HostMemoryEstimate* estimate) {
   const pipeline::BakeSettings& s = in.settings;
   if (s.lightmap) {
     auto e = pipeline::estimate_bake_resources(*in.scene, s, device);
     if (!e) return e.status();
+    if (host.budget > 0 || estimate) {
+      auto h = pipeline::estimate_host_memory(e.value(), s, host.device_is_host, host.checkpoints);
+      if (!h) return h.status();
+      if (estimate) *estimate = h.value();
+      LUXEL_RETURN_IF_ERROR(
+          pipeline::check_host_memory(h.value(), s, host.budget, host.budget_name));
+    }
     LUXEL_RETURN_IF_ERROR(check_small_layout(in));
   }
   if (!s.probes.empty()) {

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "bake/bake.h"
+#include "bake/host_memory.h"
 #include "bake/resource_estimate.h"
 #include "common/status.h"
 #include "device/context.h"
@@ -58,6 +59,8 @@ struct JobEvents {
 };
 
 struct JobResult {
+  // Once the outputs are written, a one-page lightmap's images are released
+  // (post/bake_outputs.h, write_bake_outputs_releasing); its figures stay.
   std::optional<pipeline::BakeResult> lightmap;
   std::optional<probes::ProbeBake> probes;
   // Files written into the output folder (the lightmap's, then probes.bin
@@ -77,7 +80,19 @@ struct JobResult {
 // count, the file's or the glTF nodes' positions). The daemon runs it at
 // SubmitBake and the CLI before `bake --local`. Errors start with the
 // setting ("settings.probes: ...").
-Status check_bake_job(const JobInput& input, const pipeline::DeviceLimits& device);
+//
+// With a host-memory budget, the lightmap's host peak too
+// (bake/host_memory.h), refused over it with RESOURCE_EXHAUSTED naming the
+// settings and the bytes; `estimate`, when given, receives it.
+struct HostMemoryCheck {
+  size_t budget = 0;            // bytes; 0: not checked
+  bool device_is_host = false;  // a CPU device: its buffers are host memory
+  bool checkpoints = false;     // the host writes checkpoints (keeps finished tiles)
+  std::string budget_name;      // the flag that sets it, for the message
+};
+Status check_bake_job(const JobInput& input, const pipeline::DeviceLimits& device,
+                      const HostMemoryCheck& host = {},
+                      pipeline::HostMemoryEstimate* estimate = nullptr);
 
 // Runs the job on `ctx` and writes its outputs into `out_dir` (created if
 // needed). A cancelled step (hooks.cancel) ends the job with what it has and

@@ -57,9 +57,12 @@ Status write_exr(const std::string& path, const Image& image,
     spec.attribute(key, value);
   }
   spec.attribute("compression", "zip");
-  auto bytes = encode_with_oiio("openexr", spec, OIIO::TypeDesc::FLOAT, image.pixels.data(), path);
-  if (!bytes) return bytes.status();
-  return write_file_atomic(path, bytes->data(), bytes->size());
+  // Encoded straight into the temporary file: the encoded bytes of a
+  // lightmap of several GiB are not held in memory beside its pixels.
+  return write_file_atomic_with(path, [&](int fd, const std::string&) {
+    return encode_with_oiio_to_fd("openexr", spec, OIIO::TypeDesc::FLOAT, image.pixels.data(), path,
+                                  fd);
+  });
 }
 
 Result<Image> read_exr(const std::string& path, ExrInfo* info) {

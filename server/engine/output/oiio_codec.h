@@ -21,4 +21,11 @@ Result<std::vector<uint8_t>> encode_with_oiio(const std::string& format,
                                               OIIO::TypeDesc pixel_type, const void* pixels,
                                               const std::string& what);
 
+// The same encoding written into the open file `fd` from its start
+// (write_file_atomic_with's temporary) instead of memory: the bytes are
+// those encode_with_oiio returns.
+Status encode_with_oiio_to_fd(const std::string& format, const OIIO::ImageSpec& spec,
+                              OIIO::TypeDesc pixel_type, const void* pixels,
+                              const std::string& what, int fd);
+
 }  // namespace luxel::output

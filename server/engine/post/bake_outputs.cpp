@@ -156,11 +156,14 @@ std::string lightmapped_glb_name(const std::string& scene_file_name) {
   return stem + "_lightmapped.glb";
 }
 
-Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
-                                       const BakeSettings& settings, const BakeResult& result,
-                                       const std::string& scene_sha256,
-                                       const std::string& source_path,
-                                       const std::string& scene_name) {
+namespace {
+
+// `owned`: the same result as `result`, whose images may be moved out as
+// they are written (null: they are copied).
+Result<OutputPaths> write_outputs(const std::string& dir, const scene::Scene& scene,
+                                  const BakeSettings& settings, const BakeResult& result,
+                                  BakeResult* owned, const std::string& scene_sha256,
+                                  const std::string& source_path, const std::string& scene_name) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec)
@@ -206,10 +209,15 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       {"luxel/alpha", "fraction of the texel covered by geometry"},
       {"luxel/scene", shown_name}};
   BakeSeamStitch seams(result);
+  // A page's pixels: a copy of its rows, or with `owned` (one page) the
+  // plane itself, moved out: output assembly then holds no second
+  // full-size copy of an image beside the result.
+  auto take = [&](std::vector<float>* plane, const std::vector<float>& px, int channels, int page) {
+    if (owned && pages == 1) return std::move(*plane);
+    return rows(px, channels, page);
+  };
   for (int page = 0; page < pages; ++page) {
     const std::string page_note = pages == 1 ? "" : strprintf(" (page %d)", page);
-    output::Image lightmap = to_image(result.width, page_h, 4, rows(result.irradiance, 4, page));
-    LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
     // Directional encodings are dilated with the irradiance map's coverage
     // so every channel pads the same texels.
     output::Image coverage = to_image(result.width, page_h, 1, {});
@@ -217,17 +225,11 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     const size_t first = size_t(result.width) * size_t(page_h) * size_t(page);
     for (size_t t = 0; t < coverage.pixels.size(); ++t)
       coverage.pixels[t] = result.irradiance[(first + t) * 4 + 3];
-    std::vector<output::Image> coefficients;
-    for (const auto& e : result.encodings) {
-      coefficients.push_back(
-          to_image(result.width, page_h, e.count * 3, rows(e.coefficients, e.count * 3, page)));
-      LUXEL_RETURN_IF_ERROR(
-          output::dilate(coefficients.back(), coverage, settings.dilation_texels));
-    }
+    output::Image lightmap = to_image(result.width, page_h, 4, {});
+    lightmap.pixels = take(owned ? &owned->irradiance : nullptr, result.irradiance, 4, page);
+    LUXEL_RETURN_IF_ERROR(output::dilate(lightmap, settings.dilation_texels));
     // After dilation: bilinear fetches along seams read padding (bake_seams.h).
-    std::vector<output::Image*> coefficient_ptrs;
-    for (auto& img : coefficients) coefficient_ptrs.push_back(&img);
-    seams.stitch_page(page, lightmap, coverage, coefficient_ptrs);
+    seams.stitch_page(page, lightmap, coverage, {});
 
     const std::string irradiance = name("irradiance", ".exr", page);
     const std::string preview = name("preview", ".png", page);
@@ -236,9 +238,14 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
     LUXEL_RETURN_IF_ERROR(
         output::write_exr(at(irradiance.c_str()), lightmap, {"R", "G", "B", "A"}, meta));
     LUXEL_RETURN_IF_ERROR(output::write_png_preview(at(preview.c_str()), lightmap));
-    LUXEL_RETURN_IF_ERROR(output::write_exr(
-        at(samples.c_str()), to_image(result.width, page_h, 1, rows(result.samples, 1, page)),
-        {"Y"}, {{"luxel/content", "samples per texel"}}));
+    lightmap = {};
+    {
+      output::Image spp = to_image(result.width, page_h, 1, {});
+      spp.pixels = take(owned ? &owned->samples : nullptr, result.samples, 1, page);
+      LUXEL_RETURN_IF_ERROR(output::write_exr(at(samples.c_str()), spp, {"Y"},
+                                              {{"luxel/content", "samples per texel"}}));
+    }
+    // The relative errors stay: seam stitching weighs the encodings' gaps by them.
     LUXEL_RETURN_IF_ERROR(output::write_exr(
         at(error.c_str()), to_image(result.width, page_h, 1, rows(result.rel_error, 1, page)),
         {"Y"}, {{"luxel/content", "relative standard error of the texel mean"}}));
@@ -251,8 +258,9 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
              page);
     if (!result.irradiance_denoised.empty()) {
       // The denoised map, dilated the same way; the raw one above stays the bake.
-      output::Image denoised =
-          to_image(result.width, page_h, 4, rows(result.irradiance_denoised, 4, page));
+      output::Image denoised = to_image(result.width, page_h, 4, {});
+      denoised.pixels =
+          take(owned ? &owned->irradiance_denoised : nullptr, result.irradiance_denoised, 4, page);
       LUXEL_RETURN_IF_ERROR(output::dilate(denoised, settings.dilation_texels));
       seams.stitch_denoised_page(page, denoised, coverage);
       std::map<std::string, std::string> denoised_meta = meta;
@@ -273,17 +281,24 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       paths.samples_exr = at(samples.c_str());
       paths.error_exr = at(error.c_str());
     }
-    // Directional encodings: one EXR each, channels c00.R .. cNN.B.
+    // Directional encodings: one EXR each, channels c00.R .. cNN.B, one at
+    // a time (dilated, stitched, written, released).
     for (size_t k = 0; k < result.encodings.size(); ++k) {
       const auto& e = result.encodings[k];
       std::vector<std::string> names;
       for (int i = 0; i < e.count; ++i)
         for (const char* c : {"R", "G", "B"}) names.push_back(strprintf("c%02d.%s", i, c));
+      output::Image coefficients = to_image(result.width, page_h, e.count * 3, {});
+      coefficients.pixels = take(owned ? &owned->encodings[k].coefficients : nullptr,
+                                 e.coefficients, e.count * 3, page);
+      LUXEL_RETURN_IF_ERROR(output::dilate(coefficients, coverage, settings.dilation_texels));
+      seams.stitch_encoding(page, k, coefficients, coverage);
       const std::string file = name(e.name, ".exr", page);
-      LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), coefficients[k], names,
+      LUXEL_RETURN_IF_ERROR(output::write_exr(at(file.c_str()), coefficients, names,
                                               {{"luxel/encoding", e.name},
                                                {"luxel/units", "radiance coefficients, W/(m^2 sr)"},
                                                {"luxel/scene", shown_name}}));
+      coefficients = {};
       paths.encodings.push_back(at(file.c_str()));
       add_file(e.name, file, "exr",
                strprintf("float32, %d coefficients x RGB of the %s basis (see encodings in this "
@@ -294,8 +309,9 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
       if (e.coefficients_denoised.empty()) continue;
       // The denoised coefficients (SH through OIDN's directional mode),
       // dilated like the raw ones; the raw file above stays the bake.
-      output::Image denoised = to_image(result.width, page_h, e.count * 3,
-                                        rows(e.coefficients_denoised, e.count * 3, page));
+      output::Image denoised = to_image(result.width, page_h, e.count * 3, {});
+      denoised.pixels = take(owned ? &owned->encodings[k].coefficients_denoised : nullptr,
+                             e.coefficients_denoised, e.count * 3, page);
       LUXEL_RETURN_IF_ERROR(output::dilate(denoised, coverage, settings.dilation_texels));
       const std::string dfile = name(e.name + "_denoised", ".exr", page);
       LUXEL_RETURN_IF_ERROR(
@@ -349,6 +365,26 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
   LUXEL_RETURN_IF_ERROR(output::write_manifest(paths.manifest_json, m));
   paths.files.push_back("manifest.json");
   return paths;
+}
+
+}  // namespace
+
+Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scene& scene,
+                                       const BakeSettings& settings, const BakeResult& result,
+                                       const std::string& scene_sha256,
+                                       const std::string& source_path,
+                                       const std::string& scene_name) {
+  return write_outputs(dir, scene, settings, result, nullptr, scene_sha256, source_path,
+                       scene_name);
+}
+
+Result<OutputPaths> write_bake_outputs_releasing(const std::string& dir, const scene::Scene& scene,
+                                                 const BakeSettings& settings, BakeResult& result,
+                                                 const std::string& scene_sha256,
+                                                 const std::string& source_path,
+                                                 const std::string& scene_name) {
+  return write_outputs(dir, scene, settings, result, &result, scene_sha256, source_path,
+                       scene_name);
 }
 
 }  // namespace luxel::pipeline

@@ -46,6 +46,16 @@ Result<OutputPaths> write_bake_outputs(const std::string& dir, const scene::Scen
                                        const std::string& source_path = "",
                                        const std::string& scene_name = "");
 
+// The same files from a result the caller is done with: a one-page
+// result's images are moved out and released as each file is written, so
+// output assembly holds no second full-size copy of them (the figures,
+// atlas, manifest entries and final state stay).
+Result<OutputPaths> write_bake_outputs_releasing(const std::string& dir, const scene::Scene& scene,
+                                                 const BakeSettings& settings, BakeResult& result,
+                                                 const std::string& scene_sha256 = "",
+                                                 const std::string& source_path = "",
+                                                 const std::string& scene_name = "");
+
 // The manifest that write_bake_outputs writes (without the file list).
 output::Manifest make_manifest(const scene::Scene& scene, const BakeSettings& settings,
                                const BakeResult& result, const std::string& scene_sha256);

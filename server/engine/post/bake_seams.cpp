@@ -62,6 +62,21 @@ void BakeSeamStitch::stitch_page(int page, output::Image& irradiance, const outp
   seconds_ += seconds_since(t0);
 }
 
+void BakeSeamStitch::stitch_encoding(int page, size_t k, output::Image& img,
+                                     const output::Image& coverage) {
+  if (!enabled() || k >= encodings_before_.size()) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<output::StitchEdge> edges = page_edges(page);
+  if (edges.empty()) return;
+  const output::SeamStitcher stitcher(img.width, img.height, edges, coverage.pixels);
+  const std::vector<float> rel = page_rel_error(page, img.texel_count());
+  encodings_before_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
+  most_iterations_ = std::max(
+      most_iterations_, stitcher.stitch(img.pixels, img.channels, 0, img.channels, false, rel));
+  encodings_after_[k].add(stitcher.measure(img.pixels, img.channels, 0, img.channels));
+  seconds_ += seconds_since(t0);
+}
+
 void BakeSeamStitch::stitch_denoised_page(int page, output::Image& denoised,
                                           const output::Image& coverage) {
   if (!enabled()) return;

@@ -36,6 +36,10 @@ class BakeSeamStitch {
   void stitch_page(int page, output::Image& irradiance, const output::Image& coverage,
                    const std::vector<output::Image*>& encodings);
 
+  // Encoding k of `page` alone (after stitch_page of the page's irradiance),
+  // so output assembly holds one encoding's image at a time.
+  void stitch_encoding(int page, size_t k, output::Image& image, const output::Image& coverage);
+
   // Stitches page `page`'s dilated denoised irradiance (RGB) the same way:
   // the denoiser filters within charts, so its two sides of a seam disagree
   // as the raw map's do.

@@ -1,5 +1,9 @@
 #include "shards/checkpoint.h"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -15,8 +19,14 @@ constexpr char kMagicV3[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '3'};
 constexpr char kMagicV2[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
 
+// The file's fields in order: counted (fd < 0: the size the checksum is
+// prefixed with), or written to fd through a small buffer and hashed as
+// they go, so a checkpoint of several GiB is never held twice in memory.
 class Writer {
  public:
+  explicit Writer(int fd = -1, uint64_t total = 0) : fd_(fd) {
+    if (fd_ >= 0) hasher_.add_length(total);
+  }
   template <typename T>
   void pod(const T& v) {
     raw(&v, sizeof v);
@@ -28,13 +38,52 @@ class Writer {
   }
   void raw(const void* p, size_t n) {
     if (n == 0) return;
-    const auto* c = static_cast<const char*>(p);
-    bytes_.insert(bytes_.end(), c, c + n);
+    size_ += n;
+    if (fd_ < 0) return;
+    hasher_.add_piece(p, n);
+    put(p, n);
   }
-  std::string& bytes() { return bytes_; }
+  // The checksum of everything before it, unhashed itself; then the rest
+  // of the buffer goes out.
+  Status finish() {
+    const std::string sum = hasher_.hex();
+    put(sum.data(), sum.size());
+    flush();
+    return status_;
+  }
+  uint64_t size() const { return size_; }
 
  private:
-  std::string bytes_;
+  void put(const void* p, size_t n) {
+    const auto* c = static_cast<const char*>(p);
+    while (n > 0 && status_.is_ok()) {
+      const size_t k = std::min(n, kBuffer - buffer_.size());
+      buffer_.insert(buffer_.end(), c, c + k);
+      c += k;
+      n -= k;
+      if (buffer_.size() == kBuffer) flush();
+    }
+  }
+  void flush() {
+    size_t done = 0;
+    while (done < buffer_.size() && status_.is_ok()) {
+      const ssize_t w = ::write(fd_, buffer_.data() + done, buffer_.size() - done);
+      if (w < 0 && errno == EINTR) continue;
+      if (w < 0)
+        status_ = errno == ENOSPC || errno == EDQUOT
+                      ? resource_exhausted(strprintf("checkpoint: %s", std::strerror(errno)))
+                      : internal_error(strprintf("checkpoint: %s", std::strerror(errno)));
+      else
+        done += static_cast<size_t>(w);
+    }
+    buffer_.clear();
+  }
+  static constexpr size_t kBuffer = size_t{1} << 20;
+  int fd_;
+  uint64_t size_ = 0;
+  Hasher hasher_;
+  std::string buffer_;
+  Status status_ = Status::ok();
 };
 
 class Reader {
@@ -70,28 +119,35 @@ class Reader {
 
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
   if (c.per_texel) return internal_error("checkpoint: whole-image state is read, never written");
-  Writer w;
-  w.raw(kMagic, sizeof kMagic);
-  w.vec(std::vector<char>(c.fingerprint.begin(), c.fingerprint.end()));
-  w.pod(c.width);
-  w.pod(c.height);
-  w.pod(c.paths_done);
-  w.pod(c.iteration);
-  w.pod(c.elapsed_s);
-  w.pod(c.nonfinite);
-  w.vec(c.series);
-  w.vec(c.mean);
-  w.vec(c.m2);
-  w.vec(c.weight);
-  w.vec(c.spp);
-  w.vec(c.basis);
-  w.vec(c.tile);
-  w.pod(c.shard_index);
-  w.pod(c.shard_count);
-  w.vec(c.basis_layout);
-  const std::string sum = Hasher().add(w.bytes()).hex();
-  w.raw(sum.data(), sum.size());
-  return write_file_atomic(path, w.bytes().data(), w.bytes().size());
+  const std::vector<char> fingerprint(c.fingerprint.begin(), c.fingerprint.end());
+  auto fields = [&](Writer& w) {
+    w.raw(kMagic, sizeof kMagic);
+    w.vec(fingerprint);
+    w.pod(c.width);
+    w.pod(c.height);
+    w.pod(c.paths_done);
+    w.pod(c.iteration);
+    w.pod(c.elapsed_s);
+    w.pod(c.nonfinite);
+    w.vec(c.series);
+    w.vec(c.mean);
+    w.vec(c.m2);
+    w.vec(c.weight);
+    w.vec(c.spp);
+    w.vec(c.basis);
+    w.vec(c.tile);
+    w.pod(c.shard_index);
+    w.pod(c.shard_count);
+    w.vec(c.basis_layout);
+  };
+  Writer count;
+  fields(count);
+  // The same bytes as hashing the whole file before its checksum at once.
+  return write_file_atomic_with(path, [&](int fd, const std::string&) {
+    Writer w(fd, count.size());
+    fields(w);
+    return w.finish();
+  });
 }
 
 Result<BakeCheckpoint> read_checkpoint(const std::string& path) {

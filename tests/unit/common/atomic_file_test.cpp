@@ -2,6 +2,7 @@
 #include "common/atomic_file.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include "temp_dir.h"
 
@@ -58,6 +59,29 @@ TEST(AtomicFile, DirectoryAsTargetFailsAndLeavesNoTemporary) {
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << st.to_string();
   EXPECT_NE(st.message().find(dir.file("sub")), std::string::npos) << st.message();
   EXPECT_TRUE(std::filesystem::is_directory(dir.file("sub")));
+  EXPECT_TRUE(dir.temporaries().empty());
+}
+
+// The streaming form: what `fill` writes (seeking back, as an EXR's
+// offset table does) is the file; a failing `fill` leaves the old file and
+// no temporary.
+TEST(AtomicFile, StreamedBytesReplaceTheFileOrNothing) {
+  TempDir dir("atomic-with");
+  const std::string path = dir.file("data.bin");
+  write_bytes(path, "old");
+  ASSERT_TRUE(write_file_atomic_with(path, [](int fd, const std::string&) {
+                if (::write(fd, "xxxx-body", 9) != 9 || ::lseek(fd, 0, SEEK_SET) != 0 ||
+                    ::write(fd, "head", 4) != 4)
+                  return internal_error("write failed");
+                return Status::ok();
+              }).is_ok());
+  EXPECT_EQ(read_bytes(path), "head-body");
+  const Status st = write_file_atomic_with(path, [](int fd, const std::string&) {
+    (void)::write(fd, "partial", 7);
+    return resource_exhausted("encoder gave up");
+  });
+  EXPECT_EQ(st.code(), StatusCode::kResourceExhausted);
+  EXPECT_EQ(read_bytes(path), "head-body");
   EXPECT_TRUE(dir.temporaries().empty());
 }
 

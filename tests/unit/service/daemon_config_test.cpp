@@ -30,6 +30,26 @@ unsigned mode_of(const fs::path& p) {
   return st.st_mode & 07777;
 }
 
+// --host-memory-budget: bytes, -1 (half the machine's memory) unless given,
+// 0 turns the check off, anything else is refused naming the flag.
+TEST(DaemonConfig, HostMemoryBudgetIsBytes) {
+  auto unset = parse_daemon_args({"--data-dir", "/tmp/x"});
+  ASSERT_TRUE(unset) << unset.status().to_string();
+  EXPECT_EQ(unset.value().host_memory_budget, -1);
+  auto given = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", "2e9"});
+  ASSERT_TRUE(given) << given.status().to_string();
+  EXPECT_EQ(given.value().host_memory_budget, 2e9);
+  auto off = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", "0"});
+  ASSERT_TRUE(off);
+  EXPECT_EQ(off.value().host_memory_budget, 0);
+  for (const char* bad : {"-1", "lots", ""}) {
+    auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", bad});
+    ASSERT_FALSE(c) << bad;
+    EXPECT_NE(c.status().message().find("--host-memory-budget"), std::string::npos)
+        << c.status().message();
+  }
+}
+
 TEST(DaemonConfig, TokenFileReadableByOthersIsRefused) {
   const fs::path dir = temp_dir("luxel-token-mode");
   const std::string token = (dir / "token").string();
