@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bake/baker.h"
+#include "common/cancel.h"
 #include "encode/basis.h"
 
 namespace luxel::pipeline {
@@ -116,6 +117,8 @@ Result<std::string> Baker::denoise_sh_encodings(BakeResult& result) {
       raw.push_back(e.name);
       continue;
     }
+    LUXEL_RETURN_IF_ERROR(check_cancel(
+        CancelToken(hooks_->discard_cancelled ? hooks_->cancel : nullptr), "the denoise"));
     OidnParams p;
     auto out = oidn_->run_sh(e.coefficients, e.count, result.irradiance, result.rel_error,
                              sh_band_bounds(basis.value()), p);
@@ -168,13 +171,20 @@ Result<size_t> Baker::denoise_result() {
     return size_t{0};
   }
   const auto t_denoise = SteadyClock::now();
+  // A host that throws a cancelled bake away (the daemon) stops between the
+  // denoiser's steps: at 2048^2 each takes up to a second on a CPU, and the
+  // device's turn may be another bake's for longer.
+  const CancelToken cancel(hooks_->discard_cancelled ? hooks_->cancel : nullptr);
   std::unique_lock<std::mutex> turn;
   if (hooks_->device_turn) turn = std::unique_lock<std::mutex>(*hooks_->device_turn);
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the denoise"));
   size_t two_point = 0;
   const std::vector<float> variance =
       atlas_variance(result.irradiance, result.rel_error, nullptr, 0, &two_point);
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the denoise"));
   auto filtered = denoise(result.irradiance, variance, two_point);
   if (!filtered) return filtered.status();
+  LUXEL_RETURN_IF_ERROR(check_cancel(cancel, "the denoise"));
   result.irradiance_denoised = std::move(filtered.value());
   result.denoise_variance = variance;
   nlohmann::json j = nlohmann::json::parse(denoise_json(two_point));
