@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "scene/import_budget.h"
 #include "settings/settings_schema.h"
 
 namespace luxel::cli {
@@ -147,15 +148,16 @@ ParseOutcome parse_bake_args(const std::vector<std::string>& args, BakeCommand& 
     else if (k == "--device")
       ok = text(a.device);
     else if (k == "--host-memory-budget") {
+      // Byte sizes as luxeld takes them ("8GiB", "8e9"); 0: no check.
       std::string v;
-      char* end = nullptr;
       ok = text(v);
-      if (ok) a.host_memory_budget = std::strtod(v.c_str(), &end);
-      if (ok && (v.empty() || *end != '\0' || !(a.host_memory_budget >= 0))) {
-        std::fprintf(stderr, "luxel bake: --host-memory-budget: expected bytes >= 0, got '%s'\n",
-                     v.c_str());
+      auto bytes = ok ? scene::parse_byte_size(v) : Result<uint64_t>(0);
+      if (ok && !bytes) {
+        std::fprintf(stderr, "luxel bake: --host-memory-budget: %s\n",
+                     bytes.status().message().c_str());
         ok = false;
       }
+      if (ok) a.host_memory_budget = static_cast<double>(*bytes);
     } else if (k == "--name")
       ok = text(a.name);
     else if (k == "--snapshots")

@@ -154,8 +154,11 @@ Result<DaemonConfig> parse_daemon_args(const std::vector<std::string>& args,
       LUXEL_RETURN_IF_ERROR(number(1, 65536, &x));
       c.max_resolution = int(x);
     } else if (k == "--host-memory-budget") {
-      LUXEL_RETURN_IF_ERROR(number(0, 1e18, &x));
-      c.host_memory_budget = x;
+      // The same byte sizes as --import-memory-budget ("8GiB"); 0: no check.
+      LUXEL_RETURN_IF_ERROR(value());
+      auto bytes = scene::parse_byte_size(v);
+      if (!bytes) return invalid_argument(k + ": " + bytes.status().message());
+      c.host_memory_budget = *bytes;
     } else if (k == "--max-queued") {
       LUXEL_RETURN_IF_ERROR(number(1, 1e6, &x));
       c.max_queued = size_t(x);

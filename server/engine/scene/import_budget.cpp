@@ -5,8 +5,11 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <optional>
+#include <string>
 
 #include "common/math.h"
 #include "scene/scene.h"
@@ -78,6 +81,17 @@ Result<uint64_t> parse_byte_size(std::string_view text) {
     ++i;
   }
   if (i == 0) return bad();
+  // A decimal ("1.5GiB", "2e9"): read again as a double; the bytes it
+  // gives must be whole.
+  std::optional<double> decimal;
+  if (i < text.size() && (text[i] == '.' || text[i] == 'e' || text[i] == 'E')) {
+    const std::string number(text.substr(0, text.find_first_not_of("0123456789.eE+-")));
+    char* end = nullptr;
+    const double d = std::strtod(number.c_str(), &end);
+    if (end != number.c_str() + number.size() || !(d >= 0) || !std::isfinite(d)) return bad();
+    decimal = d;
+    i = number.size();
+  }
   while (i < text.size() && text[i] == ' ') ++i;
   const std::string_view unit = text.substr(i);
   static const struct {
@@ -96,6 +110,12 @@ Result<uint64_t> parse_byte_size(std::string_view text) {
                 {"TB", 1000000000000}};
   for (const auto& u : kUnits) {
     if (unit != u.name) continue;
+    if (decimal) {
+      const double bytes = *decimal * static_cast<double>(u.scale);
+      // 2^64 is exactly representable: anything below it converts.
+      if (!(bytes < 18446744073709551616.0) || bytes != std::floor(bytes)) return bad();
+      return static_cast<uint64_t>(bytes);
+    }
     if (v > std::numeric_limits<uint64_t>::max() / u.scale) return bad();
     return v * u.scale;
   }

@@ -51,8 +51,9 @@ class ImportMemoryPool {
 // The default import budget: 1/8 of the memory this process may use (the
 // smaller of physical memory and the cgroup v2/v1 limit). 1/8 leaves the rest
 // to bakes, which need several times a scene's size (BVH, device buffers,
-// accumulators): ~2.9 GiB on a 24 GiB machine, which refuses each of the
-// measured import bombs (docs/operations.md "Import budgets").
+// accumulators): ~2.9 GiB on a 24 GiB machine, which refuses the measured
+// zero-filled accessor and bounds the other import bombs (docs/operations.md
+// "Import budgets").
 uint64_t default_import_memory_budget();
 
 // "3221225472", "512MiB", "3GiB", "64 KiB" (also kB/MB/GB as powers of 1000).

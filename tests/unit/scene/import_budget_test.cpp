@@ -195,8 +195,10 @@ TEST(ImportBudget, ParseByteSize) {
   EXPECT_EQ(parse_byte_size("512MiB").value(), uint64_t{512} << 20);
   EXPECT_EQ(parse_byte_size("64 KiB").value(), uint64_t{64} << 10);
   EXPECT_EQ(parse_byte_size("2GB").value(), uint64_t{2000000000});
-  for (const char* bad :
-       {"", "GiB", "1.5GiB", "-1", "3 gigs", "99999999999999999999", "17179869184GiB"}) {
+  EXPECT_EQ(parse_byte_size("1.5GiB").value(), uint64_t{3} << 29);
+  EXPECT_EQ(parse_byte_size("2e9").value(), uint64_t{2000000000});
+  for (const char* bad : {"", "GiB", "1.5", "-1", "3 gigs", "1e30", "99999999999999999999",
+                          "17179869184GiB", "2e9.5", "nan", "inf"}) {
     auto r = parse_byte_size(bad);
     EXPECT_FALSE(r.is_ok()) << bad;
     if (!r.is_ok()) EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument);

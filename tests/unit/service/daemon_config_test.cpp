@@ -39,6 +39,10 @@ TEST(DaemonConfig, HostMemoryBudgetIsBytes) {
   auto given = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", "2e9"});
   ASSERT_TRUE(given) << given.status().to_string();
   EXPECT_EQ(given.value().host_memory_budget, 2e9);
+  // The byte sizes --import-memory-budget takes.
+  auto sized = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", "8GiB"});
+  ASSERT_TRUE(sized) << sized.status().to_string();
+  EXPECT_EQ(sized.value().host_memory_budget, double(uint64_t{8} << 30));
   auto off = parse_daemon_args({"--data-dir", "/tmp/x", "--host-memory-budget", "0"});
   ASSERT_TRUE(off);
   EXPECT_EQ(off.value().host_memory_budget, 0);
@@ -100,12 +104,12 @@ TEST(DaemonConfig, ImportBudgetAndTimeout) {
   EXPECT_EQ(d->import_timeout_s, 300);
   for (const auto& [text, bytes] :
        {std::pair{"3GiB", uint64_t{3} << 30}, std::pair{"512MiB", uint64_t{512} << 20},
-        std::pair{"1048576", uint64_t{1} << 20}}) {
+        std::pair{"1048576", uint64_t{1} << 20}, std::pair{"1.5GiB", uint64_t{3} << 29}}) {
     auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--import-memory-budget", text});
     ASSERT_TRUE(c.is_ok()) << text << ": " << c.status().to_string();
     EXPECT_EQ(c->import_memory_budget, bytes) << text;
   }
-  for (const char* bad : {"", "lots", "1.5GiB", "1000", "-3GiB"}) {
+  for (const char* bad : {"", "lots", "1.5", "1000", "-3GiB"}) {
     auto c = parse_daemon_args({"--data-dir", "/tmp/x", "--import-memory-budget", bad});
     ASSERT_FALSE(c.is_ok()) << bad;
     EXPECT_NE(c.status().message().find("--import-memory-budget"), std::string::npos)
