@@ -449,7 +449,8 @@ class Suite:
 
         def cancel_after(delay, phase_check=None):
             with self.client() as c:
-                info = c.submit_bake(scene, **heavy)
+                info = c.submit_bake(scene, **(dict(heavy, samples_per_texel=8, denoise="atrous")
+                                               if delay == "finishing" else heavy))
                 if delay is None:
                     # Queued behind a running bake.
                     blocker = info
@@ -463,6 +464,12 @@ class Suite:
                     if delay == "tracing":
                         while c.get_bake(info.bake_id).progress.paths == 0:
                             time.sleep(0.01)
+                    elif delay == "finishing":
+                        # The last iteration done: read-back, denoise and
+                        # outputs still to come.
+                        while (c.get_bake(info.bake_id).progress.fraction < 1 and
+                               state_name(c.get_bake(info.bake_id).state) not in TERMINAL):
+                            time.sleep(0.002)
                     else:
                         time.sleep(delay)
                 at = c.get_bake(info.bake_id)
@@ -483,7 +490,8 @@ class Suite:
                         f"{phase} call returned in {returned:.3f} s, {final} after {ended:.3f} s")
         for label, delay in (("queued", None), ("0.3 s after RUNNING", 0.3),
                              ("1.5 s after RUNNING", 1.5), ("4.0 s after RUNNING", 4.0),
-                             ("while tracing", "tracing")):
+                             ("while tracing", "tracing"),
+                             ("after the last iteration (8 spp, a-trous)", "finishing")):
             self.case("cancel", label, lambda d=delay: cancel_after(d))
 
 
@@ -570,6 +578,7 @@ def main(argv):
     for r in suite.rows:
         if not r["held"]:
             print(f"- {r['klass']}: {r['case']}: {r['detail']}")
+    pathlib.Path(out).mkdir(parents=True, exist_ok=True)
     (pathlib.Path(out) / "hostile.json").write_text(json.dumps(
         dict(rows=suite.rows, summary=summary), indent=1))
     return 0
