@@ -74,24 +74,10 @@ std::string atomic_temp_path(const std::string& path) {
 }
 
 Status write_file_atomic(const std::string& path, const void* data, size_t bytes) {
-  if (path.empty()) return invalid_argument("write_file_atomic: empty output path");
   if (bytes > 0 && data == nullptr)
     return invalid_argument(strprintf("write_file_atomic '%s': no data", path.c_str()));
-  const std::string tmp = atomic_temp_path(path);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return errno_status(errno, "cannot create", tmp);
-
-  Status st = write_all(fd, data, bytes, tmp);
-  if (st.is_ok() && ::fsync(fd) != 0) st = errno_status(errno, "cannot fsync", tmp);
-  // close() reports deferred write errors on some file systems (NFS).
-  if (::close(fd) != 0 && st.is_ok()) st = errno_status(errno, "cannot close", tmp);
-  if (st.is_ok() && ::rename(tmp.c_str(), path.c_str()) != 0)
-    st = errno_status(errno, "cannot rename temporary file onto", path);
-  if (!st.is_ok()) {
-    ::unlink(tmp.c_str());
-    return st;
-  }
-  return sync_directory_of(path);
+  return write_file_atomic_with(
+      path, [&](int fd, const std::string& tmp) { return write_all(fd, data, bytes, tmp); });
 }
 
 Status write_file_atomic_with(const std::string& path,
@@ -102,6 +88,7 @@ Status write_file_atomic_with(const std::string& path,
   if (fd < 0) return errno_status(errno, "cannot create", tmp);
   Status st = fill(fd, tmp);
   if (st.is_ok() && ::fsync(fd) != 0) st = errno_status(errno, "cannot fsync", tmp);
+  // close() reports deferred write errors on some file systems (NFS).
   if (::close(fd) != 0 && st.is_ok()) st = errno_status(errno, "cannot close", tmp);
   if (st.is_ok() && ::rename(tmp.c_str(), path.c_str()) != 0)
     st = errno_status(errno, "cannot rename temporary file onto", path);

@@ -65,7 +65,10 @@ Status write_exr(const std::string& path, const Image& image,
   });
 }
 
-Result<Image> read_exr(const std::string& path, ExrInfo* info) {
+namespace {
+
+// An OpenEXR file opened for reading (its header read), or why not.
+Result<std::unique_ptr<OIIO::ImageInput>> open_exr(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     return not_found(strprintf("%s: no such file", path.c_str()));
@@ -75,6 +78,15 @@ Result<Image> read_exr(const std::string& path, ExrInfo* info) {
   if (std::string(in->format_name()) != "openexr")
     return invalid_argument(
         strprintf("%s: is a %s file, not OpenEXR", path.c_str(), in->format_name()));
+  return in;
+}
+
+}  // namespace
+
+Result<Image> read_exr(const std::string& path, ExrInfo* info) {
+  auto opened = open_exr(path);
+  if (!opened) return opened.status();
+  auto& in = opened.value();
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.depth > 1)
     return invalid_argument(strprintf("%s: is a volume (depth %d)", path.c_str(), spec.depth));
@@ -95,16 +107,9 @@ Result<Image> read_exr(const std::string& path, ExrInfo* info) {
 }
 
 Result<std::pair<int, int>> read_exr_size(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    return not_found(strprintf("%s: no such file", path.c_str()));
-  auto in = OIIO::ImageInput::open(path);
-  if (!in)
-    return data_loss(strprintf("%s: cannot read: %s", path.c_str(), OIIO::geterror().c_str()));
-  if (std::string(in->format_name()) != "openexr")
-    return invalid_argument(
-        strprintf("%s: is a %s file, not OpenEXR", path.c_str(), in->format_name()));
-  return std::make_pair(in->spec().width, in->spec().height);
+  auto in = open_exr(path);
+  if (!in) return in.status();
+  return std::make_pair(in.value()->spec().width, in.value()->spec().height);
 }
 
 Status write_samples_exr(const std::string& path, const Image& samples,
