@@ -267,6 +267,27 @@ grpc::Status raw_bidi_once(const Daemon& d, const std::string& method, const std
   return st;
 }
 
+v1::BakeInfo submit_bake(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
+  v1::SubmitBakeRequest req;
+  req.set_scene_id(scene_id);
+  *req.mutable_settings() = s;
+  v1::BakeInfo info;
+  auto ctx = d.context();
+  auto st = d.stub()->SubmitBake(ctx.get(), req, &info);
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  return info;
+}
+
+v1::BakeInfo cancel_bake(const Daemon& d, const std::string& bake_id) {
+  v1::CancelBakeRequest req;
+  req.set_bake_id(bake_id);
+  v1::BakeInfo info;
+  auto ctx = d.context();
+  auto st = d.stub()->CancelBake(ctx.get(), req, &info);
+  EXPECT_TRUE(st.ok()) << st.error_message();
+  return info;
+}
+
 v1::BakeSettings small_settings(uint32_t spp, uint32_t resolution) {
   v1::BakeSettings s;
   s.set_resolution(resolution);

@@ -91,5 +91,9 @@ grpc::Status raw_bidi_once(const Daemon& d, const std::string& method, const std
 // Small settings most tests use: 64x64, `spp` samples, progress and
 // snapshots every 0.1 s.
 v1::BakeSettings small_settings(uint32_t spp, uint32_t resolution = 64);
+// SubmitBake and CancelBake, expected to succeed (a failure is reported
+// and the reply is empty).
+v1::BakeInfo submit_bake(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s);
+v1::BakeInfo cancel_bake(const Daemon& d, const std::string& bake_id);
 
 }  // namespace luxel::test

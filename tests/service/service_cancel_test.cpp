@@ -32,37 +32,16 @@ v1::BakeSettings long_setup() {
   return s;
 }
 
-v1::BakeInfo submit(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
-  v1::SubmitBakeRequest req;
-  req.set_scene_id(scene_id);
-  *req.mutable_settings() = s;
-  v1::BakeInfo info;
-  auto ctx = d.context();
-  auto st = d.stub()->SubmitBake(ctx.get(), req, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info;
-}
-
-v1::BakeInfo cancel(const Daemon& d, const std::string& bake_id) {
-  v1::CancelBakeRequest req;
-  req.set_bake_id(bake_id);
-  v1::BakeInfo info;
-  auto ctx = d.context();
-  auto st = d.stub()->CancelBake(ctx.get(), req, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info;
-}
-
 TEST(ServiceCancel, ReturnsAtOnceAndTheBakeEndsCancelledFromSetup) {
   TempDir dir;
   Daemon daemon(dir.path() + "/data");
   const std::string scene_id = upload_cornell(daemon);
-  const v1::BakeInfo bake = submit(daemon, scene_id, long_setup());
+  const v1::BakeInfo bake = submit_bake(daemon, scene_id, long_setup());
   const v1::BakeInfo running = wait_for_bake(daemon, bake.bake_id(), is_running);
   ASSERT_EQ(running.state(), v1::BAKE_STATE_RUNNING);
   ASSERT_EQ(running.progress().paths(), 0u) << "setup should take longer than one poll";
 
-  const v1::BakeInfo reply = cancel(daemon, bake.bake_id());
+  const v1::BakeInfo reply = cancel_bake(daemon, bake.bake_id());
   // The reply came while the bake was still in setup: running, no path
   // traced, the request recorded; the bake had not stopped yet.
   EXPECT_EQ(reply.state(), v1::BAKE_STATE_RUNNING) << reply.DebugString();
@@ -77,7 +56,7 @@ TEST(ServiceCancel, ReturnsAtOnceAndTheBakeEndsCancelledFromSetup) {
   // The device is free again: the next bake runs.
   v1::BakeSettings small = small_settings(1, 16);
   const v1::BakeInfo next =
-      wait_for_bake(daemon, submit(daemon, scene_id, small).bake_id(), is_finished, 120s);
+      wait_for_bake(daemon, submit_bake(daemon, scene_id, small).bake_id(), is_finished, 120s);
   EXPECT_EQ(next.state(), v1::BAKE_STATE_SUCCEEDED) << next.error_message();
   EXPECT_EQ(daemon.stop(SIGTERM), 0);
 }
@@ -91,10 +70,10 @@ TEST(ServiceCancel, CancelledBakeStaysCancelledAcrossARestart) {
   v1::BakeSettings s = small_settings(1000000, 64);
   s.set_time_budget_s(600);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
-  const v1::BakeInfo bake = submit(*daemon, scene_id, s);
+  const v1::BakeInfo bake = submit_bake(*daemon, scene_id, s);
   wait_for_bake(*daemon, bake.bake_id(),
                 [](const v1::BakeInfo& b) { return b.progress().paths() > 0 || is_finished(b); });
-  const v1::BakeInfo reply = cancel(*daemon, bake.bake_id());
+  const v1::BakeInfo reply = cancel_bake(*daemon, bake.bake_id());
   EXPECT_TRUE(reply.cancel_requested()) << reply.DebugString();
   // Killed at once: the bake may not have stopped yet, but the request is
   // on disk.

@@ -16,17 +16,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-v1::BakeInfo submit_bake(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
-  v1::SubmitBakeRequest req;
-  req.set_scene_id(scene_id);
-  *req.mutable_settings() = s;
-  v1::BakeInfo info;
-  auto ctx = d.context();
-  auto st = d.stub()->SubmitBake(ctx.get(), req, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info;
-}
-
 std::string fetch(const Daemon& d, const std::string& bake_id, const std::string& name) {
   std::string bytes, sha;
   uint64_t total = 0;

@@ -21,17 +21,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-v1::BakeInfo submit(const Daemon& d, const std::string& scene_id, const v1::BakeSettings& s) {
-  v1::SubmitBakeRequest req;
-  req.set_scene_id(scene_id);
-  *req.mutable_settings() = s;
-  v1::BakeInfo info;
-  auto ctx = d.context();
-  auto st = d.stub()->SubmitBake(ctx.get(), req, &info);
-  EXPECT_TRUE(st.ok()) << st.error_message();
-  return info;
-}
-
 std::string record_on_disk(const Daemon& d, const std::string& bake_id) {
   return read_file(d.data_dir() + "/bakes/" + bake_id + "/record.json");
 }
@@ -65,8 +54,8 @@ TEST(ServiceRestart, KillDashNineMidBakeResumesFromCheckpoint) {
   // Two identical bakes run side by side; both get killed after a checkpoint.
   v1::BakeSettings s = small_settings(400);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
-  const v1::BakeInfo a = submit(*daemon, scene_id, s);
-  const v1::BakeInfo b = submit(*daemon, scene_id, s);
+  const v1::BakeInfo a = submit_bake(*daemon, scene_id, s);
+  const v1::BakeInfo b = submit_bake(*daemon, scene_id, s);
   const std::string ckpt_a = data + "/bakes/" + a.bake_id() + "/checkpoint.bin";
   const std::string ckpt_b = data + "/bakes/" + b.bake_id() + "/checkpoint.bin";
   // An upload in flight when the daemon dies: half of a .glb sent.
@@ -140,7 +129,7 @@ TEST(ServiceRestart, SigtermCheckpointsAndTheNextStartFinishes) {
   const std::string scene_id = upload_cornell(*daemon);
   v1::BakeSettings s = small_settings(600);
   s.set_snapshot_format(v1::SNAPSHOT_FORMAT_EXR);
-  const v1::BakeInfo bake = submit(*daemon, scene_id, s);
+  const v1::BakeInfo bake = submit_bake(*daemon, scene_id, s);
 
   // An EXR snapshot reaches a watcher and decodes.
   {
@@ -184,15 +173,15 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
 
   v1::BakeSettings long_bake = small_settings(0);
   long_bake.set_time_budget_s(120);
-  const v1::BakeInfo running = submit(daemon, scene_id, long_bake);
+  const v1::BakeInfo running = submit_bake(daemon, scene_id, long_bake);
   wait_for_bake(daemon, running.bake_id(),
                 [](const v1::BakeInfo& i) { return i.state() == v1::BAKE_STATE_RUNNING; });
 
   v1::BakeSettings low = small_settings(16, 32), high = small_settings(16, 32);
   low.set_priority(0);
   high.set_priority(5);
-  const v1::BakeInfo first_low = submit(daemon, scene_id, low);
-  const v1::BakeInfo later_high = submit(daemon, scene_id, high);
+  const v1::BakeInfo first_low = submit_bake(daemon, scene_id, low);
+  const v1::BakeInfo later_high = submit_bake(daemon, scene_id, high);
   EXPECT_EQ(later_high.state(), v1::BAKE_STATE_QUEUED);
 
   // The queue holds two: a third is refused, naming the limit.
@@ -243,8 +232,8 @@ TEST(ServiceRestart, CancelPrioritiesAndSceneInUse) {
   EXPECT_EQ(cancelled.state(), v1::BAKE_STATE_CANCELLED);
 
   // A queued bake cancels at once.
-  const v1::BakeInfo blocker = submit(daemon, scene_id, long_bake);
-  const v1::BakeInfo queued = submit(daemon, scene_id, low);
+  const v1::BakeInfo blocker = submit_bake(daemon, scene_id, long_bake);
+  const v1::BakeInfo queued = submit_bake(daemon, scene_id, low);
   cancel.set_bake_id(queued.bake_id());
   ctx = daemon.context();
   ASSERT_TRUE(stub->CancelBake(ctx.get(), cancel, &cancelled).ok());
@@ -297,7 +286,7 @@ TEST(ServiceRestart, DiskFullWhileWritingResultsFailsDurably) {
     s.set_samples_per_texel(1);
     s.set_max_bounces(0);
     s.set_snapshot_format(v1::SNAPSHOT_FORMAT_NONE);
-    bake_id = submit(d, scene, s).bake_id();
+    bake_id = submit_bake(d, scene, s).bake_id();
     const v1::BakeInfo done = wait_for_bake(d, bake_id, is_finished, 120s);
     ASSERT_EQ(done.state(), v1::BAKE_STATE_FAILED) << done.error_message();
     const std::string record = record_on_disk(d, bake_id);
