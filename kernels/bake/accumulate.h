@@ -4,6 +4,7 @@
 #ifndef LUXEL_BAKE_ACCUMULATE_H
 #define LUXEL_BAKE_ACCUMULATE_H
 
+#include "bake/radiance_cache.h"
 #include "bake/scatter.h"
 #include "primitives/offset_buffer.h"
 #include "shared/bake_args.h"
@@ -43,10 +44,9 @@ inline void lux_welford(float4 x, float w, float4* mean, float4* m2, float2* wei
  * basis mode, the radiance along its first segment (l) and the texel point's
  * light sample (nee, visibility applied). 0 when non-finite (dropped). The
  * firefly clamp scales all three alike. */
-inline int lux_path_sample(__global const LuxPath* paths,
-                           __global const LuxBasisSample* basis_samples, uint p,
-                           float clamp_luminance, float3* irradiance, float3* l, float3* nee) {
-  *l = paths[p].radiance.xyz;
+inline int lux_path_sample_of(float3 radiance, __global const LuxBasisSample* basis_samples, uint p,
+                              float clamp_luminance, float3* irradiance, float3* l, float3* nee) {
+  *l = radiance;
 #if LUX_BASIS
   const LuxBasisSample bs = basis_samples[p];
   *nee = bs.nee.xyz * bs.nee.w;
@@ -75,6 +75,30 @@ inline int lux_path_sample(__global const LuxPath* paths,
   return 1;
 }
 
+inline int lux_path_sample(__global const LuxPath* paths,
+                           __global const LuxBasisSample* basis_samples, uint p,
+                           float clamp_luminance, float3* irradiance, float3* l, float3* nee) {
+  return lux_path_sample_of(paths[p].radiance.xyz, basis_samples, p, clamp_luminance, irradiance, l,
+                            nee);
+}
+
+#if LUX_RADIANCE_CACHE
+/* The texel's feeders (bake/radiance_cache.h): their irradiance without
+ * the last bounce, into the cache's running mean. */
+inline void lux_feed_cache(__global const LuxPath* paths,
+                           __global const LuxBasisSample* basis_samples, uint first, uint end,
+                           float clamp_luminance, __global float4* cache, uint c) {
+  for (uint p = first; p < end; ++p) {
+    const LuxPath path = paths[p];
+    if (path.last_bounce.w == 0.0f) continue;
+    float3 e, l, nee;
+    if (lux_path_sample_of(path.radiance.xyz - path.last_bounce.xyz, basis_samples, p,
+                           clamp_luminance, &e, &l, &nee))
+      lux_cache_add(cache, c, e);
+  }
+}
+#endif
+
 #if LUX_BASIS
 #define LUX_BASIS_ADD(p, w)                                                        \
   do {                                                                             \
@@ -85,22 +109,6 @@ inline int lux_path_sample(__global const LuxPath* paths,
   } while (0)
 #else
 #define LUX_BASIS_ADD(p, w)
-#endif
-
-#if LUX_FILTER_GAUSSIAN
-/* The covered slot of a texel (covered[] ascends), or 0xFFFFFFFF: paths and
- * state are indexed by slot, the filter's neighbours are found by texel. */
-inline uint lux_covered_slot(__global const uint* covered, uint n, uint texel) {
-  uint lo = 0, hi = n;
-  while (lo < hi) {
-    const uint mid = lo + (hi - lo) / 2u;
-    if (covered[mid] < texel)
-      lo = mid + 1u;
-    else
-      hi = mid;
-  }
-  return lo < n && covered[lo] == texel ? lo : 0xFFFFFFFFu;
-}
 #endif
 
 #if LUX_PROBES
@@ -193,6 +201,10 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
     lux_welford((float4)(e, lux_luminance(e)), 1.0f, &t_mean, &t_m2, &t_weight);
     LUX_BASIS_ADD(p, 1.0f);
   }
+#endif
+#if LUX_RADIANCE_CACHE
+  if (own)
+    lux_feed_cache(paths, basis_samples, first, end, params.clamp_luminance, radiance_cache, c);
 #endif
   mean[c] = t_mean;
   m2[c] = t_m2;

@@ -46,6 +46,22 @@ inline float lux_independent_1d(uint index, uint dimension, uint seed) {
   return (float)(h >> 8) * 0x1p-24f;
 }
 
+/* The covered slot of a texel (covered[] ascends), or LUX_NO_SLOT: paths
+ * and state are indexed by slot, the accumulation filter's neighbours and the
+ * radiance cache's hits are found by texel. */
+#define LUX_NO_SLOT 0xFFFFFFFFu
+inline uint lux_covered_slot(__global const uint* covered, uint n, uint texel) {
+  uint lo = 0, hi = n;
+  while (lo < hi) {
+    const uint mid = lo + (hi - lo) / 2u;
+    if (covered[mid] < texel)
+      lo = mid + 1u;
+    else
+      hi = mid;
+  }
+  return lo < n && covered[lo] == texel ? lo : LUX_NO_SLOT;
+}
+
 /* Per-texel decorrelation seed of the sample sequence (§6.2). */
 inline uint lux_texel_seed(uint texel, uint bake_seed) {
   return lux_hash_combine(lux_hash_u32(texel), bake_seed);

@@ -6,6 +6,7 @@
 #define LUXEL_BAKE_RAYGEN_H
 
 #include "bake/path.h"
+#include "bake/radiance_cache.h"
 #include "bake/scatter.h"
 #include "bake/surface.h"
 #include "primitives/offset_buffer.h"
@@ -105,6 +106,10 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
 #endif
   path.pad = (uint)tri;
   path.radiance = (float4)(0.0f);
+  path.last_bounce = (float4)(0.0f);
+#if LUX_RADIANCE_CACHE
+  path.last_bounce.w = lux_cache_feeds(index, seed) ? 1.0f : 0.0f;
+#endif
   path.prev_pos = (float4)(s.p, 0.0f);
   path.prev_normal = (float4)(s.ns, 0.0f);
 

@@ -7,6 +7,7 @@
 #define LUXEL_BAKE_SHADE_H
 
 #include "bake/path.h"
+#include "bake/radiance_cache.h"
 #include "bake/scatter.h"
 #include "bake/surface.h"
 #include "shared/bake_args.h"
@@ -42,6 +43,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
           prev_pdf, lux_sky_pdf(sky, light_select, params.sky_light, sky_block_cdfs, sky_texel_cdfs,
                                 dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
+#if LUX_RADIANCE_CACHE
+    if (path.depth == params.max_bounces) path.last_bounce.xyz += throughput * l * w;
+#endif
 #endif
     path.alive = 0u;
     paths[slot] = path;
@@ -78,6 +82,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     }
 #endif
     path.radiance.xyz += throughput * le * w;
+#if LUX_RADIANCE_CACHE
+    if (path.depth == params.max_bounces) path.last_bounce.xyz += throughput * le * w;
+#endif
   }
 #endif
 
@@ -121,7 +128,34 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   const LuxBsdf bsdf =
       lux_make_bsdf(base, metallic, roughness, m.specular.xyz, m.specular.w, wo_local.z);
 
+  /* Extension ray (Eq. 6.2: one layer chosen stochastically). */
   const uint dim = LUX_DIM_VERTEX(path.depth);
+  const float u_layer = lux_sample_1d(path.sample_index, dim + LUX_DIM_LAYER, path.seed);
+  const float2 u_dir = lux_sample_2d(path.sample_index, dim + LUX_DIM_DIRECTION, path.seed);
+  float3 wi_local, bsdf_weight;
+  float pdf;
+  const int layer = lux_bsdf_sample(&bsdf, wo_local, u_layer, u_dir, &wi_local, &bsdf_weight, &pdf);
+
+#if LUX_RADIANCE_CACHE
+  /* Final gather at the first hit (bake/radiance_cache.h): the BSDF
+   * sample's weight estimates A(wo), the hit texel's cached mean E; the
+   * gather replaces this vertex's light sample and everything after it. A
+   * failed sample (weight 0) gathers nothing, as it would trace nothing. */
+  if (path.depth == 1u && path.last_bounce.w == 0.0f && dot(wo, s.ng_front) > 0.0f &&
+      lux_cache_gathers_at(&bsdf)) {
+    float3 e;
+    if (lux_cache_lookup(params, tris, atlas_uvs, covered, radiance_cache, hit.prim, hit.u, hit.v,
+                         hit.t, &e)) {
+      if (layer >= 0 && lux_finite3(bsdf_weight))
+        path.radiance.xyz += throughput * bsdf_weight * e * LUX_INV_PI;
+      path.alive = 0u;
+      paths[slot] = path;
+      rays[slot] = lux_no_ray();
+      return;
+    }
+  }
+#endif
+
   LuxRay shadow;
   float3 contribution;
   int unused_analytic;
@@ -130,17 +164,15 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
                  0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed,
                  &shadow, &contribution, &unused_analytic, &unused_analytic_e);
   shadow_rays[slot] = shadow;
+#if LUX_RADIANCE_CACHE
+  /* w = 1 marks the last bounce's light sample for resolve_shadows. */
+  shadow_contrib[slot] = (float4)(contribution, path.depth == params.max_bounces ? 1.0f : 0.0f);
+#else
   shadow_contrib[slot] = (float4)(contribution, 0.0f);
-
-  /* Extension ray (Eq. 6.2: one layer chosen stochastically). */
-  const float u_layer = lux_sample_1d(path.sample_index, dim + LUX_DIM_LAYER, path.seed);
-  const float2 u_dir = lux_sample_2d(path.sample_index, dim + LUX_DIM_DIRECTION, path.seed);
-  float3 wi_local, weight;
-  float pdf;
-  const int layer = lux_bsdf_sample(&bsdf, wo_local, u_layer, u_dir, &wi_local, &weight, &pdf);
+#endif
   const float3 wi = lux_to_world(wi_local, t, b, sf.ns);
-  int ok = layer >= 0 && pdf > 0.0f && dot(wi, sf.ng) > 0.0f && lux_finite3(weight);
-  throughput *= weight;
+  int ok = layer >= 0 && pdf > 0.0f && dot(wi, sf.ng) > 0.0f && lux_finite3(bsdf_weight);
+  throughput *= bsdf_weight;
   /* Russian roulette (§5.1) on the throughput relative to the sensor's pi. */
   if (ok && path.depth >= params.rr_depth) {
     const float q = fmin(0.95f, lux_max3(throughput) / LUX_SENSOR_WEIGHT);

@@ -80,17 +80,23 @@ typedef struct LuxMaterial {
 #define LUX_MATERIAL_DOUBLE_SIDED 1
 #define LUX_MATERIAL_EMISSIVE 2
 
-/* State of one path, 96 bytes.
+/* State of one path, 112 bytes.
  *   throughput.w:  solid-angle pdf of the last BSDF sample (0 = no MIS, e.g.
  *                  the first segment from a texel when no light can be hit)
  *   prev_pos.w:    unused
  *   prev_normal:   the normal the previous vertex sampled its light about
- *                  (MIS of an escaping ray against the sky's pdf); w unused */
+ *                  (MIS of an escaping ray against the sky's pdf); w unused
+ *   last_bounce:   with the radiance cache (kernels/bake/radiance_cache.h):
+ *                  rgb = the part of `radiance` that went max_bounces
+ *                  bounces, which the cache leaves out; w = 1 for a path
+ *                  that feeds the cache, 0 for one that may gather. Unused
+ *                  (zero) without it. */
 typedef struct LuxPath {
   float4 throughput;
   float4 radiance;
   float4 prev_pos;
   float4 prev_normal;
+  float4 last_bounce;
   uint texel;
   uint sample_index; /* index into the texel's progressive sequence (§6.2) */
   uint seed;         /* per-texel decorrelation seed */

@@ -78,15 +78,17 @@
   X(live, int, count, "live count")
 
 /* Accumulation: sized by the lightmap (weighted Welford per texel, §3.2.2),
- * the statistics partials and the benchmark-mode reference. */
-#define LUX_GROUP_accum(X)                          \
-  X(buffer, float4, mean, "accumulated mean")       \
-  X(buffer, float4, m2, "accumulated M2")           \
-  X(buffer, float2, weight, "accumulated weight")   \
-  X(buffer, uint, spp, "samples per texel")         \
-  X(buffer, uint, nonfinite, "non-finite counter")  \
-  X(buffer, LuxAccumStats, stats, "stats partials") \
-  X(buffer, float4, reference, "reference lightmap")
+ * the statistics partials, the benchmark-mode reference and the radiance
+ * cache's means (a placeholder without LUX_RADIANCE_CACHE). */
+#define LUX_GROUP_accum(X)                           \
+  X(buffer, float4, mean, "accumulated mean")        \
+  X(buffer, float4, m2, "accumulated M2")            \
+  X(buffer, float2, weight, "accumulated weight")    \
+  X(buffer, uint, spp, "samples per texel")          \
+  X(buffer, uint, nonfinite, "non-finite counter")   \
+  X(buffer, LuxAccumStats, stats, "stats partials")  \
+  X(buffer, float4, reference, "reference lightmap") \
+  X(buffer, float4, radiance_cache, "radiance cache") /* bake/radiance_cache.h */
 
 /* Adaptive sampling (kernels/bake/adaptive.h), sized by the lightmap:
  * each covered slot's integer allocation weight, and per block of
@@ -111,7 +113,8 @@
 #define LUX_KERNEL_raygen(G) \
   G(in, scene)               \
   G(in, textures) G(in, lights) G(in, accum) G(out, paths) G(out, live) G(out, encodings)
-#define LUX_KERNEL_shade(G) G(in, scene) G(in, textures) G(in, lights) G(out, paths) G(in, live)
+#define LUX_KERNEL_shade(G) \
+  G(in, scene) G(in, textures) G(in, lights) G(in, accum) G(out, paths) G(in, live)
 #define LUX_KERNEL_resolve_shadows(G) G(out, paths) G(in, live)
 #define LUX_KERNEL_resolve_texel_shadows(G) G(in, paths) G(in, live) G(out, encodings)
 #define LUX_KERNEL_accumulate(G) G(in, scene) G(in, paths) G(out, accum) G(out, encodings)

@@ -17,6 +17,8 @@ Each configuration switches some of the features on over the configuration
   default_atrous  the defaults with --denoise atrous
   default_oidn    the defaults with --denoise oidn
   previous        the defaults with --denoise off --no-seam-stitch (the release before them)
+  cache           the defaults with --radiance-cache
+  cache_raw       the defaults with --radiance-cache --denoise off
 
 Settings come from `luxel settings --json`, so the flags follow the schema; a
 configuration that needs a setting the binary lacks is reported as absent.
@@ -79,7 +81,11 @@ VARIANTS = {"oidn": ({"denoise"}, {"denoise": "oidn"}),
             "default_atrous": (None, {"denoise": "atrous"}),
             # The defaults of the release before denoise = auto and seam stitching
             # (the analytic estimator for punctual lights is today's non-negative one).
-            "previous": (None, {"denoise": "off", "seam_stitch": False})}
+            "previous": (None, {"denoise": "off", "seam_stitch": False}),
+            # The radiance cache (kernels/bake/radiance_cache.h) over the
+            # defaults, denoised and raw.
+            "cache": (None, {"radiance_cache": True}),
+            "cache_raw": (None, {"denoise": "off", "radiance_cache": True})}
 
 
 def configs(leave_one_out):

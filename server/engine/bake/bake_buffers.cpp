@@ -142,6 +142,8 @@ Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& sett
   LUXEL_RETURN_IF_ERROR(a.alloc(g.weight, c * 8, "accumulated weight"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.spp, c * 4, "samples per texel"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.nonfinite, 4, "non-finite counter"));
+  const bool cache = s.features.has(device::Feature::RADIANCE_CACHE);
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.radiance_cache, cache ? c * 16 : 16, "radiance cache"));
   const size_t groups = (c + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
   LUXEL_RETURN_IF_ERROR(a.alloc(g.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
   if (!settings.reference) return a.alloc(g.reference, 16, "reference (unused)");
@@ -210,8 +212,8 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 }
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
-  return texel_state_bytes(s.plan.bytes_per_texel(),
-                           s.features.has(device::Feature::ADAPTIVE));  // resource_estimate.h
+  return texel_state_bytes(s.plan.bytes_per_texel(), s.features.has(device::Feature::ADAPTIVE),
+                           s.features.has(device::Feature::RADIANCE_CACHE));  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {
@@ -231,7 +233,7 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
   Allocator a(ctx, unused);
   const AccumArgs& acc = args_.accum;
   for (const device::Buffer* z :
-       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite,
+       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite, &acc.radiance_cache,
         static_cast<const device::Buffer*>(&args_.encodings.basis_state)}) {
     LUXEL_RETURN_IF_ERROR(a.zero(*z, cancel));
   }

@@ -63,6 +63,10 @@ device::FeatureSet derive_bake_features(const BakeSettings& settings, const Ligh
   if (settings.sort_directions) f.set(Feature::SORT_DIRECTIONS);
   if (settings.compaction) f.set(Feature::COMPACTION);
   if (settings.adaptive) f.set(Feature::ADAPTIVE);
+  // The cache gathers at the first hit and holds max_bounces - 1 bounces:
+  // nothing to gather without a bounce, and shards must merge exactly.
+  if (settings.radiance_cache && settings.max_bounces >= 1 && !settings.sharded())
+    f.set(Feature::RADIANCE_CACHE);
   if (settings.filter == Filter::kGaussian) f.set(Feature::FILTER_GAUSSIAN);
   if (settings.random_sequence) f.set(Feature::SEQUENCE_RANDOM);
   if (!plan.empty()) f.set(Feature::BASIS);

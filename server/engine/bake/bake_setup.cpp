@@ -98,7 +98,10 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
     s.plan.stride += LUX_PROBE_VIS_BINS;
   }
   s.features = derive_bake_features(settings, s.lights, s.data, s.plan);
-  if (probes) s.features.set(device::Feature::PROBES);
+  if (probes) {
+    s.features.set(device::Feature::PROBES);
+    s.features.set(device::Feature::RADIANCE_CACHE, 0);  // probes have no texels to gather from
+  }
 
   // Batch size: the paths-per-iteration budget (the device's for auto,
   // resource_estimate.h), at most the device's iteration cap

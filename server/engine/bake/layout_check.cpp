@@ -14,8 +14,8 @@ static_assert(offsetof(LuxMaterial, base_color_tex) == 64 &&
               offsetof(LuxMaterial, emissive_tex) == 128);
 static_assert(offsetof(LuxMaterial, normal_tex) == 160 &&
               offsetof(LuxMaterial, normal_scale) == 192);
-static_assert(sizeof(LuxPath) == 96);
-static_assert(offsetof(LuxPath, texel) == 64 && offsetof(LuxPath, sample_pos) == 80);
+static_assert(sizeof(LuxPath) == 112);
+static_assert(offsetof(LuxPath, texel) == 80 && offsetof(LuxPath, sample_pos) == 96);
 static_assert(sizeof(LuxBakeParams) == 104 && alignof(LuxBakeParams) == 8);
 static_assert(offsetof(LuxBakeParams, first_path) == 48 &&
               offsetof(LuxBakeParams, adaptive_pass) == 76 &&

@@ -131,6 +131,12 @@ struct BakeSettings {
   bool adaptive = true;
   uint32_t adaptive_min_samples = 8;
 
+  // The radiance cache (kernels/bake/radiance_cache.h): first hits on
+  // lightmapped diffuse surfaces gather from the cached irradiance of their
+  // texel instead of tracing on, with a share that falls as n^-1/2 so the
+  // bake stays consistent. Off in sharded bakes and probe bakes.
+  bool radiance_cache = false;
+
   // Distributed bakes (shards/shard_merge.h): this bake is shard
   // shard_index of shard_count and traces only its part of every texel's
   // sample sequence (kernels/shared/shard.h); samples_per_texel stays the

@@ -199,6 +199,18 @@ void add_bake_settings(std::vector<Setting>& t) {
                .active = [](const BakeSettings& s) { return s.adaptive; },
                // in adaptive's entry
                .described = Described::kNever});
+  t.push_back({.name = "radiance_cache",
+               .type = Type::kBool,
+               .units = "",
+               .help = "radiance cache: first hits on lightmapped diffuse surfaces take their "
+                       "texel's cached irradiance instead of tracing on; its share falls with "
+                       "the sample count, so the bake converges to the traced answer "
+                       "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes)",
+               .flag = "--radiance-cache",
+               .default_value = SettingValue::of(0),
+               .scope = Scope::kLocalOnly,
+               LUXEL_BOOL(radiance_cache),
+               .describe_when = [](const BakeSettings& s) { return s.radiance_cache; }});
   t.push_back(
       {.name = "shard_count",
        .type = Type::kInt,
@@ -215,6 +227,7 @@ void add_bake_settings(std::vector<Setting>& t) {
        .implies =
            [](BakeSettings& s) {
              if (s.shard_count > 1) s.adaptive = false;
+             if (s.shard_count > 1) s.radiance_cache = false;
            },
        LUXEL_NUMBER(shard_count),
        // One entry for both shard settings, which bake_fingerprint leaves out:

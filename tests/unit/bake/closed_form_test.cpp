@@ -372,6 +372,36 @@ TEST_F(ClosedFormTest, LambertFurnaceAtFourBounces) {
   EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
 }
 
+// The radiance cache (kernels/bake/radiance_cache.h) in the Lambert
+// furnace: the irradiance is the same everywhere, so the cache's texel
+// averaging costs nothing here and only its bounce accounting shows. A cache
+// that kept the feeders' last bounce would add rho^(B+1) (+10 % here); one
+// fed by gathering paths would climb towards pi Le / (1 - rho) (+49 %); one
+// that lost a bounce, -10 %.
+TEST_F(ClosedFormTest, RadianceCacheKeepsTheBounceCountInTheFurnace) {
+  const float le = 0.25f, rho = 0.8f;
+  const int bounces = 4;
+  auto st = settings(16, 256, bounces);
+  st.radiance_cache = true;
+  st.adaptive = false;
+  // Many iterations: shade reads the cache as the iterations before left it.
+  st.paths_per_iteration = 4096;
+  auto r = bake(testing::furnace_box(rho, le), st);
+  ASSERT_GT(r.covered_texels, 100u);
+  ASSERT_NE(r.features.find("radiance_cache"), std::string::npos) << r.features;
+  // The cache gathered: the bits differ from the same bake without it.
+  st.radiance_cache = false;
+  auto traced = bake(testing::furnace_box(rho, le), st);
+  EXPECT_TRUE(r.irradiance != traced.irradiance);
+  double sum = 0;
+  for (int j = 0; j <= bounces; ++j) sum += std::pow(rho, j);
+  const double e = M_PI * le * sum;
+  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  EXPECT_EQ(r.nonfinite_dropped, 0u);
+}
+
 // Generated lightmap UVs (uv/generate.h), end to end. The furnace box
 // without TEXCOORD_1 bakes with charts and packing chosen by Luxel
 // (--uv auto), and every covered texel still reads the closed form
