@@ -61,7 +61,7 @@
 /* Sample index up to which the share stays LUX_CACHE_SHARE. */
 #define LUX_CACHE_FULL_SPP 64.0f
 /* Hits nearer than this many texel sizes (of the hit's texels) trace on. */
-#define LUX_CACHE_NEAR_TEXELS 2.0f
+#define LUX_CACHE_NEAR_TEXELS 8.0f
 /* A vertex gathers when its GGX layer takes at most this share of the
  * sampling (a mostly diffuse dielectric) or its roughness is at least
  * LUX_CACHE_MIN_ROUGHNESS (a lobe broad enough for the uniform-light

@@ -208,7 +208,7 @@ void add_bake_settings(std::vector<Setting>& t) {
                        "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes)",
                .flag = "--radiance-cache",
                .default_value = SettingValue::of(0),
-               .scope = Scope::kLocalOnly,
+               .api_note = "unset means off",
                LUXEL_BOOL(radiance_cache),
                .describe_when = [](const BakeSettings& s) { return s.radiance_cache; }});
   t.push_back(
