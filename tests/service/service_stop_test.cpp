@@ -193,7 +193,7 @@ TEST(ServiceStop, SubmitRefusesBakesThatCannotFit) {
   EXPECT_EQ(st.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << st.error_message();
   EXPECT_NE(st.error_message().find("settings.paths_per_iteration"), std::string::npos)
       << st.error_message();
-  // The batch (2^26, or the device's iteration cap) x 224 bytes per path.
+  // The batch (2^26, or the device's iteration cap) x 240 bytes per path.
   unsigned long long paths = 0, bytes = 0;
   const size_t at = st.error_message().find("a batch of");
   ASSERT_NE(at, std::string::npos) << st.error_message();
@@ -201,7 +201,7 @@ TEST(ServiceStop, SubmitRefusesBakesThatCannotFit) {
                         &paths, &bytes),
             2)
       << st.error_message();
-  EXPECT_EQ(bytes, paths * 224);
+  EXPECT_EQ(bytes, paths * 240);
   EXPECT_GT(bytes, 32ull << 20);
 
   v1::ListBakesResponse list;

@@ -12,6 +12,7 @@
 #     ${LUXEL_TOOLS_DIR:-~/.cache/luxel}/bpy-5.0.1 (tests/support/bpy-venv.sh,
 #     shared with tests/bench/peers/install-blender.sh). Its glTF importer and
 #     exporter (io_scene_gltf2, with the Draco encoder) ship inside the wheel.
+#   - numpy and OpenImageIO's Python module from Debian, for the benches.
 #   - gltfpack 1.2 (meshoptimizer's glTF packer), an independent writer of
 #     EXT_meshopt_compression: the executable inside PyPI's
 #     dsts-extractor-gltfpack 1.2.0 wheel. The wheel asks for Python 3.12 and
@@ -26,6 +27,9 @@ here="$(cd "$(dirname "$0")" && pwd)"
 
 PACKAGES=(
   assimp-utils libassimp-dev
+  # The benches under tests/bench/ read EXRs in Python (error_vs_time.py,
+  # equal_error.py, radiance_cache_bias.py).
+  python3-numpy python3-openimageio
 )
 # shellcheck source=tests/support/bpy-venv.sh
 source "$here/bpy-venv.sh"

@@ -89,7 +89,7 @@ TEST(ResourceEstimate, TexelDensityAgainstMaxResolutionIsAClosedForm) {
   EXPECT_EQ(paged->max_texels, 64u * 512u * 512u);
 }
 
-// 2^26 paths: the paths buffer alone is 2^26 x 96 = 6442450944 bytes.
+// 2^26 paths: the paths buffer alone is 2^26 x 112 = 7516192768 bytes.
 TEST(ResourceEstimate, BatchPastTheLargestAllocationNamesTheBytes) {
   const scene::Scene scene = testing::open_plane();
   pipeline::BakeSettings s = plane_settings();
@@ -100,14 +100,14 @@ TEST(ResourceEstimate, BatchPastTheLargestAllocationNamesTheBytes) {
   ASSERT_FALSE(st);
   EXPECT_EQ(st.status().code(), StatusCode::kResourceExhausted);
   EXPECT_TRUE(mentions(st.status(), "settings.paths_per_iteration")) << st.status().message();
-  EXPECT_TRUE(mentions(st.status(), "6442450944 bytes")) << st.status().message();
+  EXPECT_TRUE(mentions(st.status(), "7516192768 bytes")) << st.status().message();
   EXPECT_TRUE(mentions(st.status(), "1073741824 bytes")) << st.status().message();
-  EXPECT_TRUE(mentions(st.status(), "at most 11184810 paths")) << st.status().message();
+  EXPECT_TRUE(mentions(st.status(), "at most 9586980 paths")) << st.status().message();
 
-  // Within the allocation but past the default budget (4 GiB): 2^26 x 224.
+  // Within the allocation but past the default budget (4 GiB): 2^26 x 240.
   auto budget = pipeline::estimate_bake_resources(scene, s, DeviceLimits{64 * kGiB, 16 * kGiB});
   ASSERT_FALSE(budget);
-  EXPECT_TRUE(mentions(budget.status(), "15032385536 bytes")) << budget.status().message();
+  EXPECT_TRUE(mentions(budget.status(), "16106127360 bytes")) << budget.status().message();
   EXPECT_TRUE(mentions(budget.status(), "4294967296")) << budget.status().message();
 
   // The device's iteration cap (iteration_stops.h): 2 compute units trace
@@ -115,7 +115,7 @@ TEST(ResourceEstimate, BatchPastTheLargestAllocationNamesTheBytes) {
   auto capped = pipeline::estimate_bake_resources(scene, s, DeviceLimits{64 * kGiB, 1 * kGiB, 2});
   ASSERT_TRUE(capped) << capped.status().to_string();
   EXPECT_EQ(capped->batch_paths, 1u << 18);
-  EXPECT_EQ(capped->path_bytes, (1u << 18) * 224u);
+  EXPECT_EQ(capped->path_bytes, (1u << 18) * 240u);
   EXPECT_FALSE(pipeline::estimate_bake_resources(scene, s, DeviceLimits{64 * kGiB, 1 * kGiB, 512}));
 
   // The samples rule trims the batch: 16 spp x 32^2 texels = 16384 paths.
@@ -132,13 +132,13 @@ TEST(ResourceEstimate, AutomaticBatchFollowsTheDevice) {
   pipeline::BakeSettings s;
   ASSERT_EQ(s.paths_per_iteration, 0u);
   const pipeline::PathStateBytes bytes = pipeline::path_state_bytes(false);
-  ASSERT_EQ(bytes.per_path, 224u);
+  ASSERT_EQ(bytes.per_path, 240u);
   const DeviceLimits cpu{64 * kGiB, 16 * kGiB, 2, false};
   EXPECT_EQ(pipeline::batch_paths_request(s, cpu, bytes, 4 * kGiB), 1u << 18);
   DeviceLimits gpu{140 * kGiB, 35 * kGiB, 132, true};
-  // 2^22 x 224 B = 896 MiB, within half of 4 GiB.
+  // 2^22 x 240 B = 960 MiB, within half of 4 GiB.
   EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 4 * kGiB), 1u << 22);
-  // Half of 1 GiB holds 2^21 x 224 B = 448 MiB, not 896 MiB.
+  // Half of 1 GiB holds 2^21 x 240 B = 480 MiB, not 960 MiB.
   EXPECT_EQ(pipeline::batch_paths_request(s, gpu, bytes, 1 * kGiB), 1u << 21);
   // The largest buffer of 2^20 paths is exactly the largest allocation.
   gpu.max_alloc_bytes = (uint64_t{1} << 20) * bytes.largest;
@@ -274,7 +274,7 @@ TEST(ResourceEstimate, BakeAndEstimateRefuseTheSameBatch) {
   pipeline::BakeSettings s = plane_settings();
   s.samples_per_texel = 0;
   s.time_budget_s = 10;
-  s.paths_per_iteration = 1 << 16;  // 14.7 MB of path state
+  s.paths_per_iteration = 1 << 16;  // 15.7 MB of path state
   s.device_memory_budget_mib = 8;   // 8 MiB
   auto e = pipeline::estimate_bake_resources(scene, s, DeviceLimits::of(ctx.value()->info()));
   auto r = pipeline::bake(scene, s, *ctx.value());
@@ -282,7 +282,7 @@ TEST(ResourceEstimate, BakeAndEstimateRefuseTheSameBatch) {
   ASSERT_FALSE(r);
   EXPECT_EQ(e.status().code(), StatusCode::kResourceExhausted);
   EXPECT_EQ(r.status().code(), StatusCode::kResourceExhausted);
-  const std::string head = "a batch of 65536 paths needs 14680064 bytes";
+  const std::string head = "a batch of 65536 paths needs 15728640 bytes";
   EXPECT_TRUE(mentions(e.status(), head)) << e.status().message();
   EXPECT_TRUE(mentions(r.status(), head)) << r.status().message();
 
