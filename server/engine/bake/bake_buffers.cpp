@@ -142,8 +142,9 @@ Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& sett
   LUXEL_RETURN_IF_ERROR(a.alloc(g.weight, c * 8, "accumulated weight"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.spp, c * 4, "samples per texel"));
   LUXEL_RETURN_IF_ERROR(a.alloc(g.nonfinite, 4, "non-finite counter"));
-  const bool cache = s.features.has(device::Feature::RADIANCE_CACHE);
-  LUXEL_RETURN_IF_ERROR(a.alloc(g.radiance_cache, cache ? c * 16 : 16, "radiance cache"));
+  LUXEL_RETURN_IF_ERROR(a.alloc(g.radiance_cache,
+                                s.features.has(device::Feature::RADIANCE_CACHE) ? c * 16 : 16,
+                                "radiance cache"));
   const size_t groups = (c + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
   LUXEL_RETURN_IF_ERROR(a.alloc(g.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
   if (!settings.reference) return a.alloc(g.reference, 16, "reference (unused)");
@@ -182,6 +183,7 @@ Status BakeBuffers::allocate(device::Context& ctx, const scene::Scene& scene,
                              const TileCapacity& cap, bool dry) {
   Allocator a(ctx, device_bytes_, dry);
   args_.params = setup.params;
+  radiance_cache_ = setup.features.has(device::Feature::RADIANCE_CACHE);
   LUXEL_RETURN_IF_ERROR(upload_scene(a, scene, setup, cap, args_));
   const size_t p = setup.capacity;
   LUXEL_RETURN_IF_ERROR(a.alloc(batch_count, 4, "batch count"));
@@ -264,6 +266,8 @@ Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, size_t f
   LUXEL_RETURN_IF_ERROR(read(acc.m2, c.m2, 1));
   LUXEL_RETURN_IF_ERROR(read(acc.weight, c.weight, 1));
   LUXEL_RETURN_IF_ERROR(read(acc.spp, c.spp, 1));
+  c.radiance_cache.resize(radiance_cache_ ? n : 0);
+  if (radiance_cache_) LUXEL_RETURN_IF_ERROR(read(acc.radiance_cache, c.radiance_cache, 1));
   const size_t stride = p.encoding_count == 0 ? 0 : p.basis_stride;
   c.basis.resize(n * stride);
   constexpr size_t kReadChunk = size_t{64} << 20;
@@ -300,6 +304,11 @@ Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c,
   LUXEL_RETURN_IF_ERROR(ctx.write(acc.m2, k.m2.data(), n * sizeof(cl::float4)));
   LUXEL_RETURN_IF_ERROR(ctx.write(acc.weight, k.weight.data(), n * sizeof(cl::float2)));
   LUXEL_RETURN_IF_ERROR(ctx.write(acc.spp, k.spp.data(), n * sizeof(uint32_t)));
+  // A checkpoint without the cache (written before it, or by a bake without
+  // it) leaves the cache empty: the bake refills it.
+  if (radiance_cache_ && k.radiance_cache.size() == n)
+    LUXEL_RETURN_IF_ERROR(
+        ctx.write(acc.radiance_cache, k.radiance_cache.data(), n * sizeof(cl::float4)));
   const size_t basis_size = p.encoding_count == 0 ? 0 : n * p.basis_stride;
   if (k.basis.size() != basis_size)
     return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",

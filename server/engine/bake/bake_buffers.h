@@ -78,6 +78,7 @@ class BakeBuffers {
                   const BakeSettings& settings, const TileCapacity& cap, bool dry);
   BakeKernelArgs args_;
   size_t device_bytes_ = 0;
+  bool radiance_cache_ = false;  // the accumulation group holds the cache's means
 };
 
 }  // namespace luxel::pipeline

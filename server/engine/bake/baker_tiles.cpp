@@ -114,6 +114,12 @@ void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
   to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
   to.spp.insert(to.spp.end(), from.spp.begin(), from.spp.end());
   to.basis.insert(to.basis.end(), from.basis.begin(), from.basis.end());
+  // Finished tiles' caches are no longer read: zeros, so the slots line up.
+  if (!from.radiance_cache.empty()) {
+    to.radiance_cache.resize(to.mean.size() - from.mean.size(), cl::float4{});
+    to.radiance_cache.insert(to.radiance_cache.end(), from.radiance_cache.begin(),
+                             from.radiance_cache.end());
+  }
 }
 
 BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) {
@@ -136,6 +142,7 @@ BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti)
   c.weight.resize(n, cl::float2{});
   c.spp.resize(n, 0);
   c.basis.resize(n * stride, cl::float4{});
+  if (!c.radiance_cache.empty()) c.radiance_cache.resize(n, cl::float4{});
   const Tile& t = plan_.tiles[ti];
   c.tile.assign(kTileFields, 0.0);
   c.tile[kTileIndex] = static_cast<double>(ti);

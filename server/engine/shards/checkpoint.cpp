@@ -14,7 +14,8 @@
 namespace luxel::pipeline {
 namespace {
 
-constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '4'};
+constexpr char kMagic[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '5'};
+constexpr char kMagicV4[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '4'};
 constexpr char kMagicV3[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '3'};
 constexpr char kMagicV2[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '2'};
 constexpr char kMagicV1[8] = {'L', 'U', 'X', 'C', 'K', 'P', 'T', '1'};
@@ -139,6 +140,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
     w.pod(c.shard_index);
     w.pod(c.shard_count);
     w.vec(c.basis_layout);
+    w.vec(c.radiance_cache);
   };
   Writer count;
   fields(count);
@@ -177,16 +179,19 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   const bool v1 = std::memcmp(magic, kMagicV1, sizeof kMagicV1) == 0;
   const bool v2 = std::memcmp(magic, kMagicV2, sizeof kMagicV2) == 0;
   const bool v3 = std::memcmp(magic, kMagicV3, sizeof kMagicV3) == 0;
-  if (!v1 && !v2 && !v3 && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+  const bool v4_only = std::memcmp(magic, kMagicV4, sizeof kMagicV4) == 0;
+  if (!v1 && !v2 && !v3 && !v4_only && std::memcmp(magic, kMagic, sizeof kMagic) != 0)
     return corrupt("not a Luxel checkpoint");
-  const bool v4 = !v1 && !v2 && !v3;
+  const bool v4 = !v1 && !v2 && !v3;  // version 4 or later
+  const bool v5 = v4 && !v4_only;
   c.per_texel = v1 || v2;
   if (!r.vec(fp, 4096) || !r.pod(c.width) || !r.pod(c.height) || !r.pod(c.paths_done) ||
       !r.pod(c.iteration) || !r.pod(c.elapsed_s) || !r.pod(c.nonfinite) ||
       !r.vec(c.series, texels_max) || !r.vec(c.mean, texels_max) || !r.vec(c.m2, texels_max) ||
       !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
       (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)) ||
-      (v4 && (!r.pod(c.shard_index) || !r.pod(c.shard_count) || !r.vec(c.basis_layout, 64))))
+      (v4 && (!r.pod(c.shard_index) || !r.pod(c.shard_count) || !r.vec(c.basis_layout, 64))) ||
+      (v5 && !r.vec(c.radiance_cache, texels_max)))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   c.series_stride = v1 ? 5 : 7;
@@ -195,7 +200,8 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   const size_t n = c.mean.size();
   if ((c.per_texel ? n != texels : n > texels) || n == 0 || c.m2.size() != n ||
       c.weight.size() != n || c.spp.size() != n || c.series.size() % c.series_stride != 0 ||
-      c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields))
+      c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields) ||
+      (!c.radiance_cache.empty() && c.radiance_cache.size() != n))
     return corrupt("array sizes do not match the lightmap");
   if (c.shard_count == 0 || c.shard_index >= c.shard_count) return corrupt("invalid shard");
   return c;
@@ -241,6 +247,8 @@ BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t en
   k.spp.assign(c.spp.begin() + begin, c.spp.begin() + end);
   const size_t stride = c.mean.empty() ? 0 : c.basis.size() / c.mean.size();
   k.basis.assign(c.basis.begin() + begin * stride, c.basis.begin() + end * stride);
+  if (!c.radiance_cache.empty())
+    k.radiance_cache.assign(c.radiance_cache.begin() + begin, c.radiance_cache.begin() + end);
   return k;
 }
 

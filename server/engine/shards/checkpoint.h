@@ -43,6 +43,10 @@ struct BakeCheckpoint {
   // in state order, its lobe count | solver << 16 (LUX_SOLVER_*). Its state
   // is one header float4 (x = sum of weights) then the lobes.
   std::vector<uint32_t> basis_layout;
+  // The radiance cache's means per covered slot (version 5; empty without
+  // the cache, kernels/bake/radiance_cache.h): a resumed bake reads the
+  // cache the interrupted one had, so it gives the same bits.
+  std::vector<cl::float4> radiance_cache;
   // Bakes in tiles (bake/tile_plan.h): the state above covers every
   // covered texel (finished tiles, the current one, zeros after it) and
   // paths_done / nonfinite are the current tile's. Empty for a bake in one
@@ -67,9 +71,10 @@ enum TileField {
   kTileFields
 };
 
-// Binary, little-endian, "LUXCKPT4" magic (versions 1, without the basis
-// state, 2, whole images, and 3, without the shard fields and basis
-// layout, are still read), 128-bit checksum at the end.
+// Binary, little-endian, "LUXCKPT5" magic (versions 1, without the basis
+// state, 2, whole images, 3, without the shard fields and basis layout, and
+// 4, without the radiance cache, are still read), 128-bit checksum at the
+// end.
 Status write_checkpoint(const std::string& path, const BakeCheckpoint& checkpoint);
 // NOT_FOUND when absent, DATA_LOSS when torn or corrupt.
 Result<BakeCheckpoint> read_checkpoint(const std::string& path);

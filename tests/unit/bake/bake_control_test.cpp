@@ -70,6 +70,54 @@ TEST_F(BakeControlTest, ResumeFromCheckpointIsBitIdentical) {
   EXPECT_FALSE(pipeline::bake(scene, settings(), *ctx_, resume));
 }
 
+// The radiance cache (kernels/bake/radiance_cache.h) is state the next
+// iteration reads: the checkpoint carries it (version 5), so a resumed
+// cached bake gives the same bits. Without it the resumed bake is valid but
+// other (the cache starts empty), which shows the cache is what matters.
+TEST_F(BakeControlTest, RadianceCacheResumeIsBitIdentical) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  pipeline::BakeSettings s = settings();
+  s.radiance_cache = true;
+  s.paths_per_iteration = 1024;  // nine iterations
+  auto full = pipeline::bake(scene, s, *ctx_);
+  ASSERT_TRUE(full) << full.status().to_string();
+  ASSERT_NE(full.value().features.find("radiance_cache"), std::string::npos);
+
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "cached";
+  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  ASSERT_TRUE(pipeline::bake(scene, s, *ctx_, hooks));
+  ASSERT_GE(checkpoints.size(), 4u);
+  const pipeline::BakeCheckpoint& mid = checkpoints[2];
+  ASSERT_EQ(mid.radiance_cache.size(), mid.mean.size());
+  EXPECT_TRUE(std::any_of(mid.radiance_cache.begin(), mid.radiance_cache.end(),
+                          [](const cl::float4& c) { return c.w >= 1.0f; }))
+      << "the feeders filled the cache";
+
+  const std::string path = ::testing::TempDir() + "/luxel_cache.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, mid).is_ok());
+  auto loaded = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(loaded) << loaded.status().to_string();
+  ASSERT_EQ(loaded.value().radiance_cache.size(), mid.radiance_cache.size());
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "cached";
+  resume.resume = &loaded.value();
+  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  const auto& f = full.value().irradiance;
+  EXPECT_EQ(0, std::memcmp(f.data(), resumed.value().irradiance.data(), f.size() * 4))
+      << "a resumed cached bake must produce the same bits as an uninterrupted one";
+
+  pipeline::BakeCheckpoint emptied = loaded.value();
+  emptied.radiance_cache.clear();
+  resume.resume = &emptied;
+  auto refilled = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(refilled) << refilled.status().to_string();
+  EXPECT_NE(0, std::memcmp(f.data(), refilled.value().irradiance.data(), f.size() * 4));
+}
+
 // Adaptive sampling: the allocation depends only on the texels' state and
 // the path count, so a bake resumed past the warm-up continues exactly.
 // A point light over a plane gives texels different errors (uneven

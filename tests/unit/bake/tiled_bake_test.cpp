@@ -8,6 +8,7 @@
 // adaptive bake is checked against itself (resume, stopping rule).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "bake/bake.h"
@@ -126,6 +127,47 @@ TEST_F(TiledBakeTest, ResumeInALaterTileIsBitIdentical) {
   ASSERT_FALSE(refused);
   EXPECT_NE(refused.status().message().find("device_memory_budget_mib"), std::string::npos)
       << refused.status().message();
+}
+
+// The radiance cache in tiles: a tile gathers only from its own texels
+// (the others' caches are not on the device), so a tiled cached bake has
+// other bits than an untiled one; resuming inside a later tile still gives
+// the uninterrupted tiled bake's bits (the checkpoint carries the current
+// tile's cache).
+TEST_F(TiledBakeTest, RadianceCacheTilesResumeBitIdentically) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  pipeline::BakeSettings s = settings();
+  s.radiance_cache = true;
+  auto untiled = pipeline::bake(scene, s, *ctx_);
+  ASSERT_TRUE(untiled) << untiled.status().to_string();
+  s.device_memory_budget_mib = tight_budget_mib(untiled.value());
+  std::vector<pipeline::BakeCheckpoint> checkpoints;
+  pipeline::BakeHooks hooks;
+  hooks.fingerprint = "tiled-cache";
+  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+  auto tiled = pipeline::bake(scene, s, *ctx_, hooks);
+  ASSERT_TRUE(tiled) << tiled.status().to_string();
+  ASSERT_GE(tiled.value().tiles, 3u);
+  const pipeline::BakeCheckpoint* pick = nullptr;
+  for (const auto& c : checkpoints)
+    if (!pick && !c.tile.empty() && c.tile[pipeline::kTileIndex] >= 1 && c.paths_done > 0 &&
+        std::any_of(c.radiance_cache.begin(), c.radiance_cache.end(),
+                    [](const cl::float4& m) { return m.w >= 1.0f; }))
+      pick = &c;
+  ASSERT_NE(pick, nullptr) << "no checkpoint in a later tile with a filled cache";
+  ASSERT_EQ(pick->radiance_cache.size(), pick->mean.size());
+  const std::string path = ::testing::TempDir() + "/luxel_tiled_cache.ckpt";
+  ASSERT_TRUE(pipeline::write_checkpoint(path, *pick).is_ok());
+  auto loaded = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(loaded) << loaded.status().to_string();
+  pipeline::BakeHooks resume;
+  resume.fingerprint = "tiled-cache";
+  resume.resume = &loaded.value();
+  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+  ASSERT_TRUE(resumed) << resumed.status().to_string();
+  expect_same_bits(tiled.value().irradiance, resumed.value().irradiance, "irradiance");
+  EXPECT_EQ(tiled.value().paths, resumed.value().paths);
 }
 
 // Adaptive sampling in tiles: each tile warms up, then allocates by its own
