@@ -4,10 +4,12 @@
 #ifndef LUXEL_BAKE_ACCUMULATE_H
 #define LUXEL_BAKE_ACCUMULATE_H
 
+#include "bake/guiding.h"
 #include "bake/radiance_cache.h"
 #include "bake/scatter.h"
 #include "primitives/offset_buffer.h"
 #include "shared/bake_args.h"
+#include "shared/shard.h"
 #if LUX_BASIS
 #include "bake/basis.h"
 #endif
@@ -205,6 +207,13 @@ inline void lux_accumulate(uint c, LUX_STAGE_PARAMS(accumulate)) {
 #if LUX_RADIANCE_CACHE
   if (own)
     lux_feed_cache(paths, basis_samples, first, end, params.clamp_luminance, radiance_cache, c);
+#endif
+#if LUX_GUIDING
+  /* The texel's first-bounce histograms (bake/guiding.h). */
+  if (own)
+    lux_guide_learn(
+        guide + (size_t)c * LUX_GUIDE_STRIDE, paths, first, end,
+        lux_shard_sample_index(spp[c] + (end - first), params.shard_index, params.shard_count));
 #endif
   mean[c] = t_mean;
   m2[c] = t_m2;

@@ -5,6 +5,7 @@
 #ifndef LUXEL_BAKE_RAYGEN_H
 #define LUXEL_BAKE_RAYGEN_H
 
+#include "bake/guiding.h"
 #include "bake/path.h"
 #include "bake/radiance_cache.h"
 #include "bake/scatter.h"
@@ -30,7 +31,13 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   /* A shard's own count maps to its part of the sequence (shared/shard.h). */
   const uint index =
       lux_shard_sample_index(spp[slot] + (gid - first), params.shard_index, params.shard_count);
+#if LUX_GUIDING
+  /* Guiding: each epoch of the texel's samples its own scramble
+   * (bake/guiding.h). */
+  const uint seed = lux_guide_seed(lux_texel_seed(texel, params.bake_seed), index);
+#else
   const uint seed = lux_texel_seed(texel, params.bake_seed);
+#endif
 
 #if LUX_PROBES
   /* Probe domain: the "texel" is a probe, a point in free space whose
@@ -116,6 +123,14 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   float3 t, b;
   lux_onb(s.ns, &t, &b);
   const uint dim = LUX_DIM_VERTEX(0);
+#if LUX_GUIDING
+  /* This texel's learned first-bounce histogram (bake/guiding.h). */
+  __global const float4* guide_h = guide + (size_t)slot * LUX_GUIDE_STRIDE;
+  const float guide_total = lux_guide_total(guide_h);
+#else
+  __global const float4* guide_h = 0;
+  const float guide_total = 0.0f;
+#endif
   LuxRay shadow;
   float3 contribution;
   LuxBsdf unused_bsdf;
@@ -123,7 +138,8 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   float3 analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &s,
                  1, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index,
-                 dim, seed, &shadow, &contribution, &analytic_sample, &analytic_e);
+                 dim, seed, guide_h, guide_total, &shadow, &contribution, &analytic_sample,
+                 &analytic_e);
 #if LUX_DIRECT_ANALYTIC
 #if LUX_BASIS
 #error "LUX_DIRECT_ANALYTIC is for irradiance lightmaps only"
@@ -170,13 +186,27 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   t = tn;
   b = cross(s.ns, tn);
   const float3 dir_local = lux_uniform_hemisphere(u_dir);
+#elif LUX_GUIDING
+  /* The one-sample mixture of the learned histogram and the cosine lobe;
+   * weight cos / p = pi / m (bake/guiding.h). The layer dimension of the
+   * texel point is otherwise unused. */
+  const float u_strategy = lux_sample_1d(index, dim + LUX_DIM_LAYER, seed);
+  const float3 dir_local = lux_guide_sample(guide_h, guide_total, u_strategy, u_dir);
 #else
   const float3 dir_local = lux_cosine_hemisphere(u_dir);
 #endif
   const float3 wi = lux_to_world(dir_local, t, b, s.ns);
   const int ok = dot(wi, s.ng) > 0.0f;
+#if LUX_GUIDING
+  const float guide_m = lux_guide_factor(guide_h, guide_total, dir_local);
+  path.throughput =
+      (float4)((float3)(LUX_SENSOR_WEIGHT / guide_m), LUX_SENSOR_PDF(dir_local.z) * guide_m);
+  /* A direction under the surface carries nothing and teaches nothing. */
+  path.prev_pos.w = ok ? (float)lux_guide_bin(dir_local) : -1.0f;
+#else
   path.throughput = (float4)(LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT, LUX_SENSOR_WEIGHT,
                              LUX_SENSOR_PDF(dir_local.z));
+#endif
 #if LUX_BASIS
   {
     LuxBasisSample bs;

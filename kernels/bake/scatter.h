@@ -13,6 +13,7 @@
 #ifndef LUXEL_BAKE_SCATTER_H
 #define LUXEL_BAKE_SCATTER_H
 
+#include "bake/guiding.h"
 #include "bake/path.h"
 #include "bake/surface.h"
 #include "shading/analytic_light.h"
@@ -58,14 +59,17 @@ inline LuxRay lux_make_ray(float3 org, float3 dir, float tmax) {
 }
 
 /* Next-event estimation from surface s. `sensor`: vertex 0 (f = 1, cosine
- * pdf). Otherwise the material's BSDF in the local frame (t, b, n), wo local.
- * Writes the shadow ray and its unoccluded contribution (throughput applied). */
+ * pdf, times the first-bounce guide's factor when `guide` is not null:
+ * bake/guiding.h). Otherwise the material's BSDF in the local frame
+ * (t, b, n), wo local. Writes the shadow ray and its unoccluded
+ * contribution (throughput applied). */
 inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
                                LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
                            const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t, float3 b,
                            float3 n, float3 wo_local, float3 throughput, uint index, uint dim,
-                           uint seed, LuxRay* shadow_ray, float3* contribution,
-                           int* analytic_sample, float3* analytic_e) {
+                           uint seed, __global const float4* guide, float guide_total,
+                           LuxRay* shadow_ray, float3* contribution, int* analytic_sample,
+                           float3* analytic_e) {
   *shadow_ray = lux_no_ray();
   *contribution = (float3)(0.0f);
   *analytic_sample = 0;
@@ -148,7 +152,14 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   const int mis = !ls.is_delta && ls.mis && !*analytic_sample;
   float3 f_weighted;
   if (sensor) {
-    const float w = mis ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;
+    float p_sensor = LUX_SENSOR_PDF(cos_i);
+#if LUX_GUIDING
+    if (guide) p_sensor *= lux_guide_factor(guide, guide_total, wi_local);
+#else
+    (void)guide;
+    (void)guide_total;
+#endif
+    const float w = mis ? lux_power_heuristic(ls.pdf, p_sensor) : 1.0f;
     f_weighted = (float3)(w);
   } else {
     f_weighted = (float3)(0.0f);

@@ -22,6 +22,11 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   shadow_contrib[slot] = (float4)(0.0f);
   if (!path.alive) return;
 
+#if LUX_GUIDING
+  /* All `radiance` holds before the first hit is the texel point's light
+   * sample, which the guide leaves out (bake/guiding.h). */
+  if (path.depth == 0u) path.prev_normal.w = lux_luminance(path.radiance.xyz);
+#endif
   const LuxRay ray = rays[slot];
   const LuxHit hit = hits[slot];
   const float3 dir = ray.dir_tmax.xyz;
@@ -161,8 +166,8 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   int unused_analytic;
   float3 unused_analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
-                 0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed,
-                 &shadow, &contribution, &unused_analytic, &unused_analytic_e);
+                 0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed, 0,
+                 0.0f, &shadow, &contribution, &unused_analytic, &unused_analytic_e);
   shadow_rays[slot] = shadow;
 #if LUX_RADIANCE_CACHE
   /* w = 1 marks the last bounce's light sample for resolve_shadows. */
@@ -183,8 +188,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
       throughput /= q;
   }
   path.throughput = (float4)(throughput, pdf);
-  path.prev_pos = (float4)(sf.p, 0.0f);
-  path.prev_normal = (float4)(sf.ns, 0.0f);
+  /* w: the guide's record of the first segment (kernels/shared/bake.h). */
+  path.prev_pos = (float4)(sf.p, path.prev_pos.w);
+  path.prev_normal = (float4)(sf.ns, path.prev_normal.w);
   path.alive = ok ? 1u : 0u;
   paths[slot] = path;
   rays[slot] =

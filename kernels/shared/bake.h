@@ -83,9 +83,13 @@ typedef struct LuxMaterial {
 /* State of one path, 112 bytes.
  *   throughput.w:  solid-angle pdf of the last BSDF sample (0 = no MIS, e.g.
  *                  the first segment from a texel when no light can be hit)
- *   prev_pos.w:    unused
+ *   prev_pos.w:    with first-bounce guiding (kernels/bake/guiding.h): the
+ *                  guide bin of the first direction (-1: none, the
+ *                  direction was under the surface); 0 otherwise
  *   prev_normal:   the normal the previous vertex sampled its light about
- *                  (MIS of an escaping ray against the sky's pdf); w unused
+ *                  (MIS of an escaping ray against the sky's pdf); w: with
+ *                  guiding, the luminance of the texel point's light sample
+ *                  (set at the first hit), which the guide leaves out
  *   last_bounce:   with the radiance cache (kernels/bake/radiance_cache.h):
  *                  rgb = the part of `radiance` that went max_bounces
  *                  bounces, which the cache leaves out; w = 1 for a path
@@ -105,6 +109,12 @@ typedef struct LuxPath {
   uint alive;
   uint pad;
 } LuxPath;
+
+/* First-bounce guiding (kernels/bake/guiding.h): a texel's two histograms
+ * of LUX_GUIDE_BINS floats are LUX_GUIDE_STRIDE float4 of the accumulation
+ * group's guide buffer and of the checkpoint. */
+#define LUX_GUIDE_BINS 16
+#define LUX_GUIDE_STRIDE 8 /* the frozen histogram, then the current epoch's */
 
 /* Per-bake constants and the iteration's counts, passed by value to every
  * bake kernel (kernels/shared/bake_args.h). 104 bytes, 8-aligned (the ulong

@@ -78,17 +78,19 @@
   X(live, int, count, "live count")
 
 /* Accumulation: sized by the lightmap (weighted Welford per texel, §3.2.2),
- * the statistics partials, the benchmark-mode reference and the radiance
- * cache's means (a placeholder without LUX_RADIANCE_CACHE). */
-#define LUX_GROUP_accum(X)                           \
-  X(buffer, float4, mean, "accumulated mean")        \
-  X(buffer, float4, m2, "accumulated M2")            \
-  X(buffer, float2, weight, "accumulated weight")    \
-  X(buffer, uint, spp, "samples per texel")          \
-  X(buffer, uint, nonfinite, "non-finite counter")   \
-  X(buffer, LuxAccumStats, stats, "stats partials")  \
-  X(buffer, float4, reference, "reference lightmap") \
-  X(buffer, float4, radiance_cache, "radiance cache") /* bake/radiance_cache.h */
+ * the statistics partials, the benchmark-mode reference, the radiance
+ * cache's means and the first-bounce guide's histograms (placeholders
+ * without LUX_RADIANCE_CACHE and LUX_GUIDING). */
+#define LUX_GROUP_accum(X)                                                        \
+  X(buffer, float4, mean, "accumulated mean")                                     \
+  X(buffer, float4, m2, "accumulated M2")                                         \
+  X(buffer, float2, weight, "accumulated weight")                                 \
+  X(buffer, uint, spp, "samples per texel")                                       \
+  X(buffer, uint, nonfinite, "non-finite counter")                                \
+  X(buffer, LuxAccumStats, stats, "stats partials")                               \
+  X(buffer, float4, reference, "reference lightmap")                              \
+  X(buffer, float4, radiance_cache, "radiance cache") /* bake/radiance_cache.h */ \
+  X(buffer, float4, guide, "first-bounce guide")      /* bake/guiding.h */
 
 /* Adaptive sampling (kernels/bake/adaptive.h), sized by the lightmap:
  * each covered slot's integer allocation weight, and per block of

@@ -47,6 +47,7 @@
   X(BASIS, flag, "directional encodings: each path leaves a LuxBasisSample (bake/basis.h)")    \
   X(PROBES, flag, "the bake's texels are light probes (server/engine/probes/)")                \
   X(RADIANCE_CACHE, flag, "first hits read their texel's cache (bake/radiance_cache.h)")       \
+  X(GUIDING, flag, "first directions from a learned texel histogram (bake/guiding.h)")         \
   /* Ray queries (intersect.cl). */                                                            \
   X(BVH4, flag, "four-wide BVH nodes (intersect/trace_bvh4.h), else the fat BVH2")             \
   X(ALPHA_MASK, flag, "alphaMode MASK triangles run the alpha test")                           \

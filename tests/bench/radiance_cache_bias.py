@@ -43,6 +43,7 @@ def parse_args(argv):
     p.add_argument("--scenes", default="cornell_box,shared")
     p.add_argument("--spp", default="16,64,256")
     p.add_argument("--seeds", type=int, default=4)
+    p.add_argument("--configs", default="traced,cache", help="traced (the control), cache")
     p.add_argument("--reference-spp", type=int, default=4096)
     p.add_argument("--reference-cache", default=None)
     p.add_argument("--resolution", type=int, default=128)
@@ -88,6 +89,8 @@ def main(argv):
         classes = {"all": cov, "edges": edge, "interior": cov & ~edge}
         for spp in args.spp_list:
             for cfg, extra in (("traced", []), ("cache", ["--radiance-cache"])):
+                if cfg not in args.configs.split(","):
+                    continue
                 per_seed = {k: [] for k in classes}
                 for k in range(args.seeds):
                     d = args.out / name / ("%s_%d_s%d" % (cfg, spp, k))

@@ -71,19 +71,21 @@ class ReferenceAgreement : public testing::DeviceTest<> {
     // cache's own noise, shared by neighbouring texels within a replica.
     struct Variant {
       accel::IntersectorKind kind;
-      bool cache;
+      bool cache, guiding;
       std::unique_ptr<Bakes>* out;
     };
-    for (const Variant& v : {Variant{accel::IntersectorKind::kEmbree, false, &embree_},
-                             Variant{accel::IntersectorKind::kOpenCl, false, &opencl_},
-                             Variant{accel::IntersectorKind::kEmbree, true, &cached_}}) {
+    for (const Variant& v : {Variant{accel::IntersectorKind::kEmbree, false, false, &embree_},
+                             Variant{accel::IntersectorKind::kOpenCl, false, false, &opencl_},
+                             Variant{accel::IntersectorKind::kEmbree, true, false, &cached_},
+                             Variant{accel::IntersectorKind::kEmbree, false, true, &guided_}}) {
       auto bakes = std::make_unique<Bakes>();
       const accel::IntersectorKind kind = v.kind;
       settings.intersector = kind;
       settings.radiance_cache = v.cache;
-      // The cache is read as earlier iterations left it: 12 iterations
-      // instead of one batch of the device's size.
-      settings.paths_per_iteration = v.cache ? 8192 : 0;
+      settings.guiding = v.guiding;
+      // The cache and the guide are read as earlier iterations left them:
+      // 12 iterations instead of one batch of the device's size.
+      settings.paths_per_iteration = v.cache || v.guiding ? 8192 : 0;
       for (int r = 0; r < kReplicas; ++r) {
         settings.seed = 1000u + static_cast<uint32_t>(r);
         auto result = pipeline::bake(scene.value(), settings, *ctx_);
@@ -112,25 +114,27 @@ class ReferenceAgreement : public testing::DeviceTest<> {
     if (!ref) return fail("reference: " + ref.status().to_string());
     embree_->ref = ref.value();
     cached_->ref = ref.value();
+    guided_->ref = ref.value();
     opencl_->ref = std::move(ref.value());
   }
   static void TearDownTestSuite() {
     embree_.reset();
     opencl_.reset();
     cached_.reset();
+    guided_.reset();
     atlas_.reset();
     DeviceTest::TearDownTestSuite();
   }
   static void fail(const std::string& why) { setup_error_ = why; }
 
   void SetUp() override {
-    ASSERT_TRUE(embree_ && opencl_ && cached_ && embree_->ref.width > 0)
+    ASSERT_TRUE(embree_ && opencl_ && cached_ && guided_ && embree_->ref.width > 0)
         << "setup failed: " << setup_error_;
   }
 
   static void expect_agreement(const Bakes& b, const char* title);
 
-  static std::unique_ptr<Bakes> embree_, opencl_, cached_;
+  static std::unique_ptr<Bakes> embree_, opencl_, cached_, guided_;
   static std::unique_ptr<atlas::Atlas> atlas_;
   static std::string setup_error_;
 };
@@ -138,6 +142,7 @@ class ReferenceAgreement : public testing::DeviceTest<> {
 std::unique_ptr<Bakes> ReferenceAgreement::embree_;
 std::unique_ptr<Bakes> ReferenceAgreement::opencl_;
 std::unique_ptr<Bakes> ReferenceAgreement::cached_;
+std::unique_ptr<Bakes> ReferenceAgreement::guided_;
 std::unique_ptr<atlas::Atlas> ReferenceAgreement::atlas_;
 std::string ReferenceAgreement::setup_error_;
 
@@ -160,6 +165,16 @@ TEST_F(ReferenceAgreement, RadianceCacheAgreesWithReferenceWithinConfidenceBound
   expect_agreement(*cached_,
                    "Cornell box: engine (Embree, radiance cache) vs CPU reference (32x32, 3 "
                    "bounces)");
+}
+
+// First-bounce guiding: 128 spp per texel reach the third epoch (samples
+// 32-63 sample from the first two epochs' histogram, 64-127 from three).
+TEST_F(ReferenceAgreement, GuidingAgreesWithReferenceWithinConfidenceBounds) {
+  ASSERT_NE(guided_->engine.replicas[0].features.find("guiding"), std::string::npos);
+  ASSERT_TRUE(guided_->engine.replicas[0].irradiance != embree_->engine.replicas[0].irradiance)
+      << "the guide sampled nothing";
+  expect_agreement(*guided_,
+                   "Cornell box: engine (Embree, guiding) vs CPU reference (32x32, 3 bounces)");
 }
 
 void ReferenceAgreement::expect_agreement(const Bakes& b, const char* title) {

@@ -145,6 +145,9 @@ Status allocate_accum(Allocator& a, const BakeSetup& s, const BakeSettings& sett
   LUXEL_RETURN_IF_ERROR(a.alloc(g.radiance_cache,
                                 s.features.has(device::Feature::RADIANCE_CACHE) ? c * 16 : 16,
                                 "radiance cache"));
+  LUXEL_RETURN_IF_ERROR(
+      a.alloc(g.guide, s.features.has(device::Feature::GUIDING) ? c * 16 * kGuideStride : 16,
+              "first-bounce guide"));
   const size_t groups = (c + LUX_STATS_GROUP - 1) / LUX_STATS_GROUP;
   LUXEL_RETURN_IF_ERROR(a.alloc(g.stats, groups * sizeof(cl::LuxAccumStats), "stats partials"));
   if (!settings.reference) return a.alloc(g.reference, 16, "reference (unused)");
@@ -184,6 +187,7 @@ Status BakeBuffers::allocate(device::Context& ctx, const scene::Scene& scene,
   Allocator a(ctx, device_bytes_, dry);
   args_.params = setup.params;
   radiance_cache_ = setup.features.has(device::Feature::RADIANCE_CACHE);
+  guiding_ = setup.features.has(device::Feature::GUIDING);
   LUXEL_RETURN_IF_ERROR(upload_scene(a, scene, setup, cap, args_));
   const size_t p = setup.capacity;
   LUXEL_RETURN_IF_ERROR(a.alloc(batch_count, 4, "batch count"));
@@ -215,7 +219,8 @@ Result<size_t> BakeBuffers::fixed_bytes(device::Context& ctx, const scene::Scene
 
 size_t BakeBuffers::per_slot_bytes(const BakeSetup& s) {
   return texel_state_bytes(s.plan.bytes_per_texel(), s.features.has(device::Feature::ADAPTIVE),
-                           s.features.has(device::Feature::RADIANCE_CACHE));  // resource_estimate.h
+                           s.features.has(device::Feature::RADIANCE_CACHE),
+                           s.features.has(device::Feature::GUIDING));  // resource_estimate.h
 }
 
 size_t BakeBuffers::largest_per_slot_bytes(const BakeSetup& s) {
@@ -235,7 +240,7 @@ Status BakeBuffers::load_tile(device::Context& ctx, const BakeSetup& setup, size
   Allocator a(ctx, unused);
   const AccumArgs& acc = args_.accum;
   for (const device::Buffer* z :
-       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite, &acc.radiance_cache,
+       {&acc.mean, &acc.m2, &acc.weight, &acc.spp, &acc.nonfinite, &acc.radiance_cache, &acc.guide,
         static_cast<const device::Buffer*>(&args_.encodings.basis_state)}) {
     LUXEL_RETURN_IF_ERROR(a.zero(*z, cancel));
   }
@@ -268,6 +273,8 @@ Status BakeBuffers::read_state(device::Context& ctx, BakeCheckpoint& c, size_t f
   LUXEL_RETURN_IF_ERROR(read(acc.spp, c.spp, 1));
   c.radiance_cache.resize(radiance_cache_ ? n : 0);
   if (radiance_cache_) LUXEL_RETURN_IF_ERROR(read(acc.radiance_cache, c.radiance_cache, 1));
+  c.guide.resize(guiding_ ? n * kGuideStride : 0);
+  if (guiding_) LUXEL_RETURN_IF_ERROR(read(acc.guide, c.guide, kGuideStride));
   const size_t stride = p.encoding_count == 0 ? 0 : p.basis_stride;
   c.basis.resize(n * stride);
   constexpr size_t kReadChunk = size_t{64} << 20;
@@ -309,6 +316,9 @@ Status BakeBuffers::restore_state(device::Context& ctx, const BakeCheckpoint& c,
   if (radiance_cache_ && k.radiance_cache.size() == n)
     LUXEL_RETURN_IF_ERROR(
         ctx.write(acc.radiance_cache, k.radiance_cache.data(), n * sizeof(cl::float4)));
+  if (guiding_ && k.guide.size() == n * kGuideStride)
+    LUXEL_RETURN_IF_ERROR(
+        ctx.write(acc.guide, k.guide.data(), k.guide.size() * sizeof(cl::float4)));
   const size_t basis_size = p.encoding_count == 0 ? 0 : n * p.basis_stride;
   if (k.basis.size() != basis_size)
     return invalid_argument(strprintf("checkpoint holds %zu basis values, this bake needs %zu",

@@ -79,6 +79,7 @@ class BakeBuffers {
   BakeKernelArgs args_;
   size_t device_bytes_ = 0;
   bool radiance_cache_ = false;  // the accumulation group holds the cache's means
+  bool guiding_ = false;         // ... and the first-bounce guide's histograms
 };
 
 }  // namespace luxel::pipeline

@@ -67,6 +67,9 @@ device::FeatureSet derive_bake_features(const BakeSettings& settings, const Ligh
   // nothing to gather without a bounce, and shards must merge exactly.
   if (settings.radiance_cache && settings.max_bounces >= 1 && !settings.sharded())
     f.set(Feature::RADIANCE_CACHE);
+  // Guiding reweights the first direction, which directional encodings
+  // assume uniform: irradiance lightmaps only.
+  if (settings.guiding && plan.empty()) f.set(Feature::GUIDING);
   if (settings.filter == Filter::kGaussian) f.set(Feature::FILTER_GAUSSIAN);
   if (settings.random_sequence) f.set(Feature::SEQUENCE_RANDOM);
   if (!plan.empty()) f.set(Feature::BASIS);

@@ -101,6 +101,7 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   if (probes) {
     s.features.set(device::Feature::PROBES);
     s.features.set(device::Feature::RADIANCE_CACHE, 0);  // probes have no texels to gather from
+    s.features.set(device::Feature::GUIDING, 0);
   }
 
   // Batch size: the paths-per-iteration budget (the device's for auto,

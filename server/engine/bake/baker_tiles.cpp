@@ -120,6 +120,10 @@ void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
     to.radiance_cache.insert(to.radiance_cache.end(), from.radiance_cache.begin(),
                              from.radiance_cache.end());
   }
+  if (!from.guide.empty()) {
+    to.guide.resize((to.mean.size() - from.mean.size()) * kGuideStride, cl::float4{});
+    to.guide.insert(to.guide.end(), from.guide.begin(), from.guide.end());
+  }
 }
 
 BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) {
@@ -143,6 +147,7 @@ BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti)
   c.spp.resize(n, 0);
   c.basis.resize(n * stride, cl::float4{});
   if (!c.radiance_cache.empty()) c.radiance_cache.resize(n, cl::float4{});
+  if (!c.guide.empty()) c.guide.resize(n * kGuideStride, cl::float4{});
   const Tile& t = plan_.tiles[ti];
   c.tile.assign(kTileFields, 0.0);
   c.tile[kTileIndex] = static_cast<double>(ti);

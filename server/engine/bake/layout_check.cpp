@@ -2,6 +2,7 @@
 #include <cstddef>
 
 #include "kernels/shared/bake.h"
+#include "shards/checkpoint.h"
 
 namespace luxel::cl {
 static_assert(sizeof(LuxSurfaceTri) == 128 && alignof(LuxSurfaceTri) == 16);
@@ -15,6 +16,7 @@ static_assert(offsetof(LuxMaterial, base_color_tex) == 64 &&
 static_assert(offsetof(LuxMaterial, normal_tex) == 160 &&
               offsetof(LuxMaterial, normal_scale) == 192);
 static_assert(sizeof(LuxPath) == 112);
+static_assert(LUX_GUIDE_STRIDE == luxel::pipeline::kGuideStride);
 static_assert(offsetof(LuxPath, texel) == 80 && offsetof(LuxPath, sample_pos) == 96);
 static_assert(sizeof(LuxBakeParams) == 104 && alignof(LuxBakeParams) == 8);
 static_assert(offsetof(LuxBakeParams, first_path) == 48 &&

@@ -164,8 +164,8 @@ Result<ResourceEstimate> estimate_bake_resources(const scene::Scene& scene,
                            : uint64_t{settings.samples_per_texel} * e.max_texels);
   e.path_bytes = static_cast<size_t>(e.batch_paths) * e.per_path.per_path;
   e.scene_bytes = scene_bytes(scene, triangles);
-  e.per_texel_bytes =
-      texel_state_bytes(plan.value().bytes_per_texel(), settings.adaptive, settings.radiance_cache);
+  e.per_texel_bytes = texel_state_bytes(plan.value().bytes_per_texel(), settings.adaptive,
+                                        settings.radiance_cache, settings.guiding);
   if (Status st = check_path_state(e.batch_paths, e.per_path, e.scene_bytes, e.budget,
                                    device.max_alloc_bytes);
       !st.is_ok()) {

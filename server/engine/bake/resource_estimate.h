@@ -46,12 +46,12 @@ PathStateBytes path_state_bytes(bool basis_samples);
 // Device bytes per covered texel of a tile (BakeBuffers::per_slot_bytes):
 // covered texel, sample-info offset, offset buffer, mean, M2, weight,
 // samples, a stats partial's share, the encodings' basis state, and with
-// adaptive sampling its weight and a block sum's share, and with the
-// radiance cache its mean.
+// adaptive sampling its weight and a block sum's share, with the radiance
+// cache its mean, and with guiding its histogram.
 inline size_t texel_state_bytes(size_t basis_bytes_per_texel, bool adaptive,
-                                bool radiance_cache = false) {
+                                bool radiance_cache = false, bool guiding = false) {
   return 4 + 4 + 4 + 16 + 16 + 8 + 4 + 1 + basis_bytes_per_texel + (adaptive ? 4 + 1 : 0) +
-         (radiance_cache ? 16 : 0);
+         (radiance_cache ? 16 : 0) + (guiding ? 128 : 0);
 }
 
 // The bake's memory budget: settings.device_memory_budget_mib, or the

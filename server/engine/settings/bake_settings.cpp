@@ -126,6 +126,17 @@ Status validate_settings(const BakeSettings& s, const char* resolution_limit) {
             strprintf("node %d%s is placed twice (also placements[%zu])", np.node,
                       np.element >= 0 ? strprintf(" instance %d", np.element).c_str() : "", j));
   }
+  // Guiding draws the first direction from a learned mixture and weights it
+  // by its density; the directional encodings' moments assume directions
+  // uniform over the hemisphere with weight 1 (kernels/bake/guiding.h).
+  if (s.guiding && !s.encodings.names.empty()) {
+    auto plan = plan_encodings(s.encodings);
+    if (plan && !plan.value().empty())
+      return bad("guiding",
+                 "first-bounce guiding is for irradiance lightmaps: the directional encodings "
+                 "of settings.encodings need first directions uniform over the hemisphere; "
+                 "leave guiding off or bake irradiance only");
+  }
   if (s.shard_index > 0 && s.shard_index >= std::max(s.shard_count, 1u))
     return bad("shard_index", strprintf("must be < shard_count (%u), got %u",
                                         std::max(s.shard_count, 1u), s.shard_index));

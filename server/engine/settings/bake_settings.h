@@ -136,6 +136,11 @@ struct BakeSettings {
   // texel instead of tracing on, with a share that falls as n^-1/2 so the
   // bake stays consistent. Off in sharded bakes and probe bakes.
   bool radiance_cache = false;
+  // First-bounce guiding (kernels/bake/guiding.h): each texel's first
+  // direction comes from a one-sample mixture of the cosine lobe and a
+  // histogram learned from its earlier paths. Irradiance lightmaps only
+  // (no directional encodings, no probes).
+  bool guiding = false;
 
   // Distributed bakes (shards/shard_merge.h): this bake is shard
   // shard_index of shard_count and traces only its part of every texel's

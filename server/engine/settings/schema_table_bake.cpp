@@ -211,6 +211,17 @@ void add_bake_settings(std::vector<Setting>& t) {
                .api_note = "unset means off",
                LUXEL_BOOL(radiance_cache),
                .describe_when = [](const BakeSettings& s) { return s.radiance_cache; }});
+  t.push_back({.name = "guiding",
+               .type = Type::kBool,
+               .units = "",
+               .help = "first-bounce guiding: each texel draws its first direction from a mix "
+                       "of the cosine lobe and a histogram of where its earlier paths found "
+                       "light (unbiased; irradiance only, not with --encodings)",
+               .flag = "--guiding",
+               .default_value = SettingValue::of(0),
+               .api_note = "unset means off",
+               LUXEL_BOOL(guiding),
+               .describe_when = [](const BakeSettings& s) { return s.guiding; }});
   t.push_back(
       {.name = "shard_count",
        .type = Type::kInt,

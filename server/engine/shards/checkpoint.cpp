@@ -141,6 +141,7 @@ Status write_checkpoint(const std::string& path, const BakeCheckpoint& c) {
     w.pod(c.shard_count);
     w.vec(c.basis_layout);
     w.vec(c.radiance_cache);
+    w.vec(c.guide);
   };
   Writer count;
   fields(count);
@@ -191,7 +192,7 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
       !r.vec(c.weight, texels_max) || !r.vec(c.spp, texels_max) ||
       (!v1 && !r.vec(c.basis, texels_max * 64)) || (!c.per_texel && !r.vec(c.tile, 64)) ||
       (v4 && (!r.pod(c.shard_index) || !r.pod(c.shard_count) || !r.vec(c.basis_layout, 64))) ||
-      (v5 && !r.vec(c.radiance_cache, texels_max)))
+      (v5 && (!r.vec(c.radiance_cache, texels_max) || !r.vec(c.guide, texels_max * kGuideStride))))
     return corrupt("truncated record");
   c.fingerprint.assign(fp.begin(), fp.end());
   c.series_stride = v1 ? 5 : 7;
@@ -201,7 +202,8 @@ Result<BakeCheckpoint> read_checkpoint(const std::string& path) {
   if ((c.per_texel ? n != texels : n > texels) || n == 0 || c.m2.size() != n ||
       c.weight.size() != n || c.spp.size() != n || c.series.size() % c.series_stride != 0 ||
       c.basis.size() % n != 0 || (!c.tile.empty() && c.tile.size() != kTileFields) ||
-      (!c.radiance_cache.empty() && c.radiance_cache.size() != n))
+      (!c.radiance_cache.empty() && c.radiance_cache.size() != n) ||
+      (!c.guide.empty() && c.guide.size() != n * kGuideStride))
     return corrupt("array sizes do not match the lightmap");
   if (c.shard_count == 0 || c.shard_index >= c.shard_count) return corrupt("invalid shard");
   return c;
@@ -249,6 +251,8 @@ BakeCheckpoint slice_checkpoint(const BakeCheckpoint& c, size_t begin, size_t en
   k.basis.assign(c.basis.begin() + begin * stride, c.basis.begin() + end * stride);
   if (!c.radiance_cache.empty())
     k.radiance_cache.assign(c.radiance_cache.begin() + begin, c.radiance_cache.begin() + end);
+  if (!c.guide.empty())
+    k.guide.assign(c.guide.begin() + begin * kGuideStride, c.guide.begin() + end * kGuideStride);
   return k;
 }
 

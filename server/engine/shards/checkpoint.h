@@ -14,6 +14,9 @@
 
 namespace luxel::pipeline {
 
+// float4 of one texel's first-bounce histograms (LUX_GUIDE_STRIDE).
+inline constexpr size_t kGuideStride = 8;
+
 struct BakeCheckpoint {
   // What the state belongs to: a hash of the scene content and of the
   // settings that shape the result. Resuming with another fingerprint fails.
@@ -47,6 +50,9 @@ struct BakeCheckpoint {
   // the cache, kernels/bake/radiance_cache.h): a resumed bake reads the
   // cache the interrupted one had, so it gives the same bits.
   std::vector<cl::float4> radiance_cache;
+  // First-bounce guiding's histograms, kGuideStride float4 per covered slot
+  // (version 5; empty without guiding, kernels/bake/guiding.h).
+  std::vector<cl::float4> guide;
   // Bakes in tiles (bake/tile_plan.h): the state above covers every
   // covered texel (finished tiles, the current one, zeros after it) and
   // paths_done / nonfinite are the current tile's. Empty for a bake in one

@@ -70,52 +70,68 @@ TEST_F(BakeControlTest, ResumeFromCheckpointIsBitIdentical) {
   EXPECT_FALSE(pipeline::bake(scene, settings(), *ctx_, resume));
 }
 
-// The radiance cache (kernels/bake/radiance_cache.h) is state the next
-// iteration reads: the checkpoint carries it (version 5), so a resumed
-// cached bake gives the same bits. Without it the resumed bake is valid but
-// other (the cache starts empty), which shows the cache is what matters.
-TEST_F(BakeControlTest, RadianceCacheResumeIsBitIdentical) {
+// The radiance cache (kernels/bake/radiance_cache.h) and first-bounce
+// guiding (kernels/bake/guiding.h) are state the next iteration reads: the
+// checkpoint carries both (version 5), so a resumed bake gives the same
+// bits. Without that state the resumed bake is valid but other (it starts
+// learning again), which shows the state is what matters.
+TEST_F(BakeControlTest, LearnedStateResumesBitIdentically) {
   const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
-  pipeline::BakeSettings s = settings();
-  s.radiance_cache = true;
-  s.paths_per_iteration = 1024;  // nine iterations
-  auto full = pipeline::bake(scene, s, *ctx_);
-  ASSERT_TRUE(full) << full.status().to_string();
-  ASSERT_NE(full.value().features.find("radiance_cache"), std::string::npos);
+  for (const bool guiding : {false, true}) {
+    SCOPED_TRACE(guiding ? "guiding" : "radiance cache");
+    pipeline::BakeSettings s = settings();
+    s.radiance_cache = !guiding;
+    s.guiding = guiding;
+    s.paths_per_iteration = 1024;  // nine iterations
+    auto full = pipeline::bake(scene, s, *ctx_);
+    ASSERT_TRUE(full) << full.status().to_string();
+    ASSERT_NE(full.value().features.find(guiding ? "guiding" : "radiance_cache"),
+              std::string::npos);
 
-  std::vector<pipeline::BakeCheckpoint> checkpoints;
-  pipeline::BakeHooks hooks;
-  hooks.fingerprint = "cached";
-  hooks.checkpoint_interval_s = 1e-9;  // after every iteration
-  hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
-  ASSERT_TRUE(pipeline::bake(scene, s, *ctx_, hooks));
-  ASSERT_GE(checkpoints.size(), 4u);
-  const pipeline::BakeCheckpoint& mid = checkpoints[2];
-  ASSERT_EQ(mid.radiance_cache.size(), mid.mean.size());
-  EXPECT_TRUE(std::any_of(mid.radiance_cache.begin(), mid.radiance_cache.end(),
-                          [](const cl::float4& c) { return c.w >= 1.0f; }))
-      << "the feeders filled the cache";
+    std::vector<pipeline::BakeCheckpoint> checkpoints;
+    pipeline::BakeHooks hooks;
+    hooks.fingerprint = "learned";
+    hooks.checkpoint_interval_s = 1e-9;  // after every iteration
+    hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
+    ASSERT_TRUE(pipeline::bake(scene, s, *ctx_, hooks));
+    ASSERT_GE(checkpoints.size(), 6u);
+    // Past the first epoch of 16 samples per texel, so the guide is frozen.
+    const pipeline::BakeCheckpoint& mid = checkpoints[4];
+    if (guiding) {
+      ASSERT_EQ(mid.guide.size(), mid.mean.size() * pipeline::kGuideStride);
+      EXPECT_TRUE(std::any_of(mid.guide.begin(), mid.guide.end(), [](const cl::float4& h) {
+        return h.x > 0.0f;
+      })) << "the texels learned";
+    } else {
+      ASSERT_EQ(mid.radiance_cache.size(), mid.mean.size());
+      EXPECT_TRUE(std::any_of(mid.radiance_cache.begin(), mid.radiance_cache.end(),
+                              [](const cl::float4& c) { return c.w >= 1.0f; }))
+          << "the feeders filled the cache";
+    }
 
-  const std::string path = ::testing::TempDir() + "/luxel_cache.ckpt";
-  ASSERT_TRUE(pipeline::write_checkpoint(path, mid).is_ok());
-  auto loaded = pipeline::read_checkpoint(path);
-  ASSERT_TRUE(loaded) << loaded.status().to_string();
-  ASSERT_EQ(loaded.value().radiance_cache.size(), mid.radiance_cache.size());
-  pipeline::BakeHooks resume;
-  resume.fingerprint = "cached";
-  resume.resume = &loaded.value();
-  auto resumed = pipeline::bake(scene, s, *ctx_, resume);
-  ASSERT_TRUE(resumed) << resumed.status().to_string();
-  const auto& f = full.value().irradiance;
-  EXPECT_EQ(0, std::memcmp(f.data(), resumed.value().irradiance.data(), f.size() * 4))
-      << "a resumed cached bake must produce the same bits as an uninterrupted one";
+    const std::string path = ::testing::TempDir() + "/luxel_learned.ckpt";
+    ASSERT_TRUE(pipeline::write_checkpoint(path, mid).is_ok());
+    auto loaded = pipeline::read_checkpoint(path);
+    ASSERT_TRUE(loaded) << loaded.status().to_string();
+    ASSERT_EQ(loaded.value().radiance_cache.size(), mid.radiance_cache.size());
+    ASSERT_EQ(loaded.value().guide.size(), mid.guide.size());
+    pipeline::BakeHooks resume;
+    resume.fingerprint = "learned";
+    resume.resume = &loaded.value();
+    auto resumed = pipeline::bake(scene, s, *ctx_, resume);
+    ASSERT_TRUE(resumed) << resumed.status().to_string();
+    const auto& f = full.value().irradiance;
+    EXPECT_EQ(0, std::memcmp(f.data(), resumed.value().irradiance.data(), f.size() * 4))
+        << "a resumed bake must produce the same bits as an uninterrupted one";
 
-  pipeline::BakeCheckpoint emptied = loaded.value();
-  emptied.radiance_cache.clear();
-  resume.resume = &emptied;
-  auto refilled = pipeline::bake(scene, s, *ctx_, resume);
-  ASSERT_TRUE(refilled) << refilled.status().to_string();
-  EXPECT_NE(0, std::memcmp(f.data(), refilled.value().irradiance.data(), f.size() * 4));
+    pipeline::BakeCheckpoint emptied = loaded.value();
+    emptied.radiance_cache.clear();
+    emptied.guide.clear();
+    resume.resume = &emptied;
+    auto relearned = pipeline::bake(scene, s, *ctx_, resume);
+    ASSERT_TRUE(relearned) << relearned.status().to_string();
+    EXPECT_NE(0, std::memcmp(f.data(), relearned.value().irradiance.data(), f.size() * 4));
+  }
 }
 
 // Adaptive sampling: the allocation depends only on the texels' state and

@@ -129,7 +129,7 @@ TEST_F(TiledBakeTest, ResumeInALaterTileIsBitIdentical) {
       << refused.status().message();
 }
 
-// The radiance cache in tiles: a tile gathers only from its own texels
+// The radiance cache (and guiding) in tiles: a tile gathers only from its own texels
 // (the others' caches are not on the device), so a tiled cached bake has
 // other bits than an untiled one; resuming inside a later tile still gives
 // the uninterrupted tiled bake's bits (the checkpoint carries the current
@@ -138,6 +138,9 @@ TEST_F(TiledBakeTest, RadianceCacheTilesResumeBitIdentically) {
   const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
   pipeline::BakeSettings s = settings();
   s.radiance_cache = true;
+  s.guiding = true;  // its histograms are per texel too, checkpointed alike
+  s.encodings.names.clear();  // guiding is for irradiance lightmaps
+  s.samples_per_texel = 48;   // three guiding epochs
   auto untiled = pipeline::bake(scene, s, *ctx_);
   ASSERT_TRUE(untiled) << untiled.status().to_string();
   s.device_memory_budget_mib = tight_budget_mib(untiled.value());
@@ -148,7 +151,7 @@ TEST_F(TiledBakeTest, RadianceCacheTilesResumeBitIdentically) {
   hooks.on_checkpoint = [&](const pipeline::BakeCheckpoint& c) { checkpoints.push_back(c); };
   auto tiled = pipeline::bake(scene, s, *ctx_, hooks);
   ASSERT_TRUE(tiled) << tiled.status().to_string();
-  ASSERT_GE(tiled.value().tiles, 3u);
+  ASSERT_GE(tiled.value().tiles, 2u);
   const pipeline::BakeCheckpoint* pick = nullptr;
   for (const auto& c : checkpoints)
     if (!pick && !c.tile.empty() && c.tile[pipeline::kTileIndex] >= 1 && c.paths_done > 0 &&
@@ -157,6 +160,7 @@ TEST_F(TiledBakeTest, RadianceCacheTilesResumeBitIdentically) {
       pick = &c;
   ASSERT_NE(pick, nullptr) << "no checkpoint in a later tile with a filled cache";
   ASSERT_EQ(pick->radiance_cache.size(), pick->mean.size());
+  ASSERT_EQ(pick->guide.size(), pick->mean.size() * pipeline::kGuideStride);
   const std::string path = ::testing::TempDir() + "/luxel_tiled_cache.ckpt";
   ASSERT_TRUE(pipeline::write_checkpoint(path, *pick).is_ok());
   auto loaded = pipeline::read_checkpoint(path);
