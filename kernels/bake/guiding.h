@@ -21,7 +21,7 @@
  *   p(w) = cos / pi * m(w),   m(w) = (1 - a) + a 16 P_k(w),   a = LUX_GUIDE_SHARE,
  * and weighted cos / p = pi / m(w), so every direction keeps p > 0 where
  * cos > 0 and the estimate stays unbiased with any histogram; a bad one
- * costs at most 1 / (1 - a) = 2x variance. NEE at the texel point is MIS-
+ * costs at most 1 / (1 - a) = 4/3 the variance. NEE at the texel point is MIS-
  * weighted against the same p (lux_guide_factor in scatter.h), and so are
  * emitters and the sky that the first segment hits (path.throughput.w).
  *
@@ -79,8 +79,14 @@ inline uint lux_guide_seed(uint seed, uint index) {
   const uint e = lux_guide_epoch(index);
   return e == 0u ? seed : lux_hash_combine(seed, 0x9E3779B9u + e);
 }
-/* The guided strategy's share of the mixture. */
-#define LUX_GUIDE_SHARE 0.5f
+/* The guided strategy's share of the mixture. At 0.5 the Cornell box and
+ * the breakfast room came out worse at equal time than at 0.25
+ * (docs/accuracy.md "First-bounce guiding"). */
+#define LUX_GUIDE_SHARE 0.25f
+/* The first epoch that samples from the guide (from sample 32 on): a
+ * histogram of 16 samples is mostly noise, and its weights pi / m add
+ * variance. */
+#define LUX_GUIDE_FIRST_GUIDED_EPOCH 2u
 
 /* The histogram bin of a local direction (z up; z > 0). */
 inline uint lux_guide_bin(float3 w) {

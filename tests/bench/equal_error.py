@@ -19,6 +19,8 @@ Each configuration switches some of the features on over the configuration
   previous        the defaults with --denoise off --no-seam-stitch (the release before them)
   cache           the defaults with --radiance-cache
   cache_raw       the defaults with --radiance-cache --denoise off
+  guide, guide_raw  the defaults with --guiding (denoised, raw)
+  both, both_raw    the defaults with --radiance-cache --guiding (denoised, raw)
 
 Settings come from `luxel settings --json`, so the flags follow the schema; a
 configuration that needs a setting the binary lacks is reported as absent.
@@ -85,7 +87,12 @@ VARIANTS = {"oidn": ({"denoise"}, {"denoise": "oidn"}),
             # The radiance cache (kernels/bake/radiance_cache.h) over the
             # defaults, denoised and raw.
             "cache": (None, {"radiance_cache": True}),
-            "cache_raw": (None, {"denoise": "off", "radiance_cache": True})}
+            "cache_raw": (None, {"denoise": "off", "radiance_cache": True}),
+            # First-bounce guiding (kernels/bake/guiding.h), alone and with the cache.
+            "guide": (None, {"guiding": True}),
+            "guide_raw": (None, {"denoise": "off", "guiding": True}),
+            "both": (None, {"radiance_cache": True, "guiding": True}),
+            "both_raw": (None, {"denoise": "off", "radiance_cache": True, "guiding": True})}
 
 
 def configs(leave_one_out):

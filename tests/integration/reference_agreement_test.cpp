@@ -167,7 +167,7 @@ TEST_F(ReferenceAgreement, RadianceCacheAgreesWithReferenceWithinConfidenceBound
                    "bounces)");
 }
 
-// First-bounce guiding: 128 spp per texel reach the third epoch (samples
+// First-bounce guiding: 128 spp per texel reach the fourth epoch (samples
 // 32-63 sample from the first two epochs' histogram, 64-127 from three).
 TEST_F(ReferenceAgreement, GuidingAgreesWithReferenceWithinConfidenceBounds) {
   ASSERT_NE(guided_->engine.replicas[0].features.find("guiding"), std::string::npos);
