@@ -116,6 +116,13 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   uint64_t cap = std::min<uint64_t>(requested, iteration_path_cap(ctx.info().compute_units));
   if (settings.shard_samples() > 0)
     cap = std::min<uint64_t>(cap, uint64_t{settings.shard_samples()} * covered);
+  // The radiance cache and the guide learn between iterations: an automatic
+  // batch holds at most 16 samples per covered texel (at least 2^15 paths),
+  // so that a small lightmap's first iteration does not take most of the
+  // bake before either has learned anything.
+  if (settings.paths_per_iteration == 0 &&
+      (s.features.has(device::Feature::RADIANCE_CACHE) || s.features.has(device::Feature::GUIDING)))
+    cap = std::min<uint64_t>(cap, std::max<uint64_t>(uint64_t{1} << 15, 16 * covered));
   s.capacity = static_cast<size_t>(std::clamp<uint64_t>(cap, 1, kSlotMask));
 
   cl::LuxBakeParams& p = s.params;

@@ -37,6 +37,9 @@ source "$ROOT/tests/support/bpy-venv.sh"
 BPY_PY="$(bpy_venv_dir)/bin/python"
 PY=/usr/bin/python3          # Debian's python: numpy + OpenImageIO bindings
 RES=${PEER_RES:-64}
+# LUXEL_OPTS="--radiance-cache ...": extra options for both Luxel ladders (not
+# the reference, which stays the plain traced estimator).
+read -r -a luxel_opts <<< "${LUXEL_OPTS:-}"
 BOUNCES=${PEER_BOUNCES:-4}
 SKY=0.5,0.8,1.0              # constant sky radiance (W/m^2/sr) of the sky scenes
 
@@ -207,7 +210,7 @@ for spec in "${SCENES[@]}"; do
  "resolution": $res, "bounces": $BOUNCES,
  "ref_spp": $ref_spp, "luxel_ladder": $(json_list "$lux_ladder"),
  "blender_ladder": $(json_list "$bl_ladder"), "blender_hi": $bl_hi, "cpu_busy_before": $busy,
- "luxel_denoise": "default", "luxel_raw_ladder": "--denoise off"}
+ "luxel_denoise": "default", "luxel_raw_ladder": "--denoise off", "luxel_opts": "${LUXEL_OPTS:-}"}
 EOF
   echo "== $name: Luxel reference ($ref_spp spp, seed 1, --denoise off)"
   "$LUXEL" bake "$scene" --local --out "$d/luxel_ref" --resolution "$res" --samples "$ref_spp" \
@@ -220,7 +223,8 @@ EOF
     for spp in ${lux_ladder//,/ }; do
       t0=$(now)
       "$LUXEL" bake "$scene" --local --out "$d/$ladder/s$spp" --resolution "$res" --samples "$spp" \
-          --bounces "$BOUNCES" --seed 2 "${dnarg[@]}" "${skyarg[@]}" --quiet > "$d/$ladder/s$spp.log"
+          --bounces "$BOUNCES" --seed 2 "${dnarg[@]}" "${skyarg[@]}" "${luxel_opts[@]}" --quiet \
+          > "$d/$ladder/s$spp.log"
       elapsed "$t0" "$(now)" > "$d/$ladder/s$spp/wall_s.txt"
       echo "   $ladder $spp spp: $(grep '^baked' "$d/$ladder/s$spp.log" | cut -c12-60)$(grep -o 'denoised, [0-9.]* s' "$d/$ladder/s$spp.log" | sed 's/^/ + /') (process $(cat "$d/$ladder/s$spp/wall_s.txt") s)"
     done
