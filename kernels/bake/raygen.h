@@ -126,9 +126,8 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
 #if LUX_GUIDING
   /* This texel's learned first-bounce histogram (bake/guiding.h). */
   __global const float4* guide_h = guide + (size_t)slot * LUX_GUIDE_STRIDE;
-  const float guide_total = lux_guide_epoch(index) >= LUX_GUIDE_FIRST_GUIDED_EPOCH
-                                ? lux_guide_total(guide_h)
-                                : 0.0f;
+  const float guide_total =
+      lux_guide_epoch(index) >= LUX_GUIDE_FIRST_GUIDED_EPOCH ? lux_guide_total(guide_h) : 0.0f;
 #else
   __global const float4* guide_h = 0;
   const float guide_total = 0.0f;
