@@ -138,7 +138,7 @@ TEST_F(TiledBakeTest, RadianceCacheTilesResumeBitIdentically) {
   const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
   pipeline::BakeSettings s = settings();
   s.radiance_cache = true;
-  s.guiding = true;  // its histograms are per texel too, checkpointed alike
+  s.guiding = true;           // its histograms are per texel too, checkpointed alike
   s.encodings.names.clear();  // guiding is for irradiance lightmaps
   s.samples_per_texel = 48;   // three guiding epochs
   auto untiled = pipeline::bake(scene, s, *ctx_);
