@@ -87,8 +87,8 @@ class AdaptiveAllocationTest : public testing::DeviceTest<> {
     up(a.accum.m2, m2, "m2");
     up(a.accum.weight, weight, "weight");
     up(a.accum.spp, spp, "spp");
-    for (device::Buffer* b :
-         {&a.accum.nonfinite, &a.accum.stats, &a.accum.reference, &a.accum.radiance_cache})
+    for (device::Buffer* b : {&a.accum.nonfinite, &a.accum.stats, &a.accum.reference,
+                              &a.accum.radiance_cache, &a.accum.guide})
       placeholder(*b, 16, "unused");
     placeholder(a.paths.keys, kBatch * 4, "keys");
     for (device::Buffer* b :
