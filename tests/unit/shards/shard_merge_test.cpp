@@ -100,12 +100,66 @@ TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
   EXPECT_TRUE(c->basis_layout.empty());
   EXPECT_EQ(c->paths_done, 6u);
   EXPECT_EQ(c->mean[1].y, 6.0f);
-  // Written back, it is a version-4 file with the same state.
+  // Written back, it is a version-5 file with the same state.
   ASSERT_TRUE(pipeline::write_checkpoint(path, c.value()).is_ok());
   auto again = pipeline::read_checkpoint(path);
   ASSERT_TRUE(again) << again.status().to_string();
   EXPECT_EQ(again->shard_count, 1u);
   EXPECT_EQ(again->spp, c->spp);
+}
+
+// A version-4 checkpoint (before the radiance cache and guiding state)
+// still reads, with neither; a version-5 file keeps both, and one whose
+// cache does not match its texels is refused as corrupt.
+TEST(ShardCheckpoint, VersionFourFilesStillReadAndFiveKeepsTheLearnedState) {
+  std::string b = "LUXCKPT4";
+  auto pod = [&](const auto& v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  auto vec = [&](const auto& v) {
+    pod(static_cast<uint64_t>(v.size()));
+    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0]));
+  };
+  vec(std::string("fp"));
+  pod(uint32_t{2});
+  pod(uint32_t{1});
+  pod(uint64_t{6});  // paths
+  pod(uint32_t{3});  // iteration
+  pod(double{1.5});  // elapsed
+  pod(uint64_t{0});  // nonfinite
+  vec(std::vector<double>{});
+  vec(std::vector<cl::float4>{{1, 2, 3, 4}, {5, 6, 7, 8}});
+  vec(std::vector<cl::float4>{{0, 0, 0, 0}, {1, 1, 1, 1}});
+  vec(std::vector<cl::float2>{{3, 3}, {3, 3}});
+  vec(std::vector<uint32_t>{3, 3});
+  vec(std::vector<cl::float4>{});  // basis
+  vec(std::vector<double>{});      // tile
+  pod(uint32_t{0});                // shard index
+  pod(uint32_t{1});                // shard count
+  vec(std::vector<uint32_t>{});    // basis layout
+  b += Hasher().add(b).hex();
+  const std::string path = ::testing::TempDir() + "/shard_merge_v4.ckpt";
+  std::ofstream(path, std::ios::binary) << b;
+  auto c = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(c) << c.status().to_string();
+  EXPECT_EQ(c->mean[1].y, 6.0f);
+  EXPECT_TRUE(c->radiance_cache.empty());
+  EXPECT_TRUE(c->guide.empty());
+
+  pipeline::BakeCheckpoint k = c.value();
+  k.radiance_cache = {{0.5f, 0.5f, 0.5f, 3}, {0.25f, 0.25f, 0.25f, 2}};
+  k.guide.assign(2 * pipeline::kGuideStride, cl::float4{1, 2, 3, 4});
+  ASSERT_TRUE(pipeline::write_checkpoint(path, k).is_ok());
+  auto five = pipeline::read_checkpoint(path);
+  ASSERT_TRUE(five) << five.status().to_string();
+  ASSERT_EQ(five->radiance_cache.size(), 2u);
+  EXPECT_EQ(five->radiance_cache[1].w, 2.0f);
+  ASSERT_EQ(five->guide.size(), 2 * pipeline::kGuideStride);
+  EXPECT_EQ(five->guide[5].z, 3.0f);
+
+  k.radiance_cache.resize(1);
+  ASSERT_TRUE(pipeline::write_checkpoint(path, k).is_ok());
+  auto bad = pipeline::read_checkpoint(path);
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.status().code(), StatusCode::kDataLoss) << bad.status().to_string();
 }
 
 std::string error_of(const Status& s) {
