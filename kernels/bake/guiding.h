@@ -94,7 +94,11 @@ inline uint lux_guide_bin(float3 w) {
   float u2 = atan2(w.y, w.x) * (0.5f * LUX_INV_PI);
   if (u2 < 0.0f) u2 += 1.0f;
   u2 = clamp(u2, 0.0f, 0.99999994f);
-  return (uint)(u1 * LUX_GUIDE_SIDE) * LUX_GUIDE_SIDE + (uint)(u2 * LUX_GUIDE_SIDE);
+  /* A non-finite direction (a degenerate frame) must still name a bin: the
+   * index is written through in lux_guide_learn. */
+  if (!(u1 >= 0.0f && u2 >= 0.0f)) return 0u;
+  return min((uint)(u1 * LUX_GUIDE_SIDE), LUX_GUIDE_SIDE - 1u) * LUX_GUIDE_SIDE +
+         min((uint)(u2 * LUX_GUIDE_SIDE), LUX_GUIDE_SIDE - 1u);
 }
 
 inline float lux_guide_value(__global const float4* h, uint k) {
@@ -153,7 +157,9 @@ inline void lux_guide_learn(__global float4* h, __global const LuxPath* paths, u
     const LuxPath path = paths[p];
     if (lux_guide_epoch(path.sample_index) != epoch) continue; /* teaches nothing */
     const float e = (lux_luminance(path.radiance.xyz) - path.prev_normal.w) * LUX_INV_PI;
-    if (path.prev_pos.w >= 0.0f && isfinite(e) && e > 0.0f) current[(uint)path.prev_pos.w] += e;
+    if (path.prev_pos.w >= 0.0f && path.prev_pos.w < (float)LUX_GUIDE_BINS && isfinite(e) &&
+        e > 0.0f)
+      current[(uint)path.prev_pos.w] += e;
   }
   if (lux_guide_epoch(next) == epoch) return;
   for (uint i = 0; i < LUX_GUIDE_HALF; ++i) {
