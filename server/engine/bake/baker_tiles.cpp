@@ -114,16 +114,6 @@ void Baker::append_state(BakeCheckpoint& to, const BakeCheckpoint& from) {
   to.weight.insert(to.weight.end(), from.weight.begin(), from.weight.end());
   to.spp.insert(to.spp.end(), from.spp.begin(), from.spp.end());
   to.basis.insert(to.basis.end(), from.basis.begin(), from.basis.end());
-  // Finished tiles' caches are no longer read: zeros, so the slots line up.
-  if (!from.radiance_cache.empty()) {
-    to.radiance_cache.resize(to.mean.size() - from.mean.size(), cl::float4{});
-    to.radiance_cache.insert(to.radiance_cache.end(), from.radiance_cache.begin(),
-                             from.radiance_cache.end());
-  }
-  if (!from.guide.empty()) {
-    to.guide.resize((to.mean.size() - from.mean.size()) * kGuideStride, cl::float4{});
-    to.guide.insert(to.guide.end(), from.guide.begin(), from.guide.end());
-  }
 }
 
 BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti) {
@@ -146,9 +136,17 @@ BakeCheckpoint Baker::tiled_checkpoint(const BakeCheckpoint& current, size_t ti)
   c.weight.resize(n, cl::float2{});
   c.spp.resize(n, 0);
   c.basis.resize(n * stride, cl::float4{});
-  if (!c.radiance_cache.empty()) c.radiance_cache.resize(n, cl::float4{});
-  if (!c.guide.empty()) c.guide.resize(n * kGuideStride, cl::float4{});
   const Tile& t = plan_.tiles[ti];
+  // The learned state (radiance cache, guide) is the current tile's alone:
+  // finished tiles' is never read again, so it is neither kept nor stored
+  // (zeros there keep the slots aligned).
+  auto place = [&](std::vector<cl::float4>& to, const std::vector<cl::float4>& from, size_t k) {
+    if (from.empty()) return;
+    to.assign(n * k, cl::float4{});
+    std::copy(from.begin(), from.end(), to.begin() + static_cast<std::ptrdiff_t>(t.begin * k));
+  };
+  place(c.radiance_cache, current.radiance_cache, 1);
+  place(c.guide, current.guide, kGuideStride);
   c.tile.assign(kTileFields, 0.0);
   c.tile[kTileIndex] = static_cast<double>(ti);
   c.tile[kTileBegin] = static_cast<double>(t.begin);
@@ -210,6 +208,8 @@ Result<size_t> Baker::resume_tiles(const BakeCheckpoint& c, BakeResult& result) 
     BakeCheckpoint done = slice_checkpoint(c, 0, t.begin);
     done.nonfinite = static_cast<uint64_t>(c.tile[kTileDoneNonfinite]);
     write_state(s_, done, 0, result);
+    done.radiance_cache.clear();  // finished tiles' learned state is never read
+    done.guide.clear();
     if (keep_finished_) finished_ = std::move(done);
   }
   done_.slots = t.begin;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "post/denoise.h"
+#include "shards/checkpoint.h"
 
 namespace luxel::pipeline {
 
@@ -42,9 +43,12 @@ size_t largest_image_floats(const EncodingPlan& plan) {
   return f;
 }
 
-size_t state_bytes_per_slot(const EncodingPlan& plan) {
-  // BakeCheckpoint's per-slot arrays (shards/checkpoint.h).
-  return sizeof(cl::float4) * 2 + sizeof(cl::float2) + sizeof(uint32_t) + plan.bytes_per_texel();
+size_t state_bytes_per_slot(const EncodingPlan& plan, const BakeSettings& settings) {
+  // BakeCheckpoint's per-slot arrays (shards/checkpoint.h), with the
+  // radiance cache's mean and guiding's histograms where they may be on.
+  return sizeof(cl::float4) * 2 + sizeof(cl::float2) + sizeof(uint32_t) + plan.bytes_per_texel() +
+         (settings.radiance_cache ? sizeof(cl::float4) : 0) +
+         (settings.guiding ? kGuideStride * sizeof(cl::float4) : 0);
 }
 
 size_t HostMemoryEstimate::total() const {
@@ -103,13 +107,14 @@ Result<HostMemoryEstimate> estimate_host_memory(const ResourceEstimate& e,
   // Checkpoints and snapshots (a daemon's bakes) read a whole tile; a bake
   // without them or the denoiser's variances reads it in slices.
   const bool whole_tile = checkpoints || settings.sharded() || settings.denoise != Denoise::kOff;
-  h.tile_state =
-      (whole_tile ? tile_slots : std::min(tile_slots, kStateSliceSlots)) * state_bytes_per_slot(p);
+  h.tile_state = (whole_tile ? tile_slots : std::min(tile_slots, kStateSliceSlots)) *
+                 state_bytes_per_slot(p, settings);
   // Shards keep every tile's state for their accumulators; tiled bakes that
   // checkpoint keep the finished tiles' and assemble each checkpoint of the
   // whole atlas in the same arrays (baker_tiles.cpp, tiled_checkpoint).
   const bool tiled = tile_slots < c;
-  if (settings.sharded() || (tiled && checkpoints)) h.finished_state = c * state_bytes_per_slot(p);
+  if (settings.sharded() || (tiled && checkpoints))
+    h.finished_state = c * state_bytes_per_slot(p, settings);
   if (settings.denoise != Denoise::kOff) {
     // Guides (position, normal, chart), the filter's buffers, the variances
     // (Welford, two-point, the kept one) and the denoised map.

@@ -97,6 +97,20 @@ Verdict check(const pipeline::BakeResult& r, const std::function<double(uint32_t
   return v;
 }
 
+// E = pi Le sum_j rho^j, j = 0..B, everywhere in the Lambert furnace.
+double lambert_furnace_irradiance(float rho, float le, int bounces) {
+  double sum = 0;
+  for (int j = 0; j <= bounces; ++j) sum += std::pow(rho, j);
+  return M_PI * le * sum;
+}
+
+// Every texel at the constant e, and a 2 % error in e caught.
+void expect_constant_closed_form(const pipeline::BakeResult& r, double e) {
+  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
+  EXPECT_TRUE(check(r, expected(1.0)).ok());
+  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+}
+
 class ClosedFormTest : public testing::DeviceTest<> {
  protected:
   pipeline::BakeResult bake(const scene::Scene& s, const pipeline::BakeSettings& settings) {
@@ -311,10 +325,7 @@ TEST_F(ClosedFormTest, GuidedFurnaceBox) {
   auto r = bake(testing::furnace_box(a, le), st);
   ASSERT_GT(r.covered_texels, 300u);
   ASSERT_NE(r.features.find("guiding"), std::string::npos) << r.features;
-  const double e = M_PI * le * (1 - std::pow(a, bounces + 1)) / (1 - a);
-  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
-  EXPECT_TRUE(check(r, expected(1.0)).ok());
-  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  expect_constant_closed_form(r, lambert_furnace_irradiance(a, le, bounces));
   EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
 
@@ -402,12 +413,7 @@ TEST_F(ClosedFormTest, LambertFurnaceAtFourBounces) {
   const int bounces = 4;
   auto r = bake(testing::furnace_box(rho, le), settings(16, 256, bounces));
   ASSERT_GT(r.covered_texels, 100u);
-  double sum = 0;
-  for (int j = 0; j <= bounces; ++j) sum += std::pow(rho, j);
-  const double e = M_PI * le * sum;
-  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
-  EXPECT_TRUE(check(r, expected(1.0)).ok());
-  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  expect_constant_closed_form(r, lambert_furnace_irradiance(rho, le, bounces));
 }
 
 // The radiance cache (kernels/bake/radiance_cache.h) in the Lambert
@@ -431,12 +437,7 @@ TEST_F(ClosedFormTest, RadianceCacheKeepsTheBounceCountInTheFurnace) {
   st.radiance_cache = false;
   auto traced = bake(testing::furnace_box(rho, le), st);
   EXPECT_TRUE(r.irradiance != traced.irradiance);
-  double sum = 0;
-  for (int j = 0; j <= bounces; ++j) sum += std::pow(rho, j);
-  const double e = M_PI * le * sum;
-  auto expected = [&](double scale) { return [&, scale](uint32_t, int) { return scale * e; }; };
-  EXPECT_TRUE(check(r, expected(1.0)).ok());
-  EXPECT_FALSE(check(r, expected(1.02)).ok()) << "a 2 % error must be detected";
+  expect_constant_closed_form(r, lambert_furnace_irradiance(rho, le, bounces));
   EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
 

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <set>
 
 #include "bake/bake.h"
@@ -66,14 +67,18 @@ TEST(ShardSampleIndices, ShardsPartitionTheSequence) {
   for (uint32_t i = 0; i < 100; ++i) EXPECT_EQ(cl::lux_shard_sample_index(i, 0, 1), i);
 }
 
-// A version-3 checkpoint (before the shard fields) still reads: a whole
-// bake's state (shard 0 of 1) without an encoding layout.
-TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
-  std::string b = "LUXCKPT3";
-  auto pod = [&](const auto& v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };
+// The bytes of a checkpoint file of an older version: the fields every
+// version from 3 has (a 2x1 lightmap, two covered texels), `extra` (the
+// fields the version adds) and the checksum.
+std::string old_checkpoint(
+    const char* magic,
+    const std::function<void(const std::function<void(const void*, size_t)>&)>& extra = {}) {
+  std::string b = magic;
+  auto raw = [&](const void* p, size_t n) { b.append(static_cast<const char*>(p), n); };
+  auto pod = [&](const auto& v) { raw(&v, sizeof v); };
   auto vec = [&](const auto& v) {
     pod(static_cast<uint64_t>(v.size()));
-    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0]));
+    raw(v.data(), v.size() * sizeof(v[0]));
   };
   vec(std::string("fp"));
   pod(uint32_t{2});
@@ -87,9 +92,16 @@ TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
   vec(std::vector<cl::float4>{{0, 0, 0, 0}, {1, 1, 1, 1}});
   vec(std::vector<cl::float2>{{3, 3}, {3, 3}});
   vec(std::vector<uint32_t>{3, 3});
-  vec(std::vector<cl::float4>{});
-  vec(std::vector<double>{});
-  b += Hasher().add(b).hex();
+  vec(std::vector<cl::float4>{});  // basis
+  vec(std::vector<double>{});      // tile
+  if (extra) extra(raw);
+  return b + Hasher().add(b).hex();
+}
+
+// A version-3 checkpoint (before the shard fields) still reads: a whole
+// bake's state (shard 0 of 1) without an encoding layout.
+TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
+  const std::string b = old_checkpoint("LUXCKPT3");
   const std::string path = ::testing::TempDir() + "/shard_merge_v3.ckpt";
   std::ofstream(path, std::ios::binary) << b;
   auto c = pipeline::read_checkpoint(path);
@@ -112,30 +124,12 @@ TEST(ShardCheckpoint, VersionThreeFilesStillRead) {
 // still reads, with neither; a version-5 file keeps both, and one whose
 // cache does not match its texels is refused as corrupt.
 TEST(ShardCheckpoint, VersionFourFilesStillReadAndFiveKeepsTheLearnedState) {
-  std::string b = "LUXCKPT4";
-  auto pod = [&](const auto& v) { b.append(reinterpret_cast<const char*>(&v), sizeof v); };
-  auto vec = [&](const auto& v) {
-    pod(static_cast<uint64_t>(v.size()));
-    b.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(v[0]));
-  };
-  vec(std::string("fp"));
-  pod(uint32_t{2});
-  pod(uint32_t{1});
-  pod(uint64_t{6});  // paths
-  pod(uint32_t{3});  // iteration
-  pod(double{1.5});  // elapsed
-  pod(uint64_t{0});  // nonfinite
-  vec(std::vector<double>{});
-  vec(std::vector<cl::float4>{{1, 2, 3, 4}, {5, 6, 7, 8}});
-  vec(std::vector<cl::float4>{{0, 0, 0, 0}, {1, 1, 1, 1}});
-  vec(std::vector<cl::float2>{{3, 3}, {3, 3}});
-  vec(std::vector<uint32_t>{3, 3});
-  vec(std::vector<cl::float4>{});  // basis
-  vec(std::vector<double>{});      // tile
-  pod(uint32_t{0});                // shard index
-  pod(uint32_t{1});                // shard count
-  vec(std::vector<uint32_t>{});    // basis layout
-  b += Hasher().add(b).hex();
+  const std::string b = old_checkpoint("LUXCKPT4", [](const auto& raw) {
+    const uint32_t shard[2] = {0, 1};  // index, count
+    const uint64_t layout_entries = 0;
+    raw(shard, sizeof shard);
+    raw(&layout_entries, sizeof layout_entries);  // basis layout
+  });
   const std::string path = ::testing::TempDir() + "/shard_merge_v4.ckpt";
   std::ofstream(path, std::ios::binary) << b;
   auto c = pipeline::read_checkpoint(path);
