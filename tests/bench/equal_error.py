@@ -5,10 +5,12 @@
 Each configuration switches some of the features on over the configuration
 "before" (the engine's default before they existed):
 
-  before     --direct sampled, adaptive sampling off, --denoise off, seam stitching off
+  before     --direct sampled, adaptive sampling off, --denoise off, seam stitching off,
+             radiance cache off
   analytic   + analytic direct light with ratio-estimator shadows
   adaptive   + adaptive sampling
   denoise    + the a-trous denoiser (RMSE of irradiance_denoised.exr)
+  cache      + the radiance cache
   oidn       + Open Image Denoise's RTLightmap filter (irradiance_denoised.exr)
   all        every feature on (what the defaults are meant to be)
   all_but_X  (--leave-one-out) every feature but X
@@ -17,10 +19,10 @@ Each configuration switches some of the features on over the configuration
   default_atrous  the defaults with --denoise atrous
   default_oidn    the defaults with --denoise oidn
   previous        the defaults with --denoise off --no-seam-stitch (the release before them)
-  cache           the defaults with --radiance-cache
-  cache_raw       the defaults with --radiance-cache --denoise off
+  traced          the defaults with --no-radiance-cache (every path traced to its end)
+  traced_raw      the defaults with --no-radiance-cache --denoise off
   guide, guide_raw  the defaults with --guiding (denoised, raw)
-  both, both_raw    the defaults with --radiance-cache --guiding (denoised, raw)
+  guide_traced, guide_traced_raw  the defaults with --guiding --no-radiance-cache
 
 Settings come from `luxel settings --json`, so the flags follow the schema; a
 configuration that needs a setting the binary lacks is reported as absent.
@@ -70,6 +72,7 @@ FEATURES = {  # feature -> (setting name, value when on, value when off)
     "adaptive": ("adaptive", True, False),
     "denoise": ("denoise", "atrous", "off"),
     "stitch": ("seam_stitch", True, False),
+    "cache": ("radiance_cache", True, False),
 }
 SHARED = ["cornell_box.glb", "breakfast_room.glb", "sponza.glb", "gas_station.glb"]
 
@@ -84,15 +87,15 @@ VARIANTS = {"oidn": ({"denoise"}, {"denoise": "oidn"}),
             # The defaults of the release before denoise = auto and seam stitching
             # (the analytic estimator for punctual lights is today's non-negative one).
             "previous": (None, {"denoise": "off", "seam_stitch": False}),
-            # The radiance cache (kernels/bake/radiance_cache.h) over the
-            # defaults, denoised and raw.
-            "cache": (None, {"radiance_cache": True}),
-            "cache_raw": (None, {"denoise": "off", "radiance_cache": True}),
-            # First-bounce guiding (kernels/bake/guiding.h), alone and with the cache.
+            # The defaults without the radiance cache (kernels/bake/radiance_cache.h),
+            # denoised and raw: the default before the cache.
+            "traced": (None, {"radiance_cache": False}),
+            "traced_raw": (None, {"denoise": "off", "radiance_cache": False}),
+            # First-bounce guiding (kernels/bake/guiding.h), with the cache and without.
             "guide": (None, {"guiding": True}),
             "guide_raw": (None, {"denoise": "off", "guiding": True}),
-            "both": (None, {"radiance_cache": True, "guiding": True}),
-            "both_raw": (None, {"denoise": "off", "radiance_cache": True, "guiding": True})}
+            "guide_traced": (None, {"radiance_cache": False, "guiding": True}),
+            "guide_traced_raw": (None, {"denoise": "off", "radiance_cache": False, "guiding": True})}
 
 
 def configs(leave_one_out):

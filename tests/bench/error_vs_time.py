@@ -231,9 +231,19 @@ def bake(args, scene, out_dir, options, log_name="bake.log"):
     return True, "%.1f s wall" % wall
 
 
+def traced_options(luxel):
+    """Options that make a bake trace every path to its end: the radiance cache
+    (kernels/bake/radiance_cache.h) is consistent but biased at finite samples, so
+    references leave it out. Empty for a binary without it, or where it is off."""
+    r = subprocess.run([luxel, "settings", "--json"], capture_output=True, text=True, check=True)
+    cache = {s["name"]: s for s in json.loads(r.stdout)["settings"]}.get("radiance_cache")
+    return [cache["flag"]] if cache and cache["default"] else []
+
+
 def reference(args, name, scene, filt, version_number):
     """The cached reference bake for (scene, settings, filter); bakes it when absent."""
-    return reference_with(args, name, scene, filt, version_number, scene_lights(name))
+    return reference_with(args, name, scene, filt, version_number,
+                          scene_lights(name) + traced_options(args.luxel))
 
 
 def reference_with(args, name, scene, filt, version_number, options):

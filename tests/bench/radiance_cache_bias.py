@@ -73,13 +73,14 @@ def main(argv):
     m = re.search(r"(\d+\.\d+\.\d+)", machine["luxel_version"])
     version = m.group(1) if m else machine["luxel_version"]
     rows, failures = [], []
+    traced = evt.traced_options(args.luxel)
     t0 = time.monotonic()
     for name, path, res in ee.scene_list(args):
         print("\n== %s (%s, %d^2)" % (name, path, res), flush=True)
         a = argparse.Namespace(**vars(args))
         a.resolution = res
         ref_dir, ok, msg = evt.reference_with(a, name, path, "box", version,
-                                              ["--no-adaptive"] + ee.lights(name))
+                                              ["--no-adaptive"] + traced + ee.lights(name))
         if not ok:
             failures.append("%s: reference failed: %s" % (name, msg))
             continue
@@ -88,7 +89,7 @@ def main(argv):
         edge = ee.edge_mask(cov)
         classes = {"all": cov, "edges": edge, "interior": cov & ~edge}
         for spp in args.spp_list:
-            for cfg, extra in (("traced", []), ("cache", ["--radiance-cache"])):
+            for cfg, extra in (("traced", traced), ("cache", [])):
                 if cfg not in args.configs.split(","):
                     continue
                 per_seed = {k: [] for k in classes}

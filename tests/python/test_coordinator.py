@@ -33,9 +33,12 @@ from luxeld_process import Luxeld, free_loopback_port
 SCENES = pathlib.Path(os.environ.get("LUXEL_SCENES_DIR",
                                      pathlib.Path(__file__).resolve().parents[2] / "scenes"))
 CORNELL = SCENES / "cornell_box.gltf"
-# Uniform sampling (shards never sample adaptively), small batches so a bake
-# runs for a few seconds on PoCL and a fault can land in its middle.
+# Uniform sampling and every path traced (shards never sample adaptively nor
+# gather from the radiance cache: the one-machine reference does neither),
+# small batches so a bake runs for a few seconds on PoCL and a fault can land
+# in its middle.
 SETTINGS = dict(resolution=40, samples_per_texel=1024, paths_per_iteration=4096, adaptive=False,
+                radiance_cache=False,
                 max_bounces=2, snapshot_interval_s=0.2, progress_interval_s=0.1,
                 snapshot_format="exr")
 GRACE_S = 4

@@ -134,8 +134,9 @@ struct BakeSettings {
   // The radiance cache (kernels/bake/radiance_cache.h): first hits on
   // lightmapped diffuse surfaces gather from the cached irradiance of their
   // texel instead of tracing on, with a share that falls as n^-1/2 so the
-  // bake stays consistent. Off in sharded bakes and probe bakes.
-  bool radiance_cache = false;
+  // bake stays consistent. On by default (docs/performance.md "Radiance
+  // cache and first-bounce guiding"); off in sharded bakes and probe bakes.
+  bool radiance_cache = true;
   // First-bounce guiding (kernels/bake/guiding.h): each texel's first
   // direction comes from a one-sample mixture of the cosine lobe and a
   // histogram learned from its earlier paths. Irradiance lightmaps only

@@ -205,12 +205,12 @@ void add_bake_settings(std::vector<Setting>& t) {
                .help = "radiance cache: first hits on lightmapped diffuse surfaces take their "
                        "texel's cached irradiance instead of tracing on; its share falls with "
                        "the sample count, so the bake converges to the traced answer "
-                       "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes)",
-               .flag = "--radiance-cache",
-               .default_value = SettingValue::of(0),
-               .api_note = "unset means off",
-               LUXEL_BOOL(radiance_cache),
-               .describe_when = [](const BakeSettings& s) { return s.radiance_cache; }});
+                       "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes; "
+                       "--no-radiance-cache: every path traced to its end)",
+               .flag = "--no-radiance-cache",
+               .default_value = SettingValue::of(1),
+               .api_note = "unset: on (false is a value)",
+               LUXEL_BOOL(radiance_cache)});
   t.push_back({.name = "guiding",
                .type = Type::kBool,
                .units = "",

@@ -37,9 +37,12 @@ source "$ROOT/tests/support/bpy-venv.sh"
 BPY_PY="$(bpy_venv_dir)/bin/python"
 PY=/usr/bin/python3          # Debian's python: numpy + OpenImageIO bindings
 RES=${PEER_RES:-64}
-# LUXEL_OPTS="--radiance-cache ...": extra options for both Luxel ladders (not
-# the reference, which stays the plain traced estimator).
+# LUXEL_OPTS="--no-radiance-cache ...": extra options for both Luxel ladders
+# (not the reference, which traces every path: the radiance cache is
+# consistent but biased at finite samples).
 read -r -a luxel_opts <<< "${LUXEL_OPTS:-}"
+traced=()
+"$LUXEL" bake --help 2>&1 | grep -q -- --no-radiance-cache && traced=(--no-radiance-cache)
 BOUNCES=${PEER_BOUNCES:-4}
 SKY=0.5,0.8,1.0              # constant sky radiance (W/m^2/sr) of the sky scenes
 
@@ -212,9 +215,9 @@ for spec in "${SCENES[@]}"; do
  "blender_ladder": $(json_list "$bl_ladder"), "blender_hi": $bl_hi, "cpu_busy_before": $busy,
  "luxel_denoise": "default", "luxel_raw_ladder": "--denoise off", "luxel_opts": "${LUXEL_OPTS:-}"}
 EOF
-  echo "== $name: Luxel reference ($ref_spp spp, seed 1, --denoise off)"
+  echo "== $name: Luxel reference ($ref_spp spp, seed 1, --denoise off, every path traced)"
   "$LUXEL" bake "$scene" --local --out "$d/luxel_ref" --resolution "$res" --samples "$ref_spp" \
-      --bounces "$BOUNCES" --seed 1 --denoise off "${skyarg[@]}" --quiet | grep -E '^(lightmap|baked)' || true
+      --bounces "$BOUNCES" --seed 1 --denoise off "${traced[@]}" "${skyarg[@]}" --quiet | grep -E '^(lightmap|baked)' || true
   # two ladders, seed 2: Luxel as it ships (luxel/: its default denoiser) and
   # raw (luxel_raw/: --denoise off)
   for ladder in luxel luxel_raw; do

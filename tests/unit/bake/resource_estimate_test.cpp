@@ -182,8 +182,10 @@ TEST(ResourceEstimate, GaussianFilterStateThatCannotBeTiledIsRefused) {
   ASSERT_FALSE(gaussian);
   EXPECT_EQ(gaussian.status().code(), StatusCode::kResourceExhausted);
   EXPECT_TRUE(mentions(gaussian.status(), "settings.filter")) << gaussian.status().message();
-  // 57 bytes of texel state, 5 more with adaptive sampling's weight.
-  const std::string bytes = s.adaptive ? "x 62 bytes" : "x 57 bytes";
+  // 57 bytes of texel state, 5 more with adaptive sampling's weight and 16
+  // more with the radiance cache's mean.
+  const std::string bytes = strprintf("x %d bytes", 57 + (s.adaptive ? 5 : 0) +
+                                                        (s.radiance_cache ? 16 : 0));
   EXPECT_TRUE(mentions(gaussian.status(), "least 8388608 covered texels " + bytes))
       << gaussian.status().message();
   s.filter = pipeline::Filter::kBox;
@@ -224,7 +226,9 @@ TEST(ResourceEstimate, PerPathBytesMatchTheBakeBuffers) {
     EXPECT_GE(sort_delta, (c2 - c1) * scratch);
     EXPECT_LT(sort_delta, (c2 - c1) * (scratch + 1));  // + the histogram, small
     EXPECT_EQ(pipeline::texel_state_bytes(b.plan.bytes_per_texel(),
-                                          b.features.has(device::Feature::ADAPTIVE)),
+                                          b.features.has(device::Feature::ADAPTIVE),
+                                          b.features.has(device::Feature::RADIANCE_CACHE),
+                                          b.features.has(device::Feature::GUIDING)),
               pipeline::BakeBuffers::per_slot_bytes(b));
   }
 }

@@ -29,6 +29,7 @@ TEST(SettingsDescribe, Defaults) {
       {"max_bounces", "4"},
       {"max_resolution", "1024"},
       {"paths_per_iteration", "auto"},
+      {"radiance_cache", "on"},
       {"rr_depth", "3"},
       {"samples_per_texel", "256"},
       {"seam_stitch", "on"},
@@ -85,6 +86,8 @@ TEST(SettingsDescribe, EverySettingMoved) {
   s.dilation_texels = 0;
   s.denoise = Denoise::kAtrous;
   s.seam_stitch = false;
+  s.radiance_cache = false;
+  s.guiding = true;
   s.encodings.names = {"sh2", "sg9"};
   s.encodings.sg_sharpness = 4;
   s.encodings.solver = EncodingSolver::kProgressiveNonNegative;
@@ -122,6 +125,7 @@ TEST(SettingsDescribe, EverySettingMoved) {
       {"clamp_luminance", "10"},
       {"compaction", "off"},
       {"denoise", "atrous"},
+      {"guiding", "on"},
       {"device_memory_budget_mib", "512.5"},
       {"dilation_texels", "0"},
       {"direct", "sampled"},
@@ -138,6 +142,7 @@ TEST(SettingsDescribe, EverySettingMoved) {
       {"probe_sh_order", "1"},
       {"probe_window", "lanczos"},
       {"probes", "grid:0.5"},
+      {"radiance_cache", "off"},
       {"reference", "ref.exr"},
       {"max_resolution", "2048"},
       {"rr_depth", "5"},
@@ -194,10 +199,10 @@ TEST(SettingsDescribe, ShardEquirectSkyAndNodeProbes) {
 // The fingerprint of default settings is pinned: a change here orphans every
 // checkpoint on disk, so it must be deliberate. (Changed when the default
 // size became texel_density 40 on pages of max_resolution 1024 instead of
-// resolution 512: a default bake is another lightmap; and when seam_stitch
-// became on by default.)
+// resolution 512: a default bake is another lightmap; when seam_stitch
+// became on by default; and when the radiance cache did.)
 TEST(SettingsDescribe, DefaultFingerprintIsPinned) {
-  EXPECT_EQ(bake_fingerprint("scene", default_settings()), "35532d9dc446352fbfced363400e8163");
+  EXPECT_EQ(bake_fingerprint("scene", default_settings()), "0b91ed83cb83966d621255f8fa64a67b");
 }
 
 }  // namespace
