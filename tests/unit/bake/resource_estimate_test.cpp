@@ -184,8 +184,8 @@ TEST(ResourceEstimate, GaussianFilterStateThatCannotBeTiledIsRefused) {
   EXPECT_TRUE(mentions(gaussian.status(), "settings.filter")) << gaussian.status().message();
   // 57 bytes of texel state, 5 more with adaptive sampling's weight and 16
   // more with the radiance cache's mean.
-  const std::string bytes = strprintf("x %d bytes", 57 + (s.adaptive ? 5 : 0) +
-                                                        (s.radiance_cache ? 16 : 0));
+  const std::string bytes =
+      strprintf("x %d bytes", 57 + (s.adaptive ? 5 : 0) + (s.radiance_cache ? 16 : 0));
   EXPECT_TRUE(mentions(gaussian.status(), "least 8388608 covered texels " + bytes))
       << gaussian.status().message();
   s.filter = pipeline::Filter::kBox;
