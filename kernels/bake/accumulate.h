@@ -86,17 +86,24 @@ inline int lux_path_sample(__global const LuxPath* paths,
 
 #if LUX_RADIANCE_CACHE
 /* The texel's feeders (bake/radiance_cache.h): their irradiance without
- * the last bounce, into the cache's running mean. */
+ * what the cache leaves out (the light-sampled share of the direct light,
+ * the last bounce), into the cache's running mean. */
 inline void lux_feed_cache(__global const LuxPath* paths,
                            __global const LuxBasisSample* basis_samples, uint first, uint end,
                            float clamp_luminance, __global float4* cache, uint c) {
   for (uint p = first; p < end; ++p) {
     const LuxPath path = paths[p];
-    if (path.last_bounce.w == 0.0f) continue;
+    if (path.uncached.w == 0.0f) continue;
     float3 e, l, nee;
-    if (lux_path_sample_of(path.radiance.xyz - path.last_bounce.xyz, basis_samples, p,
-                           clamp_luminance, &e, &l, &nee))
+    if (lux_path_sample_of(path.radiance.xyz - path.uncached.xyz, basis_samples, p, clamp_luminance,
+                           &e, &l, &nee)) {
+#if LUX_BASIS
+      /* The texel point's light sample, kept apart from `radiance` in basis
+       * mode, is left out as in irradiance mode (resolve.h). */
+      e -= nee * fmax(basis_samples[p].nee_world.w, 0.0f);
+#endif
       lux_cache_add(cache, c, e);
+    }
   }
 }
 #endif

@@ -4,13 +4,25 @@
  * surface at x1 can stop there and take the light x1 reflects from the
  * irradiance that x1's texel has already gathered, instead of tracing on:
  *
- *   L_o(x1, wo) ~= A(wo) E(x1) / pi,
+ *   L_o(x1, wo) = L_light(x1, wo) + L_rest(x1, wo),
+ *   L_rest(x1, wo) ~= A(wo) E_rest(x1) / pi.
  *
- * exact for a Lambertian x1 (A = albedo) whose texel's irradiance is E(x1),
- * and the light arriving at x1 treated as uniform for the rest of the BSDF
- * (which is why only rough or mostly diffuse vertices gather). A(wo) is
- * estimated by the BSDF sample's own weight, E[f cos / p] = A(wo), so the
- * gather costs one BSDF sample and a texel read. Device only.
+ * L_light is a light sample at x1 itself with the full BSDF, MIS-weighted
+ * against the texel sensor's (unguided) density instead of the BSDF's
+ * (scatter.h, LUX_NEE_AT_PATH_END): the share of each light that light
+ * sampling carries best (small and distant lights, their shadow edges and
+ * highlights: the sharpest and most directional part of the light at x1)
+ * stays exact at the point. E_rest, the cached part, is x1's texel's
+ * irradiance without that share: its indirect light and the complementary,
+ * BSDF-sampled share of its direct light (large and near lights, where the
+ * light sample alone would have unbounded variance, e.g. a wall lit by the
+ * wall it meets). The two weights are one partition of unity, the sensor's
+ * power heuristic, so nothing is counted twice or lost. The gather is exact
+ * for a Lambertian x1 (A = albedo) whose texel's E_rest is E_rest(x1), with
+ * that light treated as uniform for the rest of the BSDF (which is why only
+ * rough or mostly diffuse vertices gather). A(wo) is estimated by the BSDF
+ * sample's own weight, E[f cos / p] = A(wo), so the gather costs one BSDF
+ * sample, a texel read and a shadow ray. Device only.
  *
  * What keeps the estimate honest:
  *  - No energy gain through feedback (the failure of bounce-from-the-
@@ -18,9 +30,11 @@
  *    lightmap. It is a running mean per covered texel, fed only by paths
  *    chosen before they start (feeders, chosen by an independent number,
  *    never by what the path finds, so the mean is not biased by the choice),
- *    which trace the whole path and never gather. Feeders leave out their
- *    last bounce (LuxPath.last_bounce): the cache holds E with at most
- *    max_bounces - 1 bounces, and a gather at the first hit adds one, so a
+ *    which trace the whole path and never gather. Feeders leave out the
+ *    light-sampled share of their direct light and their last bounce
+ *    (LuxPath.uncached, lux_cache_left_out): the cache holds 0 to
+ *    max_bounces - 1 bounces, the light sample at x1 adds the rest of x1's
+ *    direct light and the gather one bounce to the cached part, so a
  *    gathered path carries exactly the bounces of a traced one.
  *  - Only the first hit gathers, and only on the side the texel records
  *    (the front face: its lightmap normal), at a texel this bake (tile)
@@ -48,6 +62,7 @@
 #define LUXEL_BAKE_RADIANCE_CACHE_H
 
 #include "bake/path.h"
+#include "bake/scatter.h"
 #include "shading/bsdf.h"
 #include "shared/bake.h"
 #include "shared/geometry.h"
@@ -71,6 +86,39 @@
 /* The dimension of the role's independent number (lux_independent_1d),
  * apart from the sequence's vertex dimensions. */
 #define LUX_DIM_CACHE_ROLE 0x0CAC4Eu
+
+/* The weight of an emissive triangle's light that a path found (along
+ * `dir`, after `depth` bounces, with MIS weight w; light_pdf: the light
+ * sampler's density of that direction, 0 where a light sample cannot reach
+ * it) that the cache leaves out:
+ *  - the last bounce, all of it: a gather adds one bounce;
+ *  - what the texel's first segment finds, all but its BSDF-sampling
+ *    share: the gather's light sample of an emissive triangle is weighted
+ *    against the sensor's unguided density (scatter.h,
+ *    LUX_NEE_AT_PATH_END), so the cache keeps the complement,
+ *    power(p_sensor, p_light), whatever density (guided or not) drew the
+ *    direction and whatever MIS weight the texel itself gave it (analytic
+ *    lights: 0). The texel point's own light sample is left out whole
+ *    (raygen.h, resolve.h).
+ *  - nothing else. */
+inline float lux_cache_left_out(uint depth, uint max_bounces, float w, float light_pdf, float3 dir,
+                                float3 sensor_normal) {
+  if (depth == max_bounces) return w;
+  if (depth != 0u) return 0.0f;
+  const float cos_s = dot(normalize(dir), sensor_normal);
+  const float kept =
+      light_pdf > 0.0f ? lux_power_heuristic(LUX_SENSOR_PDF(fmax(cos_s, 0.0f)), light_pdf) : 1.0f;
+  return w - kept;
+}
+
+/* The same for the sky: its direct light is left out whole, since the
+ * gather's light sample takes all of it (weight 1: no distance, so no
+ * corner where light sampling alone fails), exact at the hit point; a
+ * share cached from texel averages carried the windows' light patterns
+ * into gathers (docs/accuracy.md "Radiance cache"). */
+inline float lux_cache_sky_left_out(uint depth, uint max_bounces, float w) {
+  return depth == 0u || depth == max_bounces ? w : 0.0f;
+}
 
 /* Whether the path with sample index `index` of its texel feeds the cache
  * (traces everything, never gathers). */
@@ -119,12 +167,13 @@ inline int lux_cache_lookup(LuxBakeParams params, __global const LuxSurfaceTri* 
   return 1;
 }
 
-/* Adds one feeder's sample (irradiance with at most max_bounces - 1
- * bounces) to its texel's running mean: xyz = mean, w = samples. */
+/* Adds one feeder's sample (its irradiance without what
+ * lux_cache_left_out leaves out) to its texel's running mean: xyz = mean,
+ * w = samples. */
 inline void lux_cache_add(__global float4* cache, uint slot, float3 e) {
   float4 c = cache[slot];
   c.w += 1.0f;
-  /* radiance - last_bounce can round a hair below 0. */
+  /* radiance - uncached can round a hair below 0. */
   c.xyz += (fmax(e, (float3)(0.0f)) - c.xyz) / c.w;
   cache[slot] = c;
 }

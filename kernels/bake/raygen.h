@@ -113,9 +113,9 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
 #endif
   path.pad = (uint)tri;
   path.radiance = (float4)(0.0f);
-  path.last_bounce = (float4)(0.0f);
+  path.uncached = (float4)(0.0f);
 #if LUX_RADIANCE_CACHE
-  path.last_bounce.w = lux_cache_feeds(index, seed) ? 1.0f : 0.0f;
+  path.uncached.w = lux_cache_feeds(index, seed) ? 1.0f : 0.0f;
 #endif
   path.prev_pos = (float4)(s.p, 0.0f);
   path.prev_normal = (float4)(s.ns, 0.0f);
@@ -138,9 +138,9 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   int analytic_sample;
   float3 analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &s,
-                 1, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f), (float3)(1.0f), index,
-                 dim, seed, guide_h, guide_total, &shadow, &contribution, &analytic_sample,
-                 &analytic_e);
+                 LUX_NEE_AT_SENSOR, &unused_bsdf, t, b, s.ns, (float3)(0.0f, 0.0f, 1.0f),
+                 (float3)(1.0f), index, dim, seed, guide_h, guide_total, &shadow, &contribution,
+                 &analytic_sample, &analytic_e);
 #if LUX_DIRECT_ANALYTIC
 #if LUX_BASIS
 #error "LUX_DIRECT_ANALYTIC is for irradiance lightmaps only"
@@ -169,7 +169,13 @@ inline void lux_raygen(uint gid, LUX_STAGE_PARAMS(raygen)) {
   (void)analytic_e;
 #endif
   shadow_rays[gid] = shadow;
+#if LUX_RADIANCE_CACHE
+  /* w = 1: the texel point's light sample, which the radiance cache leaves
+   * out (resolve.h, bake/radiance_cache.h). */
+  shadow_contrib[gid] = (float4)(contribution, 1.0f);
+#else
   shadow_contrib[gid] = (float4)(contribution, 0.0f);
+#endif
 
   /* First segment about the shading normal: cosine-weighted (weight pi) for
    * irradiance, uniform (weight 1, radiance) for directional encodings. A

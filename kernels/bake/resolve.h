@@ -14,10 +14,10 @@ inline void lux_resolve_shadows(uint j, LUX_STAGE_PARAMS(resolve_shadows)) {
   const float4 c = shadow_contrib[slot];
   if (c.x == 0.0f && c.y == 0.0f && c.z == 0.0f) return;
 #if LUX_RADIANCE_CACHE
-  /* c.w = 1: the light sample of a path's last bounce (shade.h), which the
-   * radiance cache leaves out. */
+  /* c.w = 1: a light sample the radiance cache leaves out, the texel
+   * point's (raygen.h) or a path's last bounce's (shade.h). */
   paths[slot].radiance.xyz += c.xyz;
-  if (c.w > 0.0f) paths[slot].last_bounce.xyz += c.xyz;
+  if (c.w > 0.0f) paths[slot].uncached.xyz += c.xyz;
 #else
   paths[slot].radiance += c;
 #endif

@@ -58,14 +58,28 @@ inline LuxRay lux_make_ray(float3 org, float3 dir, float tmax) {
   return r;
 }
 
-/* Next-event estimation from surface s. `sensor`: vertex 0 (f = 1, cosine
- * pdf, times the first-bounce guide's factor when `guide` is not null:
- * bake/guiding.h). Otherwise the material's BSDF in the local frame
- * (t, b, n), wo local. Writes the shadow ray and its unoccluded
- * contribution (throughput applied). */
+/* Where next-event estimation happens (lux_next_event's `at`):
+ *  - LUX_NEE_AT_VERTEX: a path vertex whose BSDF-sampled extension follows,
+ *    so light samples are MIS-weighted against the BSDF's density (§5.1);
+ *  - LUX_NEE_AT_SENSOR: the texel point (f = 1, cosine pdf, times the
+ *    first-bounce guide's factor when `guide` is not null: bake/guiding.h);
+ *  - LUX_NEE_AT_PATH_END: the radiance cache's gather (bake/radiance_cache.h),
+ *    where the path ends: no BSDF-sampled hit follows. The share of an
+ *    emissive triangle's light that BSDF sampling would carry comes from
+ *    the cache, which holds it as the texel sensor's first segments found
+ *    it, so the light sample of a triangle is weighted against the sensor's
+ *    density (unguided), the complement of the cached share, whatever the
+ *    BSDF here; the sky's light is all the light sample's (weight 1). */
+#define LUX_NEE_AT_VERTEX 0
+#define LUX_NEE_AT_SENSOR 1
+#define LUX_NEE_AT_PATH_END 2
+
+/* Next-event estimation from surface s, at the sensor or at a vertex with
+ * the material's BSDF in the local frame (t, b, n), wo local. Writes the
+ * shadow ray and its unoccluded contribution (throughput applied). */
 inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
                                LUX_GROUP_PARAMS(in, textures) LUX_GROUP_PARAMS(in, lights),
-                           const LuxSurface* s, int sensor, const LuxBsdf* bsdf, float3 t, float3 b,
+                           const LuxSurface* s, int at, const LuxBsdf* bsdf, float3 t, float3 b,
                            float3 n, float3 wo_local, float3 throughput, uint index, uint dim,
                            uint seed, __global const float4* guide, float guide_total,
                            LuxRay* shadow_ray, float3* contribution, int* analytic_sample,
@@ -75,6 +89,7 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
   *analytic_sample = 0;
   *analytic_e = (float3)(0.0f);
 #if LUX_NEE
+  const int sensor = at == LUX_NEE_AT_SENSOR;
   if (params.light_count == 0u) return;
   const float u_sel = lux_sample_1d(index, dim + LUX_DIM_LIGHT_SELECT, seed);
   const float2 u_pt = lux_sample_2d(index, dim + LUX_DIM_LIGHT_POINT, seed);
@@ -151,7 +166,15 @@ inline void lux_next_event(LuxBakeParams params LUX_GROUP_PARAMS(in, scene)
    * sky); the sun disc and punctual lights are NEE-only with weight 1. */
   const int mis = !ls.is_delta && ls.mis && !*analytic_sample;
   float3 f_weighted;
-  if (sensor) {
+  if (at == LUX_NEE_AT_PATH_END) {
+    /* Emissive triangles share with the cache; the sky it leaves out whole
+     * (bake/radiance_cache.h). */
+    const float w =
+        mis && isfinite(ls.dist) ? lux_power_heuristic(ls.pdf, LUX_SENSOR_PDF(cos_i)) : 1.0f;
+    f_weighted = (float3)(0.0f);
+    for (int layer = 0; layer < 2; ++layer)
+      f_weighted += lux_bsdf_eval_layer(bsdf, layer, wo_local, wi_local) * w;
+  } else if (sensor) {
     float p_sensor = LUX_SENSOR_PDF(cos_i);
 #if LUX_GUIDING
     if (guide) p_sensor *= lux_guide_factor(guide, guide_total, wi_local);

@@ -49,7 +49,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
                                 dir, path.prev_normal.xyz));
     path.radiance.xyz += throughput * l * w;
 #if LUX_RADIANCE_CACHE
-    if (path.depth == params.max_bounces) path.last_bounce.xyz += throughput * l * w;
+    path.uncached.xyz += throughput * l * lux_cache_sky_left_out(path.depth, params.max_bounces, w);
 #endif
 #endif
     path.alive = 0u;
@@ -73,10 +73,12 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
     if (m.emissive_tex.texture >= 0)
       le *= lux_texture_slot_sample(texels, textures, m.emissive_tex, s.uv, s.uv1).xyz;
 #endif
-    float w = 1.0f;
-    if (prev_pdf > 0.0f && s.light >= 0)
-      w = lux_power_heuristic(prev_pdf, lux_light_pdf_triangle(lights, light_select, s.light,
-                                                               path.prev_pos.xyz, s.p, s.ng_front));
+    float w = 1.0f, light_pdf = 0.0f;
+    if (prev_pdf > 0.0f && s.light >= 0) {
+      light_pdf =
+          lux_light_pdf_triangle(lights, light_select, s.light, path.prev_pos.xyz, s.p, s.ng_front);
+      w = lux_power_heuristic(prev_pdf, light_pdf);
+    }
 #if LUX_DIRECT_ANALYTIC
     /* The texel point's light sample carries this emitter alone, with MIS
      * weight 1 (scatter.h, raygen.h): its first segment must not count it
@@ -88,7 +90,9 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
 #endif
     path.radiance.xyz += throughput * le * w;
 #if LUX_RADIANCE_CACHE
-    if (path.depth == params.max_bounces) path.last_bounce.xyz += throughput * le * w;
+    path.uncached.xyz +=
+        throughput * le *
+        lux_cache_left_out(path.depth, params.max_bounces, w, light_pdf, dir, path.prev_normal.xyz);
 #endif
   }
 #endif
@@ -141,16 +145,28 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   float pdf;
   const int layer = lux_bsdf_sample(&bsdf, wo_local, u_layer, u_dir, &wi_local, &bsdf_weight, &pdf);
 
+  LuxRay shadow;
+  float3 contribution;
+  int unused_analytic;
+  float3 unused_analytic_e;
 #if LUX_RADIANCE_CACHE
-  /* Final gather at the first hit (bake/radiance_cache.h): the BSDF
-   * sample's weight estimates A(wo), the hit texel's cached mean E; the
-   * gather replaces this vertex's light sample and everything after it. A
-   * failed sample (weight 0) gathers nothing, as it would trace nothing. */
-  if (path.depth == 1u && path.last_bounce.w == 0.0f && dot(wo, s.ng_front) > 0.0f &&
+  /* Final gather at the first hit (bake/radiance_cache.h): a light sample
+   * at the hit itself, weighted against the sensor's density (the path
+   * ends here), and what the hit reflects of the rest of the irradiance its
+   * texel has cached, A(wo) E / pi, with A(wo) estimated by the BSDF
+   * sample's weight. A failed BSDF sample (weight 0) gathers nothing from
+   * the cache, as it would trace nothing. */
+  if (path.depth == 1u && path.uncached.w == 0.0f && dot(wo, s.ng_front) > 0.0f &&
       lux_cache_gathers_at(&bsdf)) {
     float3 e;
     if (lux_cache_lookup(params, tris, atlas_uvs, covered, radiance_cache, hit.prim, hit.u, hit.v,
                          hit.t, &e)) {
+      lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
+                     &sf, LUX_NEE_AT_PATH_END, &bsdf, t, b, sf.ns, wo_local, throughput,
+                     path.sample_index, dim, path.seed, 0, 0.0f, &shadow, &contribution,
+                     &unused_analytic, &unused_analytic_e);
+      shadow_rays[slot] = shadow;
+      shadow_contrib[slot] = (float4)(contribution, 0.0f);
       if (layer >= 0 && lux_finite3(bsdf_weight))
         path.radiance.xyz += throughput * bsdf_weight * e * LUX_INV_PI;
       path.alive = 0u;
@@ -161,16 +177,14 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   }
 #endif
 
-  LuxRay shadow;
-  float3 contribution;
-  int unused_analytic;
-  float3 unused_analytic_e;
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
-                 0, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index, dim, path.seed, 0,
-                 0.0f, &shadow, &contribution, &unused_analytic, &unused_analytic_e);
+                 LUX_NEE_AT_VERTEX, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index,
+                 dim, path.seed, 0, 0.0f, &shadow, &contribution, &unused_analytic,
+                 &unused_analytic_e);
   shadow_rays[slot] = shadow;
 #if LUX_RADIANCE_CACHE
-  /* w = 1 marks the last bounce's light sample for resolve_shadows. */
+  /* w = 1 marks the last bounce's light sample, which the cache leaves
+   * out (resolve_shadows). */
   shadow_contrib[slot] = (float4)(contribution, path.depth == params.max_bounces ? 1.0f : 0.0f);
 #else
   shadow_contrib[slot] = (float4)(contribution, 0.0f);

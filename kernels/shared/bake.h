@@ -90,17 +90,19 @@ typedef struct LuxMaterial {
  *                  (MIS of an escaping ray against the sky's pdf); w: with
  *                  guiding, the luminance of the texel point's light sample
  *                  (set at the first hit), which the guide leaves out
- *   last_bounce:   with the radiance cache (kernels/bake/radiance_cache.h):
- *                  rgb = the part of `radiance` that went max_bounces
- *                  bounces, which the cache leaves out; w = 1 for a path
- *                  that feeds the cache, 0 for one that may gather. Unused
- *                  (zero) without it. */
+ *   uncached:      with the radiance cache (kernels/bake/radiance_cache.h):
+ *                  rgb = the part of `radiance` the cache leaves out: the
+ *                  light-sampled share of the direct light and the light
+ *                  that went max_bounces bounces (lux_cache_left_out; it
+ *                  can be negative); w = 1 for a path that feeds the
+ *                  cache, 0 for one that may gather. Unused (zero) without
+ *                  it. */
 typedef struct LuxPath {
   float4 throughput;
   float4 radiance;
   float4 prev_pos;
   float4 prev_normal;
-  float4 last_bounce;
+  float4 uncached;
   uint texel;
   uint sample_index; /* index into the texel's progressive sequence (§6.2) */
   uint seed;         /* per-texel decorrelation seed */

@@ -52,6 +52,7 @@ def parse_args(argv):
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--paths-per-iteration", type=int, default=65536)
     p.add_argument("--device", default=None)
+    p.add_argument("--luxel-opts", default="", help="more bake options for both configs, e.g. --no-seam-stitch")
     a = p.parse_args(argv)
     a.out = pathlib.Path(a.out)
     a.reference_cache = pathlib.Path(a.reference_cache) if a.reference_cache else a.out / "references"
@@ -97,7 +98,7 @@ def main(argv):
                     d = args.out / name / ("%s_%d_s%d" % (cfg, spp, k))
                     opts = ["--samples", str(spp), "--seed", str(args.seed + k), "--no-adaptive",
                             "--denoise", "off", "--paths-per-iteration", str(args.paths_per_iteration)]
-                    ok, msg = evt.bake(a, path, d, opts + extra + ee.lights(name))
+                    ok, msg = evt.bake(a, path, d, opts + args.luxel_opts.split() + extra + ee.lights(name))
                     if not ok:
                         failures.append("%s/%s/%d: %s" % (name, cfg, spp, msg))
                         continue

@@ -202,9 +202,10 @@ void add_bake_settings(std::vector<Setting>& t) {
   t.push_back({.name = "radiance_cache",
                .type = Type::kBool,
                .units = "",
-               .help = "radiance cache: first hits on lightmapped diffuse surfaces take their "
-                       "texel's cached irradiance instead of tracing on; its share falls with "
-                       "the sample count, so the bake converges to the traced answer "
+               .help = "radiance cache: first hits on lightmapped diffuse surfaces sample "
+                       "their direct light and take their texel's cached indirect irradiance "
+                       "instead of tracing on; its share falls with the sample count, so the "
+                       "bake converges to the traced answer "
                        "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes; "
                        "--no-radiance-cache: every path traced to its end)",
                .flag = "--no-radiance-cache",

@@ -418,18 +418,21 @@ TEST_F(ClosedFormTest, LambertFurnaceAtFourBounces) {
 
 // The radiance cache (kernels/bake/radiance_cache.h) in the Lambert
 // furnace: the irradiance is the same everywhere, so the cache's texel
-// averaging costs nothing here and only its bounce accounting shows. A cache
-// that kept the feeders' last bounce would add rho^(B+1) (+10 % here); one
-// fed by gathering paths would climb towards pi Le / (1 - rho) (+49 %); one
-// that lost a bounce, -10 %.
+// averaging costs nothing here and only its accounting shows. Gathers carry
+// a third of the irradiance here. Injected through LUXEL_KERNEL_DIR, each of
+// these fails: a cache that keeps the feeders' direct light (counted twice,
+// +11 %), a gather whose light sample keeps its MIS weight although no
+// BSDF-sampled hit follows (-8 %), a gather that adds nothing (-34 %).
 TEST_F(ClosedFormTest, RadianceCacheKeepsTheBounceCountInTheFurnace) {
   const float le = 0.25f, rho = 0.8f;
   const int bounces = 4;
-  auto st = settings(16, 256, bounces);
+  // 64^2: a texel is 1/11 of a wall, so most first hits lie beyond the
+  // corner rule's 8 texel sizes and gather (at 16^2 almost none did).
+  auto st = settings(64, 64, bounces);
   st.radiance_cache = true;
   st.adaptive = false;
   // Many iterations: shade reads the cache as the iterations before left it.
-  st.paths_per_iteration = 4096;
+  st.paths_per_iteration = 1u << 15;
   auto r = bake(testing::furnace_box(rho, le), st);
   ASSERT_GT(r.covered_texels, 100u);
   ASSERT_NE(r.features.find("radiance_cache"), std::string::npos) << r.features;
