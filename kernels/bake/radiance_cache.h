@@ -90,7 +90,7 @@
 /* The weight of an emissive triangle's light that a path found (along
  * `dir`, after `depth` bounces, with MIS weight w; light_pdf: the light
  * sampler's density of that direction, 0 where a light sample cannot reach
- * it) that the cache leaves out:
+ * it; dir unit) that the cache leaves out:
  *  - the last bounce, all of it: a gather adds one bounce;
  *  - what the texel's first segment finds, all but its BSDF-sampling
  *    share: the gather's light sample of an emissive triangle is weighted
@@ -105,7 +105,7 @@ inline float lux_cache_left_out(uint depth, uint max_bounces, float w, float lig
                                 float3 sensor_normal) {
   if (depth == max_bounces) return w;
   if (depth != 0u) return 0.0f;
-  const float cos_s = dot(normalize(dir), sensor_normal);
+  const float cos_s = dot(dir, sensor_normal);
   const float kept =
       light_pdf > 0.0f ? lux_power_heuristic(LUX_SENSOR_PDF(fmax(cos_s, 0.0f)), light_pdf) : 1.0f;
   return w - kept;

@@ -92,7 +92,7 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
 #if LUX_RADIANCE_CACHE
     path.uncached.xyz +=
         throughput * le *
-        lux_cache_left_out(path.depth, params.max_bounces, w, light_pdf, dir, path.prev_normal.xyz);
+        lux_cache_left_out(path.depth, params.max_bounces, w, light_pdf, -wo, path.prev_normal.xyz);
 #endif
   }
 #endif
@@ -145,47 +145,42 @@ inline void lux_shade(uint j, LUX_STAGE_PARAMS(shade)) {
   float pdf;
   const int layer = lux_bsdf_sample(&bsdf, wo_local, u_layer, u_dir, &wi_local, &bsdf_weight, &pdf);
 
+#if LUX_RADIANCE_CACHE
+  /* Final gather at the first hit (bake/radiance_cache.h): the light
+   * sample here is weighted against the sensor's density (the path ends
+   * here), and the hit reflects the rest of the irradiance its texel has
+   * cached, A(wo) E / pi, with A(wo) estimated by the BSDF sample's weight.
+   * A failed BSDF sample (weight 0) gathers nothing from the cache, as it
+   * would trace nothing. */
+  float3 e;
+  const int gather = path.depth == 1u && path.uncached.w == 0.0f && dot(wo, s.ng_front) > 0.0f &&
+                     lux_cache_gathers_at(&bsdf) &&
+                     lux_cache_lookup(params, tris, atlas_uvs, covered, radiance_cache, hit.prim,
+                                      hit.u, hit.v, hit.t, &e);
+#else
+  const int gather = 0;
+#endif
   LuxRay shadow;
   float3 contribution;
   int unused_analytic;
   float3 unused_analytic_e;
-#if LUX_RADIANCE_CACHE
-  /* Final gather at the first hit (bake/radiance_cache.h): a light sample
-   * at the hit itself, weighted against the sensor's density (the path
-   * ends here), and what the hit reflects of the rest of the irradiance its
-   * texel has cached, A(wo) E / pi, with A(wo) estimated by the BSDF
-   * sample's weight. A failed BSDF sample (weight 0) gathers nothing from
-   * the cache, as it would trace nothing. */
-  if (path.depth == 1u && path.uncached.w == 0.0f && dot(wo, s.ng_front) > 0.0f &&
-      lux_cache_gathers_at(&bsdf)) {
-    float3 e;
-    if (lux_cache_lookup(params, tris, atlas_uvs, covered, radiance_cache, hit.prim, hit.u, hit.v,
-                         hit.t, &e)) {
-      lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights),
-                     &sf, LUX_NEE_AT_PATH_END, &bsdf, t, b, sf.ns, wo_local, throughput,
-                     path.sample_index, dim, path.seed, 0, 0.0f, &shadow, &contribution,
-                     &unused_analytic, &unused_analytic_e);
-      shadow_rays[slot] = shadow;
-      shadow_contrib[slot] = (float4)(contribution, 0.0f);
-      if (layer >= 0 && lux_finite3(bsdf_weight))
-        path.radiance.xyz += throughput * bsdf_weight * e * LUX_INV_PI;
-      path.alive = 0u;
-      paths[slot] = path;
-      rays[slot] = lux_no_ray();
-      return;
-    }
-  }
-#endif
-
   lux_next_event(params LUX_GROUP_ARGS(scene) LUX_GROUP_ARGS(textures) LUX_GROUP_ARGS(lights), &sf,
-                 LUX_NEE_AT_VERTEX, &bsdf, t, b, sf.ns, wo_local, throughput, path.sample_index,
-                 dim, path.seed, 0, 0.0f, &shadow, &contribution, &unused_analytic,
-                 &unused_analytic_e);
+                 gather ? LUX_NEE_AT_PATH_END : LUX_NEE_AT_VERTEX, &bsdf, t, b, sf.ns, wo_local,
+                 throughput, path.sample_index, dim, path.seed, 0, 0.0f, &shadow, &contribution,
+                 &unused_analytic, &unused_analytic_e);
   shadow_rays[slot] = shadow;
 #if LUX_RADIANCE_CACHE
   /* w = 1 marks the last bounce's light sample, which the cache leaves
    * out (resolve_shadows). */
   shadow_contrib[slot] = (float4)(contribution, path.depth == params.max_bounces ? 1.0f : 0.0f);
+  if (gather) {
+    if (layer >= 0 && lux_finite3(bsdf_weight))
+      path.radiance.xyz += throughput * bsdf_weight * e * LUX_INV_PI;
+    path.alive = 0u;
+    paths[slot] = path;
+    rays[slot] = lux_no_ray();
+    return;
+  }
 #else
   shadow_contrib[slot] = (float4)(contribution, 0.0f);
 #endif

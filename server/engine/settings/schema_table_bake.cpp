@@ -203,7 +203,7 @@ void add_bake_settings(std::vector<Setting>& t) {
                .type = Type::kBool,
                .units = "",
                .help = "radiance cache: first hits on lightmapped diffuse surfaces sample "
-                       "their direct light and take their texel's cached indirect irradiance "
+                       "their lights and take the rest of their texel's cached irradiance "
                        "instead of tracing on; its share falls with the sample count, so the "
                        "bake converges to the traced answer "
                        "(docs/accuracy.md \"Radiance cache\"; off in sharded bakes; "

@@ -420,9 +420,10 @@ TEST_F(ClosedFormTest, LambertFurnaceAtFourBounces) {
 // furnace: the irradiance is the same everywhere, so the cache's texel
 // averaging costs nothing here and only its accounting shows. Gathers carry
 // a third of the irradiance here. Injected through LUXEL_KERNEL_DIR, each of
-// these fails: a cache that keeps the feeders' direct light (counted twice,
-// +11 %), a gather whose light sample keeps its MIS weight although no
-// BSDF-sampled hit follows (-8 %), a gather that adds nothing (-34 %).
+// these fails: a cache that keeps the feeders' light-sampled share of the
+// direct light (counted twice, +3.8 %), a gather light sample of weight 1
+// although the cache keeps the BSDF-sampled share (+7.7 %), a gather that
+// adds nothing from the cache (-34 %).
 TEST_F(ClosedFormTest, RadianceCacheKeepsTheBounceCountInTheFurnace) {
   const float le = 0.25f, rho = 0.8f;
   const int bounces = 4;
