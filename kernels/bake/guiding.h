@@ -138,8 +138,9 @@ inline float3 lux_guide_sample(__global const float4* h, float total, float u_s,
   while (k > 0u && !(lux_guide_value(h, k) > 0.0f)) --k;
   const float u1 = ((float)(k / LUX_GUIDE_SIDE) + u.x) * (1.0f / LUX_GUIDE_SIDE);
   const float u2 = ((float)(k % LUX_GUIDE_SIDE) + u.y) * (1.0f / LUX_GUIDE_SIDE);
-  const float r = sqrt(u1), phi = 2.0f * M_PI_F * u2;
-  return (float3)(r * cos(phi), r * sin(phi), sqrt(fmax(0.0f, 1.0f - u1)));
+  const float r = sqrt(u1);
+  const float2 cs = lux_cos_sin_2pi(u2);
+  return (float3)(r * cs.x, r * cs.y, sqrt(fmax(0.0f, 1.0f - u1)));
 }
 
 /* One texel's learning after an iteration (accumulate.h): its own paths

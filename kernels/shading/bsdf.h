@@ -209,8 +209,8 @@ inline float3 lux_ggx_ms_sample(float roughness, float u_row, float2 u) {
   const float xa = (float)i / n, xb = (float)(i + 1) / n;
   const float mu = sqrt(mix(xa * xa * xa * xa, xb * xb * xb * xb, s));
   const float sin_theta = sqrt(fmax(0.0f, 1.0f - mu * mu));
-  const float phi = 2.0f * LUX_PI * u.y;
-  return (float3)(sin_theta * cos(phi), sin_theta * sin(phi), mu);
+  const float2 cs = lux_cos_sin_2pi(u.y);
+  return (float3)(sin_theta * cs.x, sin_theta * cs.y, mu);
 }
 
 #endif /* LUX_SPECULAR */
@@ -312,10 +312,10 @@ inline float3 lux_ggx_sample_vndf(float3 wo, float alpha, float2 u) {
       len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) * rsqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
   const float3 t2 = cross(vh, t1);
   const float r = sqrt(u.x);
-  const float phi = 2.0f * LUX_PI * u.y;
-  const float p1 = r * cos(phi);
+  const float2 cs = lux_cos_sin_2pi(u.y);
+  const float p1 = r * cs.x;
   const float s = 0.5f * (1.0f + vh.z);
-  const float p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * r * sin(phi);
+  const float p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * r * cs.y;
   const float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
   return normalize((float3)(alpha * nh.x, alpha * nh.y, fmax(nh.z, 0.0f)));
 }

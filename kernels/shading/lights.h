@@ -47,11 +47,10 @@ typedef struct LuxLightSample {
 inline float3 lux_lights_uniform_cone(float2 u, float one_minus_cos, float3 axis) {
   const float h = u.x * one_minus_cos; /* 1 - cos(theta), uniform */
   const float sin_t = sqrt(max(h * (2.0f - h), 0.0f));
-  const float phi = 2.0f * M_PI_F * u.y;
+  const float2 cs = lux_cos_sin_2pi(u.y);
   float3 t, b;
   lux_onb(axis, &t, &b);
-  return normalize(
-      lux_to_world((float3)(cos(phi) * sin_t, sin(phi) * sin_t, 1.0f - h), t, b, axis));
+  return normalize(lux_to_world((float3)(cs.x * sin_t, cs.y * sin_t, 1.0f - h), t, b, axis));
 }
 
 /* ---- Sky mapping (shared/light.h, EQUIRECT MAPPING). ---- */
@@ -306,10 +305,12 @@ inline int lux_lights_sample_sky(const LuxSky sky, const __global float* sky_tex
   if (sky.kind == LUX_SKY_KIND_IMAGE) {
     float pdf_st;
     const float2 st = lux_sky_sample_st(sky, sky_block_cdfs, sky_texel_cdfs, n, u, &pdf_st);
-    const float theta = M_PI_F * st.y, phi = 2.0f * M_PI_F * (st.x - 0.5f);
-    const float sin_t = sin(theta);
+    /* theta = pi st.y, phi = 2 pi (st.x - 1/2), through sinpi/cospi
+     * (sampling/warp.h, lux_cos_sin_2pi). */
+    const float sin_t = sinpi(st.y);
     if (!(pdf_st > 0.0f) || !(sin_t > 0.0f)) return 0;
-    s->wi = lux_sky_to_world(sky, (float3)(sin_t * sin(phi), cos(theta), -sin_t * cos(phi)));
+    const float2 cs_phi = lux_cos_sin_2pi(st.x - 0.5f);
+    s->wi = lux_sky_to_world(sky, (float3)(sin_t * cs_phi.y, cospi(st.y), -sin_t * cs_phi.x));
     s->pdf = pdf_st / (2.0f * M_PI_F * M_PI_F * sin_t);
     s->radiance = lux_sky_texel(sky, sky_texels, st);
     return 1;

@@ -1,12 +1,16 @@
 // bench_bake: throughput of the bake engine.
 //
-//   bench_bake [--spp N] [--resolution N] [--quick] [SCENE...]
+//   bench_bake [--spp N] [--resolution N] [--quick] [--kernels N] [--default-only]
+//              [SCENE...]
 //   bench_bake --memory ENCODINGS [--budget MIB] [--spp N] [--resolution N] [SCENE...]
 //
 // --memory: one bake per scene with the directional encodings given
 // (comma-separated, e.g. sg12) under the device-memory budget (default: the
 // engine's), 1 bounce; prints time, peak device memory, tiles and the
 // host's peak resident memory. No files are written.
+//
+// --kernels N: each row names its N largest kernels (default 4).
+// --default-only: only the default configuration's row.
 //
 // For each scene, in one run on one device:
 //  1. paths/s and the per-kernel breakdown at 1 and 4 bounces through each
@@ -32,6 +36,9 @@ using namespace luxel;
 
 namespace {
 
+// How many of the largest kernels a row names (--kernels N).
+size_t g_top_kernels = 4;
+
 struct Run {
   double seconds = 0, mpaths_per_s = 0, kernel_ms = 0;
   size_t device_mib = 0;
@@ -56,7 +63,7 @@ Run bake_once(const scene::Scene& s, pipeline::BakeSettings st, device::Context&
   auto kernels = r.value().kernel_ms;
   std::sort(kernels.begin(), kernels.end(), [](auto& a, auto& b) { return a.second > b.second; });
   for (const auto& k : kernels) run.kernel_ms += k.second;
-  for (size_t i = 0; i < kernels.size() && i < 4; ++i)
+  for (size_t i = 0; i < kernels.size() && i < g_top_kernels; ++i)
     run.top_kernels += strprintf("%s%s %.0f%%", i ? ", " : "", kernels[i].first.c_str(),
                                  100.0 * kernels[i].second / run.kernel_ms);
   return run;
@@ -67,7 +74,7 @@ Run bake_once(const scene::Scene& s, pipeline::BakeSettings st, device::Context&
 int main(int argc, char** argv) {
   uint32_t spp = 16;
   int resolution = 256;
-  bool quick = false;
+  bool quick = false, default_only = false;
   std::string memory_encodings;
   double budget_mib = 0;
   std::vector<std::string> scenes;
@@ -77,6 +84,10 @@ int main(int argc, char** argv) {
       spp = static_cast<uint32_t>(std::atoi(argv[++i]));
     else if (a == "--resolution" && i + 1 < argc)
       resolution = std::atoi(argv[++i]);
+    else if (a == "--kernels" && i + 1 < argc)
+      g_top_kernels = static_cast<size_t>(std::atoi(argv[++i]));
+    else if (a == "--default-only")
+      default_only = true;
     else if (a == "--quick")
       quick = true;
     else if (a == "--memory" && i + 1 < argc)
@@ -144,6 +155,10 @@ int main(int argc, char** argv) {
       std::printf("  %-28s %9.2f %9.3f %10.0f %8zu  %s\n", name.c_str(), r.seconds, r.mpaths_per_s,
                   r.kernel_ms, r.device_mib, r.top_kernels.c_str());
     };
+    if (default_only) {
+      row("bounces 4 (default)", bake_once(s.value(), base, *ctx.value()));
+      continue;
+    }
     // Both ray-query backends side by side (accel/intersector.h); the rows
     // below use the default (auto: Embree on a CPU device).
     for (int bounces : {1, 4}) {

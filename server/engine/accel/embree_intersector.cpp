@@ -61,6 +61,7 @@ Status EmbreeIntersector::run(const char* name, const device::Buffer& rays,
     LUXEL_RETURN_IF_ERROR(n.status());
     count = *n.as<int>();
   }
+  host_count_ = std::min(static_cast<size_t>(std::max(count, 0)), capacity);
   const auto t0 = std::chrono::steady_clock::now();
   if (count > 0) {
     const size_t live = std::min(static_cast<size_t>(count), capacity);

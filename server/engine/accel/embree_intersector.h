@@ -26,6 +26,7 @@ class EmbreeIntersector final : public Intersector {
   Status any_indexed(const device::Buffer& rays, const device::Buffer& indices,
                      const device::Buffer& ray_count, uint32_t index_mask,
                      const device::Buffer& occluded, size_t capacity) override;
+  std::optional<size_t> host_count() const override { return host_count_; }
 
  private:
   EmbreeIntersector(device::Context& ctx) : ctx_(ctx) {}
@@ -37,6 +38,7 @@ class EmbreeIntersector final : public Intersector {
   device::Context& ctx_;
   std::unique_ptr<EmbreeTracer> tracer_;
   device::FeatureSet features_;
+  std::optional<size_t> host_count_;
 };
 
 }  // namespace luxel::accel

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "accel/bvh_builder.h"
@@ -44,6 +45,13 @@ class Intersector {
   virtual Status any_indexed(const device::Buffer& rays, const device::Buffer& indices,
                              const device::Buffer& ray_count, uint32_t index_mask,
                              const device::Buffer& occluded, size_t capacity) = 0;
+
+  // The live count the last query read on the host (at most its capacity),
+  // for backends that read it there anyway (Embree, before it traces); none
+  // when it stayed on the device. The stage after a query can then launch
+  // over the live paths instead of the list's capacity: the work-items past
+  // the count only return, which cost 1-2 % of a PoCL bake.
+  virtual std::optional<size_t> host_count() const { return std::nullopt; }
 };
 
 // kAuto: Embree on CPU devices, OpenCL on the others. `bvh` must outlive the

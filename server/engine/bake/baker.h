@@ -67,6 +67,7 @@ class Baker {
     LUXEL_RETURN_IF_ERROR(kernels_.bind(k, b_.args()));
     return ctx_.launch(kernels_[k], global, local);
   }
+  size_t live_items() const;
   Status plan_memory();
   // false: a stop was requested mid-iteration and the iteration was given
   // up before its accumulation (iteration_stops.h).

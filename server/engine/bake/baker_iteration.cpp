@@ -17,7 +17,14 @@ Status Baker::trace_shadows(bool texel_point) {
   LUXEL_RETURN_IF_ERROR(s_.tracer->any_indexed(g.shadow_rays, *live.active, *live.count, kSlotMask,
                                                g.occluded, s_.capacity));
   return launch(texel_point ? BakeKernel::resolve_texel_shadows : BakeKernel::resolve_shadows,
-                s_.capacity);
+                live_items());
+}
+
+// Work-items for the stage after a ray query: the live paths when the
+// intersector read their count on the host, else the list's capacity (the
+// kernels return past the count on the device).
+size_t Baker::live_items() const {
+  return s_.tracer->host_count().value_or(s_.capacity);
 }
 
 Result<bool> Baker::stop_point() {
@@ -125,7 +132,7 @@ Result<bool> Baker::run_iteration(uint32_t batch) {
   // 4. Primary rays + NEE at the texel point.
   a.live = {&b_.active_a, &b_.path_count};
   const device::Buffer* spare = &b_.active_b;
-  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::raygen, cap));
+  LUXEL_RETURN_IF_ERROR(launch(BakeKernel::raygen, batch));  // returns past the batch
   LUXEL_STOP_POINT();
   auto sort_by_direction = [&] {
     return sort_->enqueue(*a.live.active, device::Buffer(), *a.live.count, cap, kTagShift, 32);
@@ -139,7 +146,7 @@ Result<bool> Baker::run_iteration(uint32_t batch) {
     LUXEL_RETURN_IF_ERROR(s_.tracer->closest_indexed(a.paths.rays, *a.live.active, *a.live.count,
                                                      kSlotMask, a.paths.hits, cap));
     LUXEL_STOP_POINT();
-    LUXEL_RETURN_IF_ERROR(launch(BakeKernel::shade, cap));
+    LUXEL_RETURN_IF_ERROR(launch(BakeKernel::shade, live_items()));
     LUXEL_STOP_POINT();
     if (bounce == settings_.max_bounces) break;  // vertices past the limit only add emission
     if (nee) LUXEL_RETURN_IF_ERROR(trace_shadows(/*texel_point=*/false));
