@@ -4,17 +4,22 @@
 // and after, the most negative value, and the solve's CPU seconds.
 //   bench_seam_stitch SCENE DIR [--lambda L] [--padding P] [--tolerance T] [--points N]
 //                     [--min-edge TEXELS] [--min-chart TEXELS] [--clamp 0|1]
-//                     [--sigmas Z] [--rel-gap G] [--noise 0|1] [--write OUT.exr]
+//                     [--sigmas Z] [--rel-gap G] [--noise 0|1] [--pool 0|1]
+//                     [--write OUT.exr]
 // The defaults are the bake's: sample points whose gap exceeds Z standard
 // deviations (from DIR/rel_error.exr) and G times the sides' mean are left out
 // (SeamStitchOptions::structure_sigmas); --noise 0 stitches every point (as
-// before that rule). --write saves the stitched map (to compare
+// before that rule); --pool 0 bounds each texel's move by its own standard
+// error instead of the pooled one (SeamStitchOptions::pool_move_sigmas).
+// Also prints how far the stitch moved the covered texels (RMS over them and
+// the channels). --write saves the stitched map (to compare
 // option choices against a reference without re-baking). SEAM_DEBUG=1 also
 // prints every 20th-part seam with its values, every stitched seam (those
 // the narrow-chart rule keeps) and the seams around the lowest texel.
 #include "output/seam_stitch.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -54,6 +59,7 @@ int main(int argc, char** argv) {
     if (a == "--rel-gap") o.structure_rel_gap = v;
     if (a == "--move") o.max_move_sigmas = v;
     if (a == "--noise") noise_bound = v != 0;
+    if (a == "--pool") o.pool_move_sigmas = v != 0;
   }
   auto scene = scene::import_gltf_file(argv[1]);
   if (!scene) return std::fprintf(stderr, "%s\n", scene.status().to_string().c_str()), 1;
@@ -98,6 +104,7 @@ int main(int argc, char** argv) {
         std::printf("stitched: chart %.2f A (%.2f,%.2f)-(%.2f,%.2f) | B (%.2f,%.2f)-(%.2f,%.2f)\n",
                     e.chart_texels, e.a0.x, e.a0.y, e.a1.x, e.a1.y, e.b0.x, e.b0.y, e.b1.x, e.b1.y);
   }
+  const std::vector<float> unstitched = im.pixels;
   const std::clock_t c1 = std::clock();
   const output::SeamStitcher st(im.width, im.height, edges, coverage, o);
   const auto before = st.measure(im.pixels, 4, 0, 3);
@@ -105,6 +112,14 @@ int main(int argc, char** argv) {
   const int it = st.stitch(im.pixels, 4, 0, 3, clamp, rel_error, &structural);
   const double stitch_s = double(std::clock() - c1) / CLOCKS_PER_SEC;
   const auto after = st.measure(im.pixels, 4, 0, 3);
+  double moved_sq = 0;
+  size_t moved_n = 0;
+  for (size_t t = 0; t < im.texel_count(); ++t)
+    if (coverage[t] > 0)
+      for (int c = 0; c < 3; ++c, ++moved_n)
+        moved_sq += std::pow(double(im.pixels[t * 4 + c]) - unstitched[t * 4 + c], 2);
+  std::printf("moved: RMS %.4g over %zu covered texel channels\n",
+              moved_n ? std::sqrt(moved_sq / moved_n) : 0.0, moved_n);
   float lowest = 0;
   size_t negative = 0;
   for (size_t t = 0; t < im.texel_count(); ++t)

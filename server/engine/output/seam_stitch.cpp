@@ -166,14 +166,7 @@ std::vector<uint8_t> SeamStitcher::noise_rows(const std::vector<float>& pixels, 
                                               size_t& structural) const {
   std::vector<uint8_t> on(rows_.size(), 1);
   if (rel_error.empty()) return on;
-  auto rms = [&](uint32_t u) {
-    double sq = 0;
-    for (int ch = first; ch < first + count; ++ch) {
-      const double v = pixels[size_t(texels_[u]) * size_t(stride) + ch];
-      sq += v * v;
-    }
-    return std::sqrt(sq / count);
-  };
+  auto rms = [&](uint32_t u) { return texel_rms(pixels, stride, first, count, u); };
   for (size_t i = 0; i < rows_.size(); ++i) {
     const Row& row = rows_[i];
     double sigma[8] = {}, pad_sigma = 0;
@@ -244,18 +237,7 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
   // freely but for the range below.
   constexpr double kInf = std::numeric_limits<double>::infinity();
   std::vector<double> reach(n, kInf);
-  if (!rel_error.empty())
-    for (size_t u = 0; u < n; ++u) {
-      const double rel = rel_error[texels_[u]];
-      if (!covered_[u] || !std::isfinite(rel)) continue;
-      double sq = 0;
-      for (int ch = first; ch < first + count; ++ch) {
-        const double v = pixels[size_t(texels_[u]) * size_t(stride) + ch];
-        sq += v * v;
-      }
-      const double m = options_.max_move_sigmas * std::max(0.0, rel) * std::sqrt(sq / count);
-      if (std::isfinite(m)) reach[u] = m;
-    }
+  if (!rel_error.empty()) reach = move_reach(pixels, stride, first, count, rel_error, plain);
   std::vector<int> most(threads, 0);
   auto work = [&](int t) {
     std::vector<double> x0(n), lo(n), hi(n), delta(n), r(n), z(n), p(n), q(n);
@@ -286,6 +268,67 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
   work(0);
   for (auto& th : pool) th.join();
   return *std::max_element(most.begin(), most.end());
+}
+
+// How far each covered texel may move: max_move_sigmas standard errors of
+// its mean (infinite without an estimate). The standard error of a texel is
+// its relative error times its RMS over the stitched channels; with
+// pool_move_sigmas it is pooled (RMS) over the covered texels that the
+// texel's kept sample points read, both sides of the seam. At a few samples
+// per texel a texel's own estimate follows its value: one that drew a bright
+// path has a wide spread, one that drew none almost none. Own errors then let
+// the bright side of a seam fall further than the dark side rises, and the
+// stitch darkens the seams of a noisy map on average.
+std::vector<double> SeamStitcher::move_reach(const std::vector<float>& pixels, int stride,
+                                             int first, int count,
+                                             const std::vector<float>& rel_error,
+                                             const Weights& w) const {
+  const size_t n = texels_.size();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  std::vector<double> var(n, -1.0);  // own standard error squared; < 0: none
+  for (size_t u = 0; u < n; ++u) {
+    const double rel = rel_error[texels_[u]];
+    if (!covered_[u] || !std::isfinite(rel)) continue;
+    const double sigma = std::max(0.0, rel) * texel_rms(pixels, stride, first, count, u);
+    if (std::isfinite(sigma)) var[u] = sigma * sigma;
+  }
+  std::vector<double> pooled(var);
+  if (options_.pool_move_sigmas) {
+    std::vector<double> sum(n, 0.0);
+    std::vector<uint32_t> rows(n, 0);
+    for (size_t i = 0; i < rows_.size(); ++i) {
+      if (!w.on(static_cast<uint32_t>(i))) continue;
+      const Row& row = rows_[i];
+      double s = 0;
+      int m = 0;
+      for (int k = 0; k < row.n; ++k)
+        if (var[row.unknown[k]] >= 0) {
+          s += var[row.unknown[k]];
+          ++m;
+        }
+      if (m == 0) continue;
+      for (int k = 0; k < row.n; ++k) {
+        sum[row.unknown[k]] += s / m;
+        ++rows[row.unknown[k]];
+      }
+    }
+    for (size_t u = 0; u < n; ++u)
+      if (var[u] >= 0 && rows[u] > 0) pooled[u] = sum[u] / rows[u];
+  }
+  std::vector<double> reach(n, kInf);
+  for (size_t u = 0; u < n; ++u)
+    if (pooled[u] >= 0) reach[u] = options_.max_move_sigmas * std::sqrt(pooled[u]);
+  return reach;
+}
+
+double SeamStitcher::texel_rms(const std::vector<float>& pixels, int stride, int first, int count,
+                               uint32_t u) const {
+  double sq = 0;
+  for (int ch = first; ch < first + count; ++ch) {
+    const double v = pixels[size_t(texels_[u]) * size_t(stride) + ch];
+    sq += v * v;
+  }
+  return std::sqrt(sq / count);
 }
 
 // Padding stays within the range of the baked texels its (kept) sample

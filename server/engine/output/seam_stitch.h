@@ -82,6 +82,10 @@ struct SeamStitchOptions {
   // errors of its mean: a converged map keeps its baked texels (the stitch
   // then moves padding), a noisy one is stitched as before.
   double max_move_sigmas = 1;
+  // That standard error pooled over the texels the texel's sample points
+  // read (both sides of the seam) rather than the texel's own, so both sides
+  // of a seam may move alike (SeamStitcher::move_reach).
+  bool pool_move_sigmas = true;
 };
 
 // Size of the difference between the two sides' bilinear values over all
@@ -151,6 +155,10 @@ class SeamStitcher {
                                   size_t& structural) const;
   void apply(const Component& c, const Weights& w, const std::vector<double>& x,
              std::vector<double>& y) const;
+  std::vector<double> move_reach(const std::vector<float>& pixels, int stride, int first, int count,
+                                 const std::vector<float>& rel_error, const Weights& w) const;
+  double texel_rms(const std::vector<float>& pixels, int stride, int first, int count,
+                   uint32_t u) const;
   void padding_range(const std::vector<double>& x0, std::vector<double>& lo,
                      std::vector<double>& hi) const;
   int pin_to_bounds(const Weights& base, const std::vector<double>& x0,

@@ -122,6 +122,7 @@ std::string BakeSeamStitch::manifest_json() const {
                       {"narrow_chart_edges_skipped", narrow_chart_edges_},
                       {"min_chart_texels", o.min_chart_texels},
                       {"max_move_sigmas", o.max_move_sigmas},
+                      {"pool_move_sigmas", o.pool_move_sigmas},
                       {"structure_sigmas", o.structure_sigmas},
                       {"structure_rel_gap", o.structure_rel_gap},
                       {"structural_points_skipped", structural_points_},
