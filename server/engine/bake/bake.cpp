@@ -116,7 +116,7 @@ Result<Termination> Baker::run_tile(size_t ti, bool load) {
   if (tiled() && settings_.time_budget_s > 0)
     tile_settings.time_budget_s = settings_.time_budget_s * static_cast<double>(tile.end) /
                                   static_cast<double>(s_.info.covered_texels.size());
-  const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin);
+  const BakePolicy tile_policy(tile_settings, hooks, tile.end - tile.begin, s_.grow_batches);
   progressive_.reset();
   if (load) {
     LUXEL_RETURN_IF_ERROR(b_.load_tile(ctx_, s_, tile.begin, tile.end));

@@ -22,18 +22,25 @@ const char* termination_name(Termination t) {
 }
 
 BakePolicy::BakePolicy(const BakeSettings& settings, const BakeHooks& hooks,
-                       uint64_t covered_texels)
+                       uint64_t covered_texels, bool grow_batches)
     : settings_(settings),
       snapshot_interval_s_(hooks.snapshot_interval_s),
       checkpoint_interval_s_(hooks.checkpoint_interval_s),
       snapshots_(static_cast<bool>(hooks.on_snapshot) && hooks.snapshot_interval_s > 0),
       checkpoints_(static_cast<bool>(hooks.on_checkpoint)),
       target_paths_(
-          settings.shard_samples() > 0 ? uint64_t{settings.shard_samples()} * covered_texels : 0) {}
+          settings.shard_samples() > 0 ? uint64_t{settings.shard_samples()} * covered_texels : 0),
+      learning_batch_(grow_batches ? learning_batch(covered_texels) : 0) {}
+
+uint64_t BakePolicy::learning_batch(uint64_t covered_texels) {
+  return std::max<uint64_t>(uint64_t{1} << 15, 16 * covered_texels);
+}
 
 uint64_t BakePolicy::next_batch(uint64_t capacity, uint64_t paths_done) const {
-  if (target_paths_ == 0) return capacity;
-  return std::min<uint64_t>(capacity, target_paths_ - std::min(target_paths_, paths_done));
+  uint64_t batch = capacity;
+  if (learning_batch_ > 0) batch = std::min(batch, std::max(learning_batch_, paths_done));
+  if (target_paths_ == 0) return batch;
+  return std::min<uint64_t>(batch, target_paths_ - std::min(target_paths_, paths_done));
 }
 
 std::optional<Termination> BakePolicy::stop_after_iteration(uint64_t paths_done, double elapsed_s,

@@ -19,11 +19,20 @@ namespace luxel::pipeline {
 
 class BakePolicy {
  public:
-  BakePolicy(const BakeSettings& settings, const BakeHooks& hooks, uint64_t covered_texels);
+  // grow_batches: iterations start at learning_batch(covered_texels) paths
+  // and grow to the paths already traced (BakeSetup::grow_batches).
+  BakePolicy(const BakeSettings& settings, const BakeHooks& hooks, uint64_t covered_texels,
+             bool grow_batches = false);
+
+  // The first iterations' size where state learned between iterations
+  // matters: 16 samples per covered texel, at least 2^15 paths.
+  static uint64_t learning_batch(uint64_t covered_texels);
 
   // Paths the samples rule needs in all (0: no samples rule).
   uint64_t target_paths() const { return target_paths_; }
-  // Paths of the next iteration: the batch, trimmed to the samples rule.
+  // Paths of the next iteration: the batch (with grow_batches, at most the
+  // larger of the learning batch and paths_done), trimmed to the samples
+  // rule. A function of its arguments only, so resumed bakes iterate alike.
   uint64_t next_batch(uint64_t capacity, uint64_t paths_done) const;
 
   // The rules checked before progress statistics: samples, cancellation,
@@ -49,6 +58,7 @@ class BakePolicy {
   bool snapshots_ = false;
   bool checkpoints_ = false;
   uint64_t target_paths_ = 0;
+  uint64_t learning_batch_ = 0;  // 0: iterations do not grow
 };
 
 }  // namespace luxel::pipeline

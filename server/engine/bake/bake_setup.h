@@ -35,6 +35,9 @@ struct BakeSetup {
   device::FeatureSet features;  // bake.cl's (the tracer's are its own)
   cl::LuxBakeParams params{};   // per-bake constants; paths/first_path set per iteration
   size_t capacity = 0;          // path slots per iteration
+  // Iterations start small and grow (BakePolicy::next_batch): the radiance
+  // cache with an automatic batch learns between iterations.
+  bool grow_batches = false;
   // Probe domain (bake_probe_domain in bake.h): one float4 per probe, the
   // position and the visibility cap in w; the atlas is then probes x 1
   // "texels" and the sample info a stand-in. Empty for lightmaps.

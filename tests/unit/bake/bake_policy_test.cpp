@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 namespace luxel::pipeline {
 namespace {
 
@@ -25,6 +28,36 @@ TEST(BakePolicy, LastBatchIsTrimmedToTheSamplesRule) {
   open.samples_per_texel = 0;
   open.time_budget_s = 5;
   EXPECT_EQ(BakePolicy(open, {}, 100).next_batch(256, 1u << 30), 256u) << "no samples rule";
+}
+
+// Iterations that grow (the radiance cache's automatic batch): 16 samples
+// per covered texel first (at least 2^15 paths), then at most the paths
+// already traced, so the cache holds at least half of each texel's samples
+// when an iteration reads it, up to the full batch; the samples rule still
+// trims the last.
+TEST(BakePolicy, GrowingIterationsDoubleUpToTheBatch) {
+  EXPECT_EQ(BakePolicy::learning_batch(100), 1u << 15);
+  EXPECT_EQ(BakePolicy::learning_batch(10000), 160000u);
+  const BakeSettings s = samples_only(1000);
+  const BakePolicy p(s, {}, /*covered_texels=*/4096, /*grow_batches=*/true);
+  const uint64_t cap = 1u << 18;
+  std::vector<uint64_t> batches;
+  for (uint64_t done = 0; batches.size() < 64;) {
+    const uint64_t b = p.next_batch(cap, done);
+    if (b == 0) break;
+    batches.push_back(b);
+    done += b;
+  }
+  const std::vector<uint64_t> expected = {65536, 65536, 131072, 262144};
+  ASSERT_GE(batches.size(), expected.size() + 1);
+  for (size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(batches[i], expected[i]) << i;
+  uint64_t total = 0;
+  for (size_t i = 0; i < batches.size(); ++i) {
+    total += batches[i];
+    if (i + 1 < batches.size()) EXPECT_LE(batches[i + 1], std::max<uint64_t>(65536, total));
+  }
+  EXPECT_EQ(total, 4096u * 1000) << "the samples rule still ends the bake exactly";
+  EXPECT_EQ(BakePolicy(s, {}, 4096).next_batch(cap, 0), cap) << "without growth: the batch";
 }
 
 TEST(BakePolicy, SamplesRuleWinsOverCancelAndTime) {
