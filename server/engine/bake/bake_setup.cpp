@@ -126,7 +126,7 @@ Result<BakeSetup> prepare_bake(const scene::Scene& scene, atlas::Atlas atlas,
   //  - the cache's start at that size and then grow to the samples already
   //    traced (BakePolicy::next_batch): the cache then always holds at least
   //    half of a texel's samples, and later iterations run at the full
-  //    batch. Iterations of 2^15 paths trace 12-15 % fewer paths per second
+  //    batch. Iterations of 2^15 paths trace 8-13 % fewer paths per second
   //    than of 2^18 on the 64^2 peer scenes (docs/performance.md).
   if (settings.paths_per_iteration == 0 && s.features.has(device::Feature::GUIDING))
     cap = std::min<uint64_t>(cap, BakePolicy::learning_batch(covered));

@@ -232,9 +232,8 @@ int SeamStitcher::stitch(std::vector<float>& pixels, int stride, int first, int 
   const int threads =
       std::clamp(static_cast<int>(std::thread::hardware_concurrency()), 1, std::min(count, 16));
   // How far each unknown may move (the same for every channel): covered
-  // texels by max_move_sigmas standard errors of their mean (sigma =
-  // rel_error times the texel's RMS over the stitched channels), padding
-  // freely but for the range below.
+  // texels by max_move_sigmas standard errors (move_reach), padding freely
+  // but for the range below.
   constexpr double kInf = std::numeric_limits<double>::infinity();
   std::vector<double> reach(n, kInf);
   if (!rel_error.empty()) reach = move_reach(pixels, stride, first, count, rel_error, plain);
