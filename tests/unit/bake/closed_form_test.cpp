@@ -20,6 +20,7 @@
 #include "accel/triangle_soup.h"
 #include "atlas/sample_info.h"
 #include "bake/bake.h"
+#include "bake/bake_policy.h"
 #include "bake/scene_data.h"
 #include "common/half.h"
 #include "device/context.h"
@@ -441,6 +442,28 @@ TEST_F(ClosedFormTest, RadianceCacheKeepsTheBounceCountInTheFurnace) {
   st.radiance_cache = false;
   auto traced = bake(testing::furnace_box(rho, le), st);
   EXPECT_TRUE(r.irradiance != traced.irradiance);
+  expect_constant_closed_form(r, lambert_furnace_irradiance(rho, le, bounces));
+  EXPECT_EQ(r.nonfinite_dropped, 0u);
+}
+
+// The same furnace with the automatic batch, as users bake: iterations start
+// at 16 samples per covered texel and grow to the paths already traced
+// (BakePolicy::next_batch), so later iterations read a cache that is up to
+// half as old as their own samples. The closed form must still hold.
+TEST_F(ClosedFormTest, RadianceCacheWithGrowingIterationsKeepsTheFurnace) {
+  const float le = 0.25f, rho = 0.8f;
+  const int bounces = 4;
+  auto st = settings(64, 64, bounces);
+  st.radiance_cache = true;
+  st.adaptive = false;
+  st.paths_per_iteration = 0;
+  auto r = bake(testing::furnace_box(rho, le), st);
+  ASSERT_NE(r.features.find("radiance_cache"), std::string::npos) << r.features;
+  // Growth happened: the first iterations (16 samples per texel) are smaller
+  // than the batch the bake holds, and the bake needs more than them.
+  const uint64_t first = pipeline::BakePolicy::learning_batch(r.covered_texels);
+  ASSERT_LT(first, r.batch_paths);
+  ASSERT_GT(uint64_t{64} * r.covered_texels, 2 * first);
   expect_constant_closed_form(r, lambert_furnace_irradiance(rho, le, bounces));
   EXPECT_EQ(r.nonfinite_dropped, 0u);
 }
