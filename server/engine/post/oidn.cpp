@@ -248,15 +248,14 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
   // 4-s gas-station bake at 128^2 when each chart was its own call). A
   // chart's own texels are then at least two margins from any other chart's,
   // with its own light between (oidn_test's leak check measures what still
-  // crosses). The margin is half the chart's narrower side, 2 to kMargin
-  // texels: a wider one costs more than the chart's own area on small
-  // charts. Charts narrower than kMinSide texels are not filtered (their
-  // texels stay raw): a network that sees a chart of one or two texels
-  // across can only average it with what surrounds it.
-  static constexpr int kMargin = 8, kMinSide = 3;
-  auto margin = [](const Crop& c) {
-    return std::clamp(std::min(c.x1 - c.x0 + 1, c.y1 - c.y0 + 1) / 2, 2, kMargin);
-  };
+  // crosses). The margin is kMargin texels: measured against converged
+  // references at 4-64 spp (docs/accuracy.md "Open Image Denoise"), 2 texels
+  // gave the same or lower error than the half-side margins of up to 8 used
+  // before, and 1 texel a higher one on the sky courtyard, while the filter's
+  // cost follows the mosaic's area. Charts narrower than kMinSide texels are
+  // not filtered (their texels stay raw): a network that sees a chart of one
+  // or two texels across can only average it with what surrounds it.
+  static constexpr int kMargin = 2, kMinSide = 3;
   std::vector<Crop*> order;
   size_t area = 0;
   int widest = 0;
@@ -266,7 +265,7 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
       it = crops.erase(it);
       continue;
     }
-    c.m = margin(c);
+    c.m = kMargin;
     order.push_back(&c);
     const int pw = c.x1 - c.x0 + 1 + 2 * c.m, ph = c.y1 - c.y0 + 1 + 2 * c.m;
     area += size_t(pw) * size_t(ph);
