@@ -48,10 +48,12 @@ __kernel void accumulate(LUX_STAGE_PARAMS(accumulate)) {
 __kernel void accum_stats(LUX_STAGE_PARAMS(accum_stats)) {
   __local float l_err[LUX_STATS_GROUP];
   __local float l_lum[LUX_STATS_GROUP];
+  __local float l_cov[LUX_STATS_GROUP];
   __local uint l_min[LUX_STATS_GROUP];
   __local float2 l_ref[LUX_STATS_GROUP];
   lux_accum_stats((uint)get_global_id(0), (uint)get_local_id(0), (uint)get_local_size(0),
-                  (uint)get_group_id(0), l_err, l_lum, l_min, l_ref, LUX_STAGE_ARGS(accum_stats));
+                  (uint)get_group_id(0), l_err, l_lum, l_cov, l_min, l_ref,
+                  LUX_STAGE_ARGS(accum_stats));
 }
 
 /* Adaptive sampling (bake/adaptive.h); empty without LUX_ADAPTIVE. Launched

@@ -21,13 +21,21 @@
  * of the seed and settings alone.
  *
  * e_c is the relative standard error of the texel's mean luminance with a
- * dark floor: sqrt(var / n_eff) / max(y, alloc_floor), at most 1 (stats.h).
+ * dark floor: sqrt(var / n_eff) / max(y, alloc_floor), at most 1 (stats.h),
+ * and its term is weighted by the texel's coverage a_c, the share of its 64
+ * sample positions on geometry (lux_slot_coverage).
  * Why this weight: the bake's error estimate and target_error are the mean
- * of e over texels. A texel with per-sample relative deviation r has
- * e = r / sqrt(n); giving each batch in proportion to e reaches the fixed
- * point n_c ~ r_c^(2/3) (then e_c ~ n_c and the shares keep the ratios),
- * which is exactly the allocation minimising sum_c r_c / sqrt(n_c) under
- * sum_c n_c = N (Lagrange: r_c n_c^(-3/2) constant). Equalising e instead
+ * of e over texels weighted by coverage (stats.h). A texel with per-sample
+ * relative deviation r has e = r / sqrt(n); giving each batch in proportion
+ * to a e reaches the fixed point n_c ~ (a_c r_c)^(2/3) (then a_c e_c ~ n_c
+ * and the shares keep the ratios), which is exactly the allocation
+ * minimising sum_c a_c r_c / sqrt(n_c) under sum_c n_c = N (Lagrange:
+ * a_c r_c n_c^(-3/2) constant). The coverage weight spends samples by what
+ * a texel stands for: a chart's border texel that is a fifth on geometry
+ * covers a fifth of the surface of an inner one, and a renderer's bilinear
+ * fetch reads it over about that share of the surface, so its error counts
+ * that much. What the texel means is unchanged (the mean over its covered
+ * part, §4.2); only its noise grows, as (1 / a)^(1/3) at the fixed point. Equalising e instead
  * (n ~ r^2) would pour samples into the few hardest texels; weighting by
  * variance alone (absolute error) would ignore that a lightmap is viewed
  * after tone mapping, where relative error is what shows. The dark floor
@@ -60,7 +68,8 @@ inline void lux_alloc_weights(uint gid, uint lid, uint group, __local uint* l_q,
   if (gid < params.covered_count) {
     const float e =
         lux_texel_rel_error(spp[gid], weight[gid], m2[gid].w, mean[gid].w, params.alloc_floor);
-    q = (uint)(fmin(e * params.alloc_scale, params.alloc_cap) + params.alloc_mix + 0.5f);
+    const float coverage = lux_slot_coverage(gid, sample_offsets, sample_words);
+    q = (uint)(fmin(e * params.alloc_scale, params.alloc_cap) * coverage + params.alloc_mix + 0.5f);
     alloc_weights[gid] = q;
   }
   l_q[lid] = q;

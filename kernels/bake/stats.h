@@ -1,7 +1,10 @@
 /* Stage 7, progress statistics: per work-group partial sums of the
  * relative standard error of each covered texel's mean (DESIGN.md "Accuracy
- * and error reporting") and the minimum samples per texel; the host adds the
- * few partials. Relative std. error =
+ * and error reporting"), weighted by the texel's coverage (the share of its
+ * sample positions on geometry: the share of the surface its value stands
+ * for, which adaptive sampling also weighs, bake/adaptive.h), the coverage
+ * itself and the minimum samples per texel; the host adds the few partials
+ * (the bake's error is sum(a e) / sum(a)). Relative std. error =
  * sqrt(var / n_eff) / mean with var = m2 / W and n_eff = W^2 / sum w^2. A
  * texel with fewer than 2 samples counts as 100 % error; a black texel with
  * zero variance as 0. Also the sum of the texels' mean luminance (the dark
@@ -11,6 +14,7 @@
 #define LUXEL_BAKE_STATS_H
 
 #include "shared/bake_args.h"
+#include "shared/sample_info.h"
 
 /* The relative standard error of a texel's mean luminance y from its
  * Welford state (n samples, weights w = (sum w, sum w^2), m2w = M2 of the
@@ -27,13 +31,22 @@ inline float lux_texel_rel_error(uint n, float2 w, float m2w, float y, float dar
   return se <= 0.0f ? 0.0f : (d > 0.0f ? fmin(se / d, 1.0f) : 1.0f);
 }
 
-/* gid, lid, lsize, group: the work-item's ids; l_err, l_lum, l_min, l_ref: the
+/* The coverage of covered slot `slot`: the share of its texel's 64 sample
+ * positions that lie on geometry (sample_offsets is per covered slot on the
+ * device, raygen.h). */
+inline float lux_slot_coverage(uint slot, __global const uint* sample_offsets,
+                               __global const uint* sample_words) {
+  return (float)lux_sample_info_count(sample_words, sample_offsets[slot]) *
+         (1.0f / (float)LUX_SAMPLES_PER_TEXEL);
+}
+
+/* gid, lid, lsize, group: the work-item's ids; l_err, l_lum, l_cov, l_min, l_ref: the
  * work-group's reduction arrays (local memory, LUX_STATS_GROUP entries,
  * declared by the kernel). */
 inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local float* l_err,
-                            __local float* l_lum, __local uint* l_min, __local float2* l_ref,
-                            LUX_STAGE_PARAMS(accum_stats)) {
-  float err = 0.0f, lum = 0.0f;
+                            __local float* l_lum, __local float* l_cov, __local uint* l_min,
+                            __local float2* l_ref, LUX_STAGE_PARAMS(accum_stats)) {
+  float err = 0.0f, lum = 0.0f, cov = 0.0f;
   float2 ref_err = (float2)(0.0f);
   uint t_spp = 0xFFFFFFFFu;
   if (gid < params.covered_count) {
@@ -50,10 +63,12 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
     /* State is per covered slot; the reference is a full image. */
     t_spp = spp[gid];
     lum = mean[gid].w;
-    err = lux_texel_rel_error(t_spp, weight[gid], m2[gid].w, lum, 0.0f);
+    cov = lux_slot_coverage(gid, sample_offsets, sample_words);
+    err = cov * lux_texel_rel_error(t_spp, weight[gid], m2[gid].w, lum, 0.0f);
   }
   l_err[lid] = err;
   l_lum[lid] = lum;
+  l_cov[lid] = cov;
   l_min[lid] = t_spp;
   l_ref[lid] = ref_err;
   barrier(CLK_LOCAL_MEM_FENCE);
@@ -61,6 +76,7 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
     if (lid < stride) {
       l_err[lid] += l_err[lid + stride];
       l_lum[lid] += l_lum[lid + stride];
+      l_cov[lid] += l_cov[lid + stride];
       l_min[lid] = min(l_min[lid], l_min[lid + stride]);
       l_ref[lid] += l_ref[lid + stride];
     }
@@ -71,7 +87,7 @@ inline void lux_accum_stats(uint gid, uint lid, uint lsize, uint group, __local 
     s.rel_error_sum = l_err[0];
     s.luminance_sum = l_lum[0];
     s.min_spp = l_min[0];
-    s.pad = 0;
+    s.coverage_sum = l_cov[0];
     s.reference = (float4)(l_ref[0], 0.0f, 0.0f);
     stats[group] = s;
   }

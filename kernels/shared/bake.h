@@ -159,10 +159,12 @@ typedef struct LuxBakeParams {
 
 /* Per-work-group partial statistics of the accumulation buffer. */
 typedef struct LuxAccumStats {
-  float rel_error_sum; /* sum over covered texels of the relative std. error */
+  /* sum over covered texels of coverage x relative std. error (coverage:
+   * the share of the texel's 64 sample positions on geometry) */
+  float rel_error_sum;
   float luminance_sum; /* sum over covered texels of the mean luminance */
   uint min_spp;
-  uint pad;
+  float coverage_sum; /* sum over covered texels of their coverage */
   /* With a reference lightmap (benchmark mode, DESIGN.md "Accuracy"):
    * x = sum over covered texels of the mean over RGB of (x - ref)^2,
    * y = the same of (x - ref)^2 / (ref^2 + 1e-2) (relMSE); z, w unused. */

@@ -121,7 +121,7 @@
 #define LUX_KERNEL_resolve_texel_shadows(G) G(in, paths) G(in, live) G(out, encodings)
 #define LUX_KERNEL_accumulate(G) G(in, scene) G(in, paths) G(out, accum) G(out, encodings)
 #define LUX_KERNEL_accum_stats(G) G(in, scene) G(out, accum)
-#define LUX_KERNEL_alloc_weights(G) G(in, accum) G(out, alloc)
+#define LUX_KERNEL_alloc_weights(G) G(in, scene) G(in, accum) G(out, alloc)
 #define LUX_KERNEL_alloc_scan(G) G(out, alloc)
 #define LUX_KERNEL_alloc_keys(G) G(out, paths) G(in, alloc)
 

@@ -287,7 +287,10 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
   done_.slots = tile.end;
   done_.paths += paths_done_;
   done_.nonfinite += nonfinite;
-  done_.error_sum += tile_progress_.error * n;
+  // Weighted by coverage as the error is (globalize); only tiled bakes read it.
+  if (tiled())
+    done_.error_sum +=
+        tile_progress_.error * (coverage_prefix_[tile.end] - coverage_prefix_[tile.begin]);
   if (settings_.reference) {
     done_.sq_sum += tile_progress_.rmse * tile_progress_.rmse * n;
     done_.rel_sum += tile_progress_.rel_mse * n;

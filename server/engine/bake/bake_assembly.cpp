@@ -122,15 +122,18 @@ void assemble_result(const BakeSetup& setup, const BakeSettings& settings,
 
 void sum_stats(const std::vector<cl::LuxAccumStats>& partials, uint32_t covered, bool has_reference,
                BakeProgress& p) {
-  double err = 0, sq = 0, rel = 0;
+  double err = 0, coverage = 0, sq = 0, rel = 0;
   uint32_t min_spp = 0xFFFFFFFFu;
   for (const auto& s : partials) {
     err += s.rel_error_sum;
+    coverage += s.coverage_sum;
     sq += s.reference.x;
     rel += s.reference.y;
     min_spp = std::min(min_spp, s.min_spp);
   }
-  p.error = err / static_cast<double>(covered);
+  // The coverage-weighted mean (kernels/bake/stats.h); every covered texel
+  // has a coverage of at least 1/64.
+  p.error = coverage > 0 ? err / coverage : 0.0;
   if (has_reference) {
     p.rmse = std::sqrt(sq / covered);
     p.rel_mse = rel / covered;

@@ -201,7 +201,7 @@ class Baker {
   struct Done {
     size_t slots = 0;                // covered slots of the finished tiles
     uint64_t paths = 0;              // their paths
-    double error_sum = 0;            // sum of their texels' relative errors
+    double error_sum = 0;            // sum of their texels' coverage x relative error
     double sq_sum = 0, rel_sum = 0;  // with a reference: RMSE^2 and relMSE sums
     uint32_t min_spp = 0xFFFFFFFFu;
     uint64_t nonfinite = 0;
@@ -214,6 +214,9 @@ class Baker {
   const BakeCheckpoint* whole_state_ = nullptr;
   // With a reference: the RMSE^2 and relMSE sums of each tile while black.
   std::vector<std::pair<double, double>> black_ref_;
+  // Tiled bakes: running sums of the covered slots' coverage
+  // (atlas::coverage_prefix), the weights of the progress error.
+  std::vector<double> coverage_prefix_;
 
   // The state of run() between its steps.
   BakeResult result_;

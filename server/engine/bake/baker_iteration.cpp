@@ -47,11 +47,10 @@ Result<bool> Baker::stop_point() {
 // Adaptive sampling (kernels/bake/adaptive.h). Uniform until every texel
 // of the tile has adaptive_min_samples (the uniform texel domain gives
 // every texel k samples after k * covered paths), so that no texel's error
-// estimate rests on fewer; then weights from the texels' relative error,
-// normalised by the tile's mean error. Everything here is a function of the
-// path count and the device state (the statistics partials summed in a
-// fixed order), never of timing: resumed and uninterrupted bakes allocate
-// alike.
+// estimate rests on fewer; then weights from the texels' relative error
+// times their coverage, normalised by the tile's mean of that product. Everything here is a
+// function of the path count and the device state (the statistics partials summed in a fixed
+// order), never of timing: resumed and uninterrupted bakes allocate alike.
 Result<bool> Baker::plan_allocation(uint32_t batch) {
   BakeKernelArgs& a = b_.args();
   const uint32_t covered = a.params.covered_count;
@@ -60,7 +59,7 @@ Result<bool> Baker::plan_allocation(uint32_t batch) {
   LUXEL_RETURN_IF_ERROR(read_partials(partials));
   double err = 0, lum = 0;
   for (const cl::LuxAccumStats& p : partials) {
-    err += p.rel_error_sum;
+    err += p.rel_error_sum;  // coverage x relative error
     lum += p.luminance_sum;
   }
   const double mean_err = err / covered, mean_lum = lum / covered;

@@ -67,6 +67,7 @@ Status Baker::plan_memory() {
   auto plan = plan_tiles(s_.info, m);
   if (!plan) return plan.status();
   plan_ = std::move(plan.value());
+  if (tiled()) coverage_prefix_ = atlas::coverage_prefix(s_.info);
   if (!tiled() || !settings_.reference) return Status::ok();
   const std::vector<float>& ref = *settings_.reference;
   for (const Tile& t : plan_.tiles) {
@@ -100,7 +101,13 @@ BakeProgress Baker::globalize(const BakeProgress& tile) const {
   p.paths = done_.paths + tile.paths;
   p.mean_spp = static_cast<double>(p.paths) / all;
   p.min_spp = black > 0 ? 0 : std::min(done_.min_spp, tile.min_spp);
-  p.error = (done_.error_sum + tile.error * n + static_cast<double>(black)) / all;
+  // The error is coverage-weighted (kernels/bake/stats.h); texels not yet
+  // reached count as 100 % error.
+  const std::vector<double>& cov = coverage_prefix_;
+  const size_t tile_end = done_.slots + b_.args().params.covered_count;
+  p.error = (done_.error_sum + tile.error * (cov[tile_end] - cov[done_.slots]) +
+             (cov.back() - cov[tile_end])) /
+            cov.back();
   if (settings_.reference) {
     p.rmse = std::sqrt((done_.sq_sum + tile.rmse * tile.rmse * n + sq_black) / all);
     p.rel_mse = (done_.rel_sum + tile.rel_mse * n + rel_black) / all;

@@ -1,9 +1,9 @@
 // Adaptive sampling's allocation kernels (kernels/bake/adaptive.h) on the
 // real device, from a crafted per-texel state, against the allocation rule
 // computed here: every texel gets floor or ceil of its share of the batch,
-// the shares follow the texels' relative error (with the dark floor, the
-// cap and the defensive term), the keys come out sorted and sum to the
-// batch, and the result is the same on every run.
+// the shares follow the texels' relative error times their coverage (with
+// the dark floor, the cap and the defensive term), the keys come out sorted
+// and sum to the batch, and the result is the same on every run.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +12,7 @@
 
 #include "bake/bake_kernels.h"
 #include "device/context.h"
+#include "kernels/shared/sample_info.h"
 #include "support/device_context.h"
 
 namespace luxel {
@@ -30,15 +31,22 @@ struct TexelState {
   double y = 1;    // mean luminance
   double rel = 0;  // relative standard error of the mean (against y)
   uint32_t spp = kSpp;
+  uint32_t valid = LUX_SAMPLES_PER_TEXEL;  // sample positions on geometry (coverage x 64)
 };
 
 // Texel t: relative errors 0.5 % .. 10 %; every 50th dark (y = 1e-3 with 50 %
 // relative error, i.e. tiny absolute error); texel 7 with 1 sample (counts
-// as 100 %); texel 11 with zero variance.
+// as 100 %); texel 11 with zero variance; every 7th (t % 7 == 1) a chart's
+// border texel, a quarter on geometry.
+constexpr uint32_t kBorderValid = LUX_SAMPLES_PER_TEXEL / 4;
+bool border(uint32_t t) {
+  return t % 7 == 1;
+}
 std::vector<TexelState> crafted_state() {
   std::vector<TexelState> s(kTexels);
   for (uint32_t t = 0; t < kTexels; ++t) {
     s[t].rel = 0.005 * (1 + t % 20);
+    if (border(t)) s[t].valid = kBorderValid;
     if (t % 50 == 3) {
       s[t].y = 1e-3;
       s[t].rel = 0.5;
@@ -83,6 +91,21 @@ class AdaptiveAllocationTest : public testing::DeviceTest<> {
       ASSERT_TRUE(r) << r.status().to_string();
       b = std::move(r.value());
     };
+    // The scene group: only the sample-info words' valid masks are read
+    // (the coverage); slot t's two header words at 2 t.
+    std::vector<uint32_t> offsets(kTexels), words(2 * size_t{kTexels});
+    for (uint32_t t = 0; t < kTexels; ++t) {
+      const uint64_t mask =
+          state[t].valid >= 64 ? ~uint64_t{0} : (uint64_t{1} << state[t].valid) - 1;
+      offsets[t] = 2 * t;
+      words[2 * size_t{t}] = static_cast<uint32_t>(mask);
+      words[2 * size_t{t} + 1] = static_cast<uint32_t>(mask >> 32);
+    }
+    up(a.scene.sample_offsets, offsets, "sample offsets");
+    up(a.scene.sample_words, words, "sample words");
+    for (device::Buffer* b : {&a.scene.tris, &a.scene.materials, &a.scene.atlas_uvs,
+                              &a.scene.instance_first, &a.scene.covered, &a.scene.probes})
+      placeholder(*b, 16, "unused");
     up(a.accum.mean, mean, "mean");
     up(a.accum.m2, m2, "m2");
     up(a.accum.weight, weight, "weight");
@@ -114,10 +137,13 @@ class AdaptiveAllocationTest : public testing::DeviceTest<> {
 };
 
 // The allocation rule of kernels/bake/adaptive.h in double precision:
-// weight = min(e * scale, cap) + mix, e = se / max(y, floor) at most 1.
-double expected_weight(const TexelState& s, double floor, double scale) {
+// weight = min(e * scale, cap) * coverage + mix, e = se / max(y, floor) at
+// most 1. with_coverage = false: the rule before coverage counted (the
+// injected error of CoverageWeighsTheShares).
+double expected_weight(const TexelState& s, double floor, double scale, bool with_coverage = true) {
   const double e = s.spp < 2 ? 1.0 : std::min(1.0, s.rel * s.y / std::max(s.y, floor));
-  return std::min(e * scale, kUnit * kCap) + kUnit * kMix;
+  const double coverage = with_coverage ? s.valid / double(LUX_SAMPLES_PER_TEXEL) : 1.0;
+  return std::min(e * scale, kUnit * kCap) * coverage + kUnit * kMix;
 }
 
 TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
@@ -125,7 +151,9 @@ TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
   double mean_y = 0, mean_err = 0;
   for (const auto& s : state) {
     mean_y += s.y / kTexels;
-    mean_err += (s.spp < 2 ? 1.0 : std::min(1.0, s.rel)) / kTexels;
+    // As the host does: the mean of coverage x relative error.
+    mean_err +=
+        (s.spp < 2 ? 1.0 : std::min(1.0, s.rel)) * s.valid / LUX_SAMPLES_PER_TEXEL / kTexels;
   }
   cl::LuxBakeParams p{};
   p.covered_count = kTexels;
@@ -163,7 +191,7 @@ TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
   // (summed over each class, so floor/ceil rounding averages out).
   double hi = 0, lo = 0;
   for (uint32_t t = 0; t < kTexels; ++t) {
-    if (t % 50 == 3 || t == 7 || t == 11) continue;
+    if (t % 50 == 3 || t == 7 || t == 11 || border(t)) continue;
     if (t % 20 == 19) hi += count[t];
     if (t % 20 == 0) lo += count[t];
   }
@@ -176,6 +204,22 @@ TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
   EXPECT_LE(count[3], count[19] / 4);
   // The one-sample texel counts as 100 % error.
   EXPECT_GT(count[7], count[19] * 5);
+  // A border texel a quarter on geometry takes (e scale / 4 + mix) /
+  // (e scale + mix) of an inner texel's share at the same error (10 %:
+  // about 0.29), summed over each class.
+  double inner10 = 0, border10 = 0;
+  size_t n_inner = 0, n_border = 0;
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    if (t % 20 != 19 || t % 50 == 3) continue;
+    (border(t) ? border10 : inner10) += count[t];
+    ++(border(t) ? n_border : n_inner);
+  }
+  const uint32_t b19 = 99;  // t % 20 == 19 and t % 7 == 1
+  ASSERT_TRUE(border(b19));
+  const double coverage_ratio = expected_weight(state[b19], p.alloc_floor, p.alloc_scale) /
+                                expected_weight(state[19], p.alloc_floor, p.alloc_scale);
+  EXPECT_LT(coverage_ratio, 0.35);
+  EXPECT_NEAR((border10 / n_border) / (inner10 / n_inner), coverage_ratio, 0.02 * coverage_ratio);
 
   // Deterministic: the same state gives the same keys.
   std::vector<uint32_t> again, weights2;
@@ -206,6 +250,33 @@ TEST_F(AdaptiveAllocationTest, UniformSharesWouldFailTheCheck) {
     if (count[t] < std::floor(uniform) || count[t] > std::ceil(uniform)) ++outside;
   }
   EXPECT_GT(outside, kTexels / 2);
+}
+
+// Injected error: the rule without the coverage weight (every texel as if
+// wholly on geometry) must fail the per-texel weight check of
+// BatchSplitsByRelativeError on the border texels, so that check sees the
+// coverage.
+TEST_F(AdaptiveAllocationTest, IgnoringCoverageWouldFailTheCheck) {
+  const std::vector<TexelState> state = crafted_state();
+  cl::LuxBakeParams p{};
+  p.covered_count = kTexels;
+  p.paths = kBatch;
+  p.adaptive_pass = 1;
+  p.alloc_floor = 0.1f;
+  p.alloc_scale = static_cast<float>(kUnit / 0.05);
+  p.alloc_cap = static_cast<float>(kUnit * kCap);
+  p.alloc_mix = static_cast<float>(kUnit * kMix);
+  std::vector<uint32_t> keys, weights;
+  allocate(state, p, keys, weights);
+  if (HasFatalFailure()) return;
+  size_t caught = 0, borders = 0;
+  for (uint32_t t = 0; t < kTexels; ++t) {
+    if (!border(t) || t == 11) continue;
+    ++borders;
+    const double w = expected_weight(state[t], p.alloc_floor, p.alloc_scale, false);
+    if (std::fabs(weights[t] - w) > 0.5 + 1e-3 * w) ++caught;
+  }
+  EXPECT_EQ(caught, borders);
 }
 
 }  // namespace

@@ -273,6 +273,37 @@ namespace luxel {
 namespace {
 
 // Benchmark mode: RMSE / relMSE against a reference lightmap.
+// The bake's error estimate is the coverage-weighted mean of the covered
+// texels' relative standard errors (kernels/bake/stats.h), recomputed here
+// from the result's own images: coverage in the irradiance's alpha, the error
+// in rel_error. With adaptive sampling the chart borders' partly covered
+// texels take fewer paths, so the unweighted mean (the estimate before
+// coverage counted) differs, and the check tells the two apart.
+TEST_F(BakeControlTest, ErrorEstimateIsTheCoverageWeightedMean) {
+  const scene::Scene scene = testing::furnace_box(0.5f, 0.25f);
+  auto r = pipeline::bake(scene, settings(), *ctx_);
+  ASSERT_TRUE(r) << r.status().to_string();
+  const pipeline::BakeResult& b = r.value();
+  double weighted = 0, coverage = 0, plain = 0;
+  size_t covered = 0, partial = 0;
+  for (size_t t = 0; t < size_t(b.width) * size_t(b.height); ++t) {
+    const double a = b.irradiance[t * 4 + 3];
+    if (!(a > 0)) continue;
+    const double e = b.samples[t] < 2 ? 1.0 : std::min(1.0, double(b.rel_error[t]));
+    weighted += a * e;
+    coverage += a;
+    plain += e;
+    ++covered;
+    if (a < 1) ++partial;
+  }
+  ASSERT_GT(partial, covered / 10) << "the atlas needs chart borders";
+  const double expected = weighted / coverage, unweighted = plain / double(covered);
+  std::printf("  error %.6f, coverage-weighted %.6f, unweighted %.6f (%zu of %zu partial)\n",
+              b.error, expected, unweighted, partial, covered);
+  EXPECT_NEAR(b.error, expected, 1e-4 * expected);
+  EXPECT_GT(std::abs(unweighted - expected), 1e-2 * expected);
+}
+
 TEST_F(BakeControlTest, ReferenceErrorIsExactAndTracksTheEstimate) {
   // A plane under a uniform sky of radiance 1 (E = pi), given as an image:
   // the image sky is importance-sampled by its own distribution, not by the
