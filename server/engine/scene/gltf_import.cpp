@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <new>
 #include <sstream>
 
@@ -84,6 +85,19 @@ Result<Mat4> local_transform(const tinygltf::Model& model, int i) {
 // from its TRANSLATION / ROTATION / SCALE accessors (each optional, all of
 // one count), to be applied before the node's own world transform. Empty
 // when the node does not use the extension.
+// An attribute's accessor index: a JSON integer. tinygltf keeps an integer
+// that does not fit an int as a double, and converting that to int is
+// undefined (the import fuzzer found ROTATION: 1.1e50), so a number that is
+// not an integer in [0, INT_MAX] is refused by name before any conversion.
+Result<int> accessor_index(const tinygltf::Value& v, const std::string& what) {
+  if (v.IsInt()) return v.Get<int>();
+  const double d = v.GetNumberAsDouble();
+  if (d >= 0 && d <= double(std::numeric_limits<int>::max()) && d == std::floor(d))
+    return static_cast<int>(d);
+  return invalid_argument(strprintf("%s: accessor index %g is not an integer in [0, %d]",
+                                    what.c_str(), d, std::numeric_limits<int>::max()));
+}
+
 Status instance_transforms(const tinygltf::Model& model, int node_index, ImportBudget* budget,
                            std::vector<Mat4>* out) {
   out->clear();
@@ -115,7 +129,9 @@ Status instance_transforms(const tinygltf::Model& model, int node_index, ImportB
   for (auto& a : attrs) {
     const tinygltf::Value& v = attributes.Get(a.name);
     if (!v.IsNumber() && !v.IsInt()) continue;
-    const int acc = v.GetNumberAsInt();
+    auto index = accessor_index(v, ctx + " " + a.name);
+    if (!index) return index.status();
+    const int acc = index.value();
     if (acc < 0 || static_cast<size_t>(acc) >= model.accessors.size()) continue;  // read_floats
     const uint64_t declared = declared_count(model, acc);
     LUXEL_RETURN_IF_ERROR(
@@ -128,7 +144,9 @@ Status instance_transforms(const tinygltf::Model& model, int node_index, ImportB
   for (auto& a : attrs) {
     const tinygltf::Value& v = attributes.Get(a.name);
     if (!v.IsNumber() && !v.IsInt()) continue;
-    LUXEL_RETURN_IF_ERROR(read_floats(model, v.GetNumberAsInt(), a.name, a.type, a.normalized,
+    auto index = accessor_index(v, ctx + " " + a.name);
+    if (!index) return index.status();
+    LUXEL_RETURN_IF_ERROR(read_floats(model, index.value(), a.name, a.type, a.normalized,
                                       a.unnormalized, ctx, budget, &values, &a.values));
     const size_t n = a.values.size() / (a.type == TINYGLTF_TYPE_VEC4 ? 4 : 3);
     if (any && n != count) {

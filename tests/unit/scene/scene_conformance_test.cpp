@@ -198,6 +198,15 @@ TEST(SceneConformance, GpuInstancingMakesOneInstancePerElement) {
       b.add_floats({1, 1, 1}, "VEC3");
   expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
                {"node 'grid' (node[0])", "EXT_mesh_gpu_instancing", "SCALE"});
+
+  // An accessor index past int (JSON has no integer limit; tinygltf keeps it
+  // as a double) or with a fraction is an error naming the attribute, not a
+  // conversion (tests/fuzz/regressions/instancing_accessor_index_1e50.gltf).
+  for (const json& index : {json(1.1e50), json(1.5)}) {
+    b.doc["nodes"][0]["extensions"]["EXT_mesh_gpu_instancing"]["attributes"]["ROTATION"] = index;
+    expect_error(load(b.gltf_embedded()), StatusCode::kInvalidArgument,
+                 {"node 'grid' (node[0])", "ROTATION", "is not an integer"});
+  }
 }
 
 // KHR_draco_mesh_compression is decoded (scene/gltf_decompress.h;
