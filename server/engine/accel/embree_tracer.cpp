@@ -1,10 +1,8 @@
 #include "accel/embree_tracer.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <thread>
 #include <vector>
 
 #include "accel/embree_device.h"
@@ -31,23 +29,6 @@ void alpha_filter(const RTCFilterFunctionNArguments* args) {
                               bvh->alpha_texels.data(), u, v))
       args->valid[i] = 0;
   }
-}
-
-template <typename Fn>
-void parallel_chunks(size_t n, unsigned threads, Fn&& fn) {
-  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
-  std::atomic<size_t> next{0};
-  auto worker = [&] {
-    for (;;) {
-      const size_t begin = next.fetch_add(kChunk);
-      if (begin >= n) return;
-      fn(begin, std::min(n, begin + kChunk));
-    }
-  };
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (auto& t : pool) t.join();
 }
 
 void to_embree(const cl::LuxRay& r, RTCRay& e) {
@@ -129,7 +110,7 @@ EmbreeTracer::~EmbreeTracer() {
 
 void EmbreeTracer::intersect(std::span<const cl::LuxRay> rays, std::span<cl::LuxHit> hits,
                              bool coherent, unsigned threads) const {
-  parallel_chunks(rays.size(), threads, [&](size_t begin, size_t end) {
+  pool_.run(rays.size(), kChunk, threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags =
@@ -159,7 +140,7 @@ void EmbreeTracer::intersect(std::span<const cl::LuxRay> rays, std::span<cl::Lux
 
 void EmbreeTracer::occluded(std::span<const cl::LuxRay> rays, std::span<int> occluded,
                             bool coherent, unsigned threads) const {
-  parallel_chunks(rays.size(), threads, [&](size_t begin, size_t end) {
+  pool_.run(rays.size(), kChunk, threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags =
@@ -183,7 +164,7 @@ cl::LuxHit EmbreeTracer::to_hit(const RTCRayHit& rh) const {
 void EmbreeTracer::intersect_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
                                      uint32_t index_mask, cl::LuxHit* hits,
                                      unsigned threads) const {
-  parallel_chunks(count, threads, [&](size_t begin, size_t end) {
+  pool_.run(count, kChunk, threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx = make_context(false);
     RTCRayHit batch[kStream];
     uint32_t slot[kStream];
@@ -202,7 +183,7 @@ void EmbreeTracer::intersect_indexed(const cl::LuxRay* rays, const uint32_t* ind
 
 void EmbreeTracer::occluded_indexed(const cl::LuxRay* rays, const uint32_t* indices, size_t count,
                                     uint32_t index_mask, int* occluded, unsigned threads) const {
-  parallel_chunks(count, threads, [&](size_t begin, size_t end) {
+  pool_.run(count, kChunk, threads, [&](size_t begin, size_t end) {
     RTCIntersectContext ctx = make_context(false);
     RTCRay batch[kStream];
     uint32_t slot[kStream];

@@ -15,6 +15,7 @@
 #include <span>
 
 #include "accel/bvh_builder.h"
+#include "accel/chunk_pool.h"
 #include "common/status.h"
 #include "kernels/shared/geometry.h"
 
@@ -52,6 +53,7 @@ class EmbreeTracer {
   RTCScene scene_ = nullptr;
   const DeviceBvh* bvh_ = nullptr;  // triangles, uvs and masks for ids and the alpha filter
   double build_ms_ = 0.0;
+  ChunkPool pool_{0};  // the queries' threads, one per core
 };
 
 }  // namespace luxel::accel
