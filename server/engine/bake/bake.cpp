@@ -66,7 +66,6 @@ Result<BakeResult> Baker::run(const BakeHooks& hooks) {
   hooks_ = &hooks;
   auto first_tile = start();
   if (!first_tile) return first_tile.status();
-  warm_oidn();
   const BakePolicy policy(settings_, hooks, s_.params.covered_count);
   policy_ = &policy;
   t_start_ = SteadyClock::now();

@@ -8,7 +8,6 @@
 // (baker_denoise.cpp); bake_assembly puts the result together.
 #pragma once
 
-#include <future>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -36,9 +35,6 @@ class Baker {
   Baker(const LightmapLayout& layout, const BakeSettings& settings, device::Context& ctx,
         const ProbeDomain* probes = nullptr)
       : scene_(*layout.scene), layout_(layout), settings_(settings), ctx_(ctx), probes_(probes) {}
-  ~Baker();
-  Baker(const Baker&) = delete;
-  Baker& operator=(const Baker&) = delete;
 
   // The bake, as named steps (bake.cpp): start (setup, resume or the first
   // tile), then per tile run_tile (iterations until a rule stops it, with
@@ -137,9 +133,6 @@ class Baker {
   // oidn_ on the first call; otherwise records why in oidn_missing_ (the
   // a-trous filter runs instead). Decided once per bake.
   bool use_oidn();
-  // With denoise_method() == oidn: starts oidn_device_ (the warm-up runs on
-  // its own thread while the bake traces).
-  void warm_oidn();
   // The manifest's "denoise" object for what denoise() did last.
   std::string denoise_json(size_t two_point_texels) const;
   // OIDN's directional mode on each SH encoding of `result`
@@ -191,9 +184,6 @@ class Baker {
   std::unique_ptr<OffsetBuffer> offset_buffer_;
   std::unique_ptr<Denoiser> denoiser_;  // on the first denoise()
   std::unique_ptr<OidnDenoiser> oidn_;  // denoise_method() == oidn, library found
-  // Its device, warmed beside the trace (post/oidn.h warmed_oidn_device):
-  // started by run(), adopted by use_oidn(), released by ~Baker if unused.
-  std::future<oidn::Device> oidn_device_;
   bool oidn_tried_ = false;
   std::string oidn_missing_;             // why oidn_ is null with denoise == oidn
   ProgressiveVariance progressive_;      // milestones of the current tile

@@ -33,20 +33,6 @@ Result<std::vector<float>> Baker::denoise(const std::vector<float>& rgba,
   return denoiser_->run(rgba, variance, denoise_params(two_point_texels));
 }
 
-void Baker::warm_oidn() {
-  if (denoise_method() != Denoise::kOidn) return;
-  auto lib = load_oidn();
-  if (lib)
-    oidn_device_ = std::async(std::launch::async, warmed_oidn_device, std::cref(*lib.value()));
-}
-
-Baker::~Baker() {
-  // A bake that ended before its denoise (failed, cancelled) leaves the
-  // warmed device unadopted.
-  if (!oidn_device_.valid()) return;
-  if (oidn::Device d = oidn_device_.get()) load_oidn().value()->release_device(d);
-}
-
 Denoise Baker::denoise_method() const {
   if (settings_.denoise != Denoise::kAuto) return settings_.denoise;
   // One shard's map holds part of the samples and is never delivered: only
@@ -73,8 +59,7 @@ bool Baker::use_oidn() {
     auto lib = load_oidn();
     if (lib)
       oidn_ = std::make_unique<OidnDenoiser>(
-          *lib.value(), build_denoise_guides(scene_, s_.atlas, s_.info), s_.atlas.pages,
-          oidn_device_.valid() ? oidn_device_.get() : nullptr);
+          *lib.value(), build_denoise_guides(scene_, s_.atlas, s_.info), s_.atlas.pages);
     else
       oidn_missing_ = "not found: " + lib.status().message();
   }

@@ -173,27 +173,8 @@ Result<const OidnLibrary*> load_oidn() {
   return &loaded.value();
 }
 
-oidn::Device warmed_oidn_device(const OidnLibrary& lib) {
-  oidn::Device device = lib.new_device(oidn::kDeviceCpu);
-  if (!device) return nullptr;
-  lib.commit_device(device);
-  constexpr int kSide = 8;
-  std::vector<float> rgb(size_t{kSide} * kSide * 3, 0.5f);
-  if (oidn::Filter f = lib.new_filter(device, "RTLightmap")) {
-    lib.set_shared_filter_image(f, "color", rgb.data(), oidn::kFormatFloat3, kSide, kSide, 0, 0, 0);
-    lib.set_shared_filter_image(f, "output", rgb.data(), oidn::kFormatFloat3, kSide, kSide, 0, 0,
-                                0);
-    lib.commit_filter(f);
-    lib.execute_filter(f);
-    lib.release_filter(f);
-  }
-  // An error here (recorded on the device) is the real filter's to report.
-  return device;
-}
-
-OidnDenoiser::OidnDenoiser(const OidnLibrary& lib, DenoiseGuides guides, int pages,
-                           oidn::Device device)
-    : lib_(lib), guides_(std::move(guides)), pages_(std::max(pages, 1)), device_(device) {}
+OidnDenoiser::OidnDenoiser(const OidnLibrary& lib, DenoiseGuides guides, int pages)
+    : lib_(lib), guides_(std::move(guides)), pages_(std::max(pages, 1)) {}
 
 OidnDenoiser::~OidnDenoiser() {
   if (device_) lib_.release_device(device_);

@@ -94,21 +94,10 @@ struct OidnRunStats {
   }
 };
 
-// A CPU device of `lib` on which one 8x8 RTLightmap filter has been
-// committed and run. OIDN prepares the network on a device's first filter
-// commit: on a 64^2 lightmap that was 2.6 ms of a 6-ms denoise step, and the
-// next filter's commit then took 0.06 ms (docs/performance.md, "Denoise
-// step"). A bake therefore makes the device beside its trace (Baker::run)
-// and its denoiser adopts it. nullptr when the library gives no device.
-oidn::Device warmed_oidn_device(const OidnLibrary& lib);
-
 class OidnDenoiser {
  public:
-  // `guides` of the whole atlas (`pages` pages stacked vertically);
-  // `device`: one to adopt (warmed_oidn_device; released with the
-  // denoiser), else nullptr and the first filter makes its own.
-  OidnDenoiser(const OidnLibrary& lib, DenoiseGuides guides, int pages,
-               oidn::Device device = nullptr);
+  // `guides` of the whole atlas (`pages` pages stacked vertically).
+  OidnDenoiser(const OidnLibrary& lib, DenoiseGuides guides, int pages);
   ~OidnDenoiser();
   OidnDenoiser(const OidnDenoiser&) = delete;
   OidnDenoiser& operator=(const OidnDenoiser&) = delete;
