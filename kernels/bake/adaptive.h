@@ -35,10 +35,11 @@
  * covers a fifth of the surface of an inner one, and a renderer's bilinear
  * fetch reads it over about that share of the surface, so its error counts
  * that much. What the texel means is unchanged (the mean over its covered
- * part, §4.2); only its noise grows, as (1 / a)^(1/3) at the fixed point. Equalising e instead
- * (n ~ r^2) would pour samples into the few hardest texels; weighting by
- * variance alone (absolute error) would ignore that a lightmap is viewed
- * after tone mapping, where relative error is what shows. The dark floor
+ * part, §4.2); only its noise grows, as (1 / a)^(1/3) at the fixed point.
+ * Equalising e instead (n ~ r^2) would pour samples into the few hardest
+ * texels; weighting by variance alone (absolute error) would ignore that a
+ * lightmap is viewed after tone mapping, where relative error is what
+ * shows. The dark floor
  * (the host sets it to the tile's mean luminance: texels darker than the
  * mean are weighed by absolute error in units of the mean, brighter ones by
  * relative error) stops dark texels, whose relative error is large but
