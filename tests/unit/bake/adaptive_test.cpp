@@ -57,6 +57,20 @@ std::vector<TexelState> crafted_state() {
   return s;
 }
 
+// An adaptive iteration of kBatch paths over kTexels slots with the given
+// dark floor, error scale and defensive term (cap: kCap units).
+cl::LuxBakeParams adaptive_params(double floor, double scale, double mix) {
+  cl::LuxBakeParams p{};
+  p.covered_count = kTexels;
+  p.paths = kBatch;
+  p.adaptive_pass = 1;
+  p.alloc_floor = static_cast<float>(floor);
+  p.alloc_scale = static_cast<float>(scale);
+  p.alloc_cap = static_cast<float>(kUnit * kCap);
+  p.alloc_mix = static_cast<float>(mix);
+  return p;
+}
+
 class AdaptiveAllocationTest : public testing::DeviceTest<> {
  protected:
   // Runs alloc_weights, alloc_scan, alloc_keys; returns the keys of the
@@ -155,14 +169,7 @@ TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
     mean_err +=
         (s.spp < 2 ? 1.0 : std::min(1.0, s.rel)) * s.valid / LUX_SAMPLES_PER_TEXEL / kTexels;
   }
-  cl::LuxBakeParams p{};
-  p.covered_count = kTexels;
-  p.paths = kBatch;
-  p.adaptive_pass = 1;
-  p.alloc_floor = static_cast<float>(kDarkFloor * mean_y);
-  p.alloc_scale = static_cast<float>(kUnit / mean_err);
-  p.alloc_cap = static_cast<float>(kUnit * kCap);
-  p.alloc_mix = static_cast<float>(kUnit * kMix);
+  const cl::LuxBakeParams p = adaptive_params(kDarkFloor * mean_y, kUnit / mean_err, kUnit * kMix);
   std::vector<uint32_t> keys, weights;
   allocate(state, p, keys, weights);
   if (HasFatalFailure()) return;
@@ -231,14 +238,7 @@ TEST_F(AdaptiveAllocationTest, BatchSplitsByRelativeError) {
 // the floor/ceil check above, so that check has teeth.
 TEST_F(AdaptiveAllocationTest, UniformSharesWouldFailTheCheck) {
   const std::vector<TexelState> state = crafted_state();
-  cl::LuxBakeParams p{};
-  p.covered_count = kTexels;
-  p.paths = kBatch;
-  p.adaptive_pass = 1;
-  p.alloc_floor = 0.1f;
-  p.alloc_scale = 1000.0f;
-  p.alloc_cap = static_cast<float>(kUnit * kCap);
-  p.alloc_mix = 25.0f;
+  const cl::LuxBakeParams p = adaptive_params(0.1, 1000.0, 25.0);
   std::vector<uint32_t> keys, weights;
   allocate(state, p, keys, weights);
   if (HasFatalFailure()) return;
@@ -258,14 +258,7 @@ TEST_F(AdaptiveAllocationTest, UniformSharesWouldFailTheCheck) {
 // coverage.
 TEST_F(AdaptiveAllocationTest, IgnoringCoverageWouldFailTheCheck) {
   const std::vector<TexelState> state = crafted_state();
-  cl::LuxBakeParams p{};
-  p.covered_count = kTexels;
-  p.paths = kBatch;
-  p.adaptive_pass = 1;
-  p.alloc_floor = 0.1f;
-  p.alloc_scale = static_cast<float>(kUnit / 0.05);
-  p.alloc_cap = static_cast<float>(kUnit * kCap);
-  p.alloc_mix = static_cast<float>(kUnit * kMix);
+  const cl::LuxBakeParams p = adaptive_params(0.1, kUnit / 0.05, kUnit * kMix);
   std::vector<uint32_t> keys, weights;
   allocate(state, p, keys, weights);
   if (HasFatalFailure()) return;
