@@ -109,6 +109,20 @@ def configs(leave_one_out):
     return out
 
 
+def add_reference_args(p, resolution, shared_resolution):
+    """The options of a bench that bakes the scenes against cached converged references
+    (error_vs_time.reference_with): reference samples and cache, lightmap sides, bounces,
+    the first seed and the device."""
+    p.add_argument("--reference-spp", type=int, default=4096)
+    p.add_argument("--reference-cache", default=None)
+    p.add_argument("--resolution", type=int, default=resolution)
+    p.add_argument("--shared-resolution", type=int, default=shared_resolution,
+                   help="lightmap side for ../shared/scenes")
+    p.add_argument("--bounces", type=int, default=4)
+    p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--device", default=None)
+
+
 def parse_args(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--equal-error", action="store_true", help=argparse.SUPPRESS)
@@ -118,17 +132,11 @@ def parse_args(argv):
                    help="bundled names, paths, 'shared' (../shared/scenes) and 'peers' (tests/bench/peers scenes "
                         "made by make_scenes.py into OUT/peer_scenes)")
     p.add_argument("--budgets", default="0.5,1,2,4", help="time budgets in seconds")
-    p.add_argument("--reference-spp", type=int, default=4096)
-    p.add_argument("--reference-cache", default=None)
-    p.add_argument("--resolution", type=int, default=128)
-    p.add_argument("--shared-resolution", type=int, default=256, help="lightmap side for ../shared/scenes")
-    p.add_argument("--bounces", type=int, default=4)
-    p.add_argument("--seed", type=int, default=1)
+    add_reference_args(p, resolution=128, shared_resolution=256)
     p.add_argument("--paths-per-iteration", type=int, default=65536)
     p.add_argument("--leave-one-out", action="store_true", help="also all_but_X configurations")
     p.add_argument("--configs", default=None,
                    help="comma-separated configurations to run (default: all; 'before' is always run)")
-    p.add_argument("--device", default=None)
     p.add_argument("--quick", action="store_true", help="smoke run: Cornell box 32^2, budgets 0.2,0.4")
     a = p.parse_args(argv)
     if a.quick:
