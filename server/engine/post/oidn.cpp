@@ -220,11 +220,14 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
                                    bool directional, bool whole_pages) {
   const int width = guides_.width, height = guides_.height;
   auto covered = [&](size_t t) { return rgba[t * 4 + 3] > 0.0f; };
+  // Each piece's margin and the narrowest chart filtered (why: below).
+  static constexpr int kMargin = 2, kMinSide = 3;
   // The pieces to filter: one per chart (its bounding box), or per page.
   struct Crop {
     int x0, y0, x1, y1;  // inclusive, in the atlas
     int mx = 0, my = 0;  // where its padded box starts in the mosaic
-    int m = 0;           // its margin
+    int padded_w() const { return x1 - x0 + 1 + 2 * kMargin; }
+    int padded_h() const { return y1 - y0 + 1 + 2 * kMargin; }
   };
   std::map<uint32_t, Crop> crops;
   const int page_h = height / pages_;
@@ -255,7 +258,6 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
   // cost follows the mosaic's area. Charts narrower than kMinSide texels are
   // not filtered (their texels stay raw): a network that sees a chart of one
   // or two texels across can only average it with what surrounds it.
-  static constexpr int kMargin = 2, kMinSide = 3;
   std::vector<Crop*> order;
   size_t area = 0;
   int widest = 0;
@@ -265,9 +267,8 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
       it = crops.erase(it);
       continue;
     }
-    c.m = kMargin;
     order.push_back(&c);
-    const int pw = c.x1 - c.x0 + 1 + 2 * c.m, ph = c.y1 - c.y0 + 1 + 2 * c.m;
+    const int pw = c.padded_w(), ph = c.padded_h();
     area += size_t(pw) * size_t(ph);
     widest = std::max(widest, pw);
     ++it;
@@ -275,13 +276,12 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
   if (order.empty()) return Status::ok();
   // Shelf packing, tallest first (ties by position, so the layout and the
   // filtered bits are deterministic).
-  std::stable_sort(order.begin(), order.end(), [](const Crop* a, const Crop* b) {
-    return a->y1 - a->y0 + 2 * a->m > b->y1 - b->y0 + 2 * b->m;
-  });
+  std::stable_sort(order.begin(), order.end(),
+                   [](const Crop* a, const Crop* b) { return a->padded_h() > b->padded_h(); });
   const int mosaic_w = std::max(widest, int(std::ceil(std::sqrt(double(area) * 1.15))));
   int shelf_x = 0, shelf_y = 0, shelf_h = 0;
   for (Crop* c : order) {
-    const int pw = c->x1 - c->x0 + 1 + 2 * c->m, ph = c->y1 - c->y0 + 1 + 2 * c->m;
+    const int pw = c->padded_w(), ph = c->padded_h();
     if (shelf_x + pw > mosaic_w) shelf_y += shelf_h, shelf_x = 0, shelf_h = 0;
     c->mx = shelf_x, c->my = shelf_y;
     shelf_x += pw;
@@ -298,7 +298,7 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
   };
   for (const auto& [key, c] : crops) {
     const auto mine = mine_of(key);
-    const int pw = c.x1 - c.x0 + 1 + 2 * c.m, ph = c.y1 - c.y0 + 1 + 2 * c.m;
+    const int pw = c.padded_w(), ph = c.padded_h();
     // The padded piece with only this chart's texels marked covered, dilated
     // into the rest. Channel 3 marks what holds a value: 1 on the chart, and
     // dilation carries the 1 to the texels it fills.
@@ -309,7 +309,7 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
       for (int x = c.x0; x <= c.x1; ++x) {
         const size_t t = size_t(y) * size_t(width) + size_t(x);
         if (!mine(t)) continue;
-        const int px = x - c.x0 + c.m, py = y - c.y0 + c.m;
+        const int px = x - c.x0 + kMargin, py = y - c.y0 + kMargin;
         for (int k = 0; k < 3; ++k) {
           img.at(px, py, k) = plane[t * 3 + size_t(k)];
           sum[k] += plane[t * 3 + size_t(k)];
@@ -318,7 +318,7 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
         cover.at(px, py, 0) = 1.0f;
         ++n;
       }
-    LUXEL_RETURN_IF_ERROR(output::dilate(img, cover, c.m + 2));
+    LUXEL_RETURN_IF_ERROR(output::dilate(img, cover, kMargin + 2));
     for (int y = 0; y < ph; ++y)
       for (int x = 0; x < pw; ++x) {
         const bool filled = img.at(x, y, 3) > 0.0f;
@@ -342,8 +342,8 @@ Status OidnDenoiser::filter_charts(std::vector<float>& plane, const std::vector<
       for (int x = c.x0; x <= c.x1; ++x) {
         const size_t t = size_t(y) * size_t(width) + size_t(x);
         if (!mine(t)) continue;
-        const size_t m =
-            size_t(c.my + y - c.y0 + c.m) * size_t(mosaic_w) + size_t(c.mx + x - c.x0 + c.m);
+        const size_t m = size_t(c.my + y - c.y0 + kMargin) * size_t(mosaic_w) +
+                         size_t(c.mx + x - c.x0 + kMargin);
         for (int k = 0; k < 3; ++k) {
           const float v = rgb[m * 3 + size_t(k)];
           // A non-finite output keeps the input value.
