@@ -166,14 +166,11 @@ Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atl
   return info;
 }
 
-std::vector<double> coverage_prefix(const SampleInfo& info) {
-  std::vector<double> prefix(info.covered_texels.size() + 1, 0.0);
-  for (size_t k = 0; k < info.covered_texels.size(); ++k) {
-    const uint32_t offset = info.offsets[info.covered_texels[k]];
-    prefix[k + 1] = prefix[k] + cl::lux_sample_info_count(info.words.data(), offset) /
-                                    double(LUX_SAMPLES_PER_TEXEL);
-  }
-  return prefix;
+double coverage_sum(const SampleInfo& info, size_t begin, size_t end) {
+  uint64_t valid = 0;
+  for (size_t k = begin; k < end; ++k)
+    valid += cl::lux_sample_info_count(info.words.data(), info.offsets[info.covered_texels[k]]);
+  return double(valid) / double(LUX_SAMPLES_PER_TEXEL);
 }
 
 SamplePoint sample_point(const SampleInfo& info, uint32_t texel, uint32_t rank) {

@@ -50,11 +50,10 @@ struct SampleInfo {
 Result<SampleInfo> build_sample_info(const scene::Scene& scene, const Atlas& atlas,
                                      CancelToken cancel = {});
 
-// Running sums of the covered texels' coverage (the share of each one's 64
-// sample positions on geometry, the weight of kernels/bake/stats.h and
-// adaptive.h), in covered-slot order: entry i sums slots [0, i), so there are
-// covered_texels.size() + 1 entries. Sums of multiples of 1/64: exact.
-std::vector<double> coverage_prefix(const SampleInfo& info);
+// The sum of the coverage (the share of a texel's 64 sample positions on
+// geometry, the weight of kernels/bake/stats.h and adaptive.h) of covered
+// slots [begin, end). A sum of multiples of 1/64: exact.
+double coverage_sum(const SampleInfo& info, size_t begin, size_t end);
 
 // One decoded sample position (host twin of lux_sample_info_lookup).
 struct SamplePoint {

@@ -290,7 +290,7 @@ Status Baker::finish_tile(const Tile& tile, bool last) {
   // Weighted by coverage as the error is (globalize); only tiled bakes read it.
   if (tiled())
     done_.error_sum +=
-        tile_progress_.error * (coverage_prefix_[tile.end] - coverage_prefix_[tile.begin]);
+        tile_progress_.error * (coverage_before(tile.end) - coverage_before(tile.begin));
   if (settings_.reference) {
     done_.sq_sum += tile_progress_.rmse * tile_progress_.rmse * n;
     done_.rel_sum += tile_progress_.rel_mse * n;

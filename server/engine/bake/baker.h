@@ -214,9 +214,12 @@ class Baker {
   const BakeCheckpoint* whole_state_ = nullptr;
   // With a reference: the RMSE^2 and relMSE sums of each tile while black.
   std::vector<std::pair<double, double>> black_ref_;
-  // Tiled bakes: running sums of the covered slots' coverage
-  // (atlas::coverage_prefix), the weights of the progress error.
-  std::vector<double> coverage_prefix_;
+  // Tiled bakes: entry i sums the coverage of tiles [0, i)
+  // (atlas::coverage_sum), the weights of the progress error; one entry per
+  // tile boundary, so its size follows the plan, not the lightmap.
+  std::vector<double> tile_coverage_;
+  // The coverage of covered slots [0, slot), `slot` a tile boundary.
+  double coverage_before(size_t slot) const;
 
   // The state of run() between its steps.
   BakeResult result_;

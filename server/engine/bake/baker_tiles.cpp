@@ -67,7 +67,12 @@ Status Baker::plan_memory() {
   auto plan = plan_tiles(s_.info, m);
   if (!plan) return plan.status();
   plan_ = std::move(plan.value());
-  if (tiled()) coverage_prefix_ = atlas::coverage_prefix(s_.info);
+  if (tiled()) {
+    tile_coverage_.assign(1, 0.0);
+    for (const Tile& t : plan_.tiles)
+      tile_coverage_.push_back(tile_coverage_.back() +
+                               atlas::coverage_sum(s_.info, t.begin, t.end));
+  }
   if (!tiled() || !settings_.reference) return Status::ok();
   const std::vector<float>& ref = *settings_.reference;
   for (const Tile& t : plan_.tiles) {
@@ -83,6 +88,13 @@ Status Baker::plan_memory() {
     black_ref_.push_back({sq, rel});
   }
   return Status::ok();
+}
+
+double Baker::coverage_before(size_t slot) const {
+  // Tiles are in slot order; `slot` is one's begin or the last one's end.
+  const auto it = std::lower_bound(plan_.tiles.begin(), plan_.tiles.end(), slot,
+                                   [](const Tile& t, size_t s) { return t.begin < s; });
+  return tile_coverage_[size_t(it - plan_.tiles.begin())];
 }
 
 BakeProgress Baker::globalize(const BakeProgress& tile) const {
@@ -103,11 +115,10 @@ BakeProgress Baker::globalize(const BakeProgress& tile) const {
   p.min_spp = black > 0 ? 0 : std::min(done_.min_spp, tile.min_spp);
   // The error is coverage-weighted (kernels/bake/stats.h); texels not yet
   // reached count as 100 % error.
-  const std::vector<double>& cov = coverage_prefix_;
   const size_t tile_end = done_.slots + b_.args().params.covered_count;
-  p.error = (done_.error_sum + tile.error * (cov[tile_end] - cov[done_.slots]) +
-             (cov.back() - cov[tile_end])) /
-            cov.back();
+  const double before = coverage_before(done_.slots), through = coverage_before(tile_end);
+  const double total = tile_coverage_.back();
+  p.error = (done_.error_sum + tile.error * (through - before) + (total - through)) / total;
   if (settings_.reference) {
     p.rmse = std::sqrt((done_.sq_sum + tile.rmse * tile.rmse * n + sq_black) / all);
     p.rel_mse = (done_.rel_sum + tile.rel_mse * n + rel_black) / all;
